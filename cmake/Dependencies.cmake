@@ -1,0 +1,43 @@
+# Every dependency comes from Debian 12's packages (scripts/install-deps.sh installs them);
+# nothing is downloaded at configure time. Each failure names the package to install.
+function(lightmesh_require found package what)
+  if(NOT ${found})
+    message(FATAL_ERROR "lightmesh needs ${what}: run scripts/install-deps.sh "
+                        "(or apt-get install ${package})")
+  endif()
+endfunction()
+
+find_package(Threads REQUIRED)
+find_package(TBB QUIET)
+lightmesh_require(TBB_FOUND libtbb-dev "TBB (parallel loops)")
+find_package(nlohmann_json 3 QUIET)
+lightmesh_require(nlohmann_json_FOUND nlohmann-json3-dev "nlohmann-json (scene files)")
+find_package(CLI11 QUIET)
+lightmesh_require(CLI11_FOUND libcli11-dev "CLI11 (command line)")
+find_package(OpenEXR 3 QUIET)
+lightmesh_require(OpenEXR_FOUND libopenexr-dev "OpenEXR (EXR images)")
+find_package(assimp QUIET)
+lightmesh_require(assimp_FOUND libassimp-dev "Assimp (mesh import)")
+
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(STB QUIET stb)
+find_path(STB_IMAGE_WRITE_DIR stb_image_write.h HINTS ${STB_INCLUDE_DIRS} PATH_SUFFIXES stb)
+lightmesh_require(STB_IMAGE_WRITE_DIR libstb-dev "stb (PNG images)")
+
+if(LIGHTMESH_ENABLE_EMBREE)
+  find_package(embree 3 QUIET)
+  if(NOT embree_FOUND)
+    message(FATAL_ERROR "lightmesh needs Embree 3 for its embree back-end: run "
+                        "scripts/install-deps.sh (or apt-get install libembree-dev), or "
+                        "configure with -DLIGHTMESH_ENABLE_EMBREE=OFF")
+  endif()
+endif()
+
+if(LIGHTMESH_BUILD_TESTS)
+  find_package(GTest QUIET)
+  lightmesh_require(GTest_FOUND "libgtest-dev libgmock-dev" "GoogleTest (tests)")
+endif()
+if(LIGHTMESH_BUILD_BENCHMARKS)
+  find_package(benchmark QUIET)
+  lightmesh_require(benchmark_FOUND libbenchmark-dev "Google Benchmark (benchmarks)")
+endif()

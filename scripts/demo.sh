@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# The main job: install what is missing, build, then render the built-in gazebo scene with
+# soft shadows by the light mesh method (LMM) and with Whitted's hard shadows (RT), and
+# print both times. Images: gazebo-lmm.png and gazebo-rt.png in the current folder.
+# Usage: scripts/demo.sh [extra options for lightmesh render, e.g. --width 1024 --height 768]
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+"$root/scripts/build.sh"
+exe="$root/build/apps/lightmesh"
+echo
+"$exe" render builtin:gazebo --shadows lmm -o gazebo-lmm.png --stats "$@" | tee /tmp/lightmesh-lmm.txt
+echo
+"$exe" render builtin:gazebo --shadows rt -o gazebo-rt.png --stats "$@" | tee /tmp/lightmesh-rt.txt
+lmm=$(sed -n 's/.*render \([0-9.]*\) s$/\1/p' /tmp/lightmesh-lmm.txt | head -1)
+rt=$(sed -n 's/.*render \([0-9.]*\) s$/\1/p' /tmp/lightmesh-rt.txt | head -1)
+echo
+awk -v l="$lmm" -v r="$rt" 'BEGIN { printf "render time: LMM (soft shadows) %.3f s, RT (hard shadows) %.3f s, LMM/RT = %.2f\n", l, r, l / r }'

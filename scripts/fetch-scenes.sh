@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# Fetches the real scenes' models from Debian packages into the lightmesh cache
+# (${XDG_CACHE_HOME:-~/.cache}/lightmesh), outside the source tree. Only `apt-get download`
+# and `dpkg -x` touch the network and the packages; nothing is installed.
+# Scene files in scenes/ refer to these models as "cache:<path>" (see README).
+# Usage: scripts/fetch-scenes.sh        (idempotent: skips what is already there)
+set -euo pipefail
+cache="${XDG_CACHE_HOME:-$HOME/.cache}/lightmesh"
+debs="$cache/debs"; pkg="$cache/packages"; models="$cache/models"
+mkdir -p "$debs" "$pkg" "$models"
+
+fetch() {  # fetch PACKAGE: download and unpack it once
+  local p=$1
+  if [ ! -d "$pkg/$p" ]; then
+    if ! ls "$debs/$p"_*.deb >/dev/null 2>&1; then
+      echo "fetch-scenes: downloading $p" >&2
+      (cd "$debs" && apt-get download "$p" >/dev/null 2>&1) || {
+        apt-get update -qq >/dev/null 2>&1 || true
+        (cd "$debs" && apt-get download "$p")
+      }
+    fi
+    dpkg -x "$debs/$p"_*.deb "$pkg/$p.tmp" && mv "$pkg/$p.tmp" "$pkg/$p"
+  fi
+}
+
+# Sweet Home 3D's Scopia furniture library (sweethome3d-furniture): the garden gazebo
+# ("barnum", like the paper's Gazebo) and the playground climbing frame ("parque").
+fetch sweethome3d-furniture
+if [ ! -f "$models/scopia/barnum/barnum.obj" ] || [ ! -f "$models/scopia/parque/parque.obj" ]; then
+  python3 - "$pkg/sweethome3d-furniture/usr/share/sweethome3d/furniture/Scopia.sh3f" "$models" <<'PY'
+import sys, zipfile
+archive, out = sys.argv[1], sys.argv[2]
+with zipfile.ZipFile(archive) as z:
+    for name in z.namelist():
+        if name.startswith(("scopia/barnum/", "scopia/parque/")) and not name.endswith("/"):
+            z.extract(name, out)
+PY
+fi
+echo "fetch-scenes: models in $models" >&2
+find "$models" -name '*.obj' | sort

@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# Installs what lightmesh needs to build, test and benchmark, from Debian 12's packages.
+# Does nothing when everything is there already; needs root (or sudo) otherwise.
+set -euo pipefail
+
+packages=(cmake ninja-build g++ pkg-config
+          libassimp-dev libembree-dev libtbb-dev nlohmann-json3-dev libcli11-dev
+          libstb-dev libopenexr-dev libgtest-dev libgmock-dev libbenchmark-dev)
+packages+=("$@")
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+[ ${#missing[@]} -eq 0 ] && exit 0
+
+echo "install-deps: installing ${missing[*]}" >&2
+sudo=""
+[ "$(id -u)" -eq 0 ] || sudo="sudo"
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -qq
+$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

@@ -1,0 +1,530 @@
+// accel_test.cpp -- the grid and Embree back-ends against brute force, ray by ray.
+#include <gtest/gtest.h>
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "lightmesh/accel/accelerator.h"
+#include "lightmesh/accel/brute_force.h"
+#include "lightmesh/accel/test_scenes.h"
+#include "lightmesh/geometry/triangle.h"
+#include "lightmesh/util/error.h"
+
+namespace lm {
+namespace {
+
+namespace ts = testing_scenes;
+
+bool HasEmbree() {
+#ifdef LIGHTMESH_HAS_EMBREE
+    return true;
+#else
+    return false;
+#endif
+}
+
+struct NamedScene {
+    std::string name;
+    TriangleMesh mesh;
+};
+
+// The scenes, built once. Sizes keep brute force (the slow side) to a few seconds in all.
+const NamedScene& GetScene(const std::string& name) {
+    static std::mutex mutex;
+    static std::map<std::string, std::unique_ptr<NamedScene>> cache;
+    std::lock_guard<std::mutex> lock(mutex);
+    auto& slot = cache[name];
+    if (!slot) {
+        slot = std::make_unique<NamedScene>();
+        slot->name = name;
+        if (name == "soup") slot->mesh = ts::Soup(1500, 1);
+        else if (name == "heightfield") slot->mesh = ts::HeightField(28, 2);
+        else if (name == "longthin") slot->mesh = ts::LongThin(600, 3);
+        else if (name == "onecell") slot->mesh = ts::OneCell(1500, 4);
+        else if (name == "sphere") slot->mesh = ts::Sphere(24, 32);
+        else if (name == "box") slot->mesh = ts::TessellatedBox(8);
+        else ADD_FAILURE() << "no scene " << name;
+    }
+    return *slot;
+}
+
+// ---------------------------------------------------------------------------------------
+// Rays
+
+struct TestRay {
+    Ray ray;
+    const char* kind;
+};
+
+// Every kind of ray the renderer makes, and the awkward ones: from outside and inside the
+// box, axis-parallel, with a zero component, short segments, starting exactly on the box's
+// boundary, aimed exactly at vertices, with tMin > 0.
+std::vector<TestRay> MakeRays(const TriangleMesh& mesh, int count, uint32_t seed) {
+    ts::Rng rng(seed);
+    const Bounds3 b = mesh.Bounds();
+    const Vec3 c = b.Center();
+    const float radius = 0.5f * Length(b.Diagonal());
+    std::vector<TestRay> rays;
+    rays.reserve(size_t(count));
+    for (int i = 0; i < count; ++i) {
+        const int kind = i % 9;
+        const Vec3 inside = rng.InBox(b.lo, b.hi);
+        const Vec3 outside = c + rng.Direction() * (radius * rng.Uniform(1.5f, 4.0f));
+        const float scale = rng.Uniform(0.1f, 10.0f);  // |d| need not be 1
+        Ray r;
+        const char* name = "";
+        switch (kind) {
+            case 0:
+                r = Ray{outside, (inside - outside) * scale};
+                name = "outside->box";
+                break;
+            case 1:
+                r = Ray{inside, rng.Direction() * scale};
+                name = "inside";
+                break;
+            case 2: {
+                const int a = int(rng.Index(3));
+                Vec3 d(0.0f);
+                d[a] = rng.Uniform() < 0.5f ? -scale : scale;
+                Vec3 o = inside;
+                if (rng.Uniform() < 0.5f) o[a] = c[a] - d[a] / scale * 2 * radius;  // from outside
+                r = Ray{o, d};
+                name = "axis-parallel";
+                break;
+            }
+            case 3: {
+                Vec3 d = rng.Direction() * scale;
+                d[int(rng.Index(3))] = 0.0f;
+                r = Ray{rng.Uniform() < 0.5f ? inside : outside, d};
+                name = "zero component";
+                break;
+            }
+            case 4: {
+                const Vec3 end = inside + rng.Direction() * (radius * rng.Uniform(0.0f, 0.3f));
+                r = Segment(inside, end);
+                name = "short segment";
+                break;
+            }
+            case 5: {
+                Vec3 o = inside;
+                const int a = int(rng.Index(3));
+                const bool hi = rng.Uniform() < 0.5f;
+                o[a] = hi ? b.hi[a] : b.lo[a];
+                Vec3 d = rng.Direction();
+                if ((d[a] > 0) == hi) d[a] = -d[a];  // into the box
+                r = Ray{o, d * scale};
+                name = "on box boundary";
+                break;
+            }
+            case 6: {
+                const Vec3& v = mesh.positions[rng.Index(uint32_t(mesh.positions.size()))];
+                r = Ray{outside, v - outside};
+                name = "at a vertex";
+                break;
+            }
+            case 7: {
+                r = Ray{outside, (inside - outside)};
+                r.tMin = rng.Uniform(0.0f, 1.0f);
+                r.tMax = r.tMin + rng.Uniform(0.05f, 2.0f);
+                name = "tMin > 0";
+                break;
+            }
+            default: {
+                r = Segment(outside, inside);
+                name = "outside segment";
+                break;
+            }
+        }
+        rays.push_back({r, name});
+    }
+    return rays;
+}
+
+std::string RayString(const Ray& r) {
+    return StringPrintf("Ray{o=(%a, %a, %a), d=(%a, %a, %a), tMin=%a, tMax=%a}", r.o.x, r.o.y, r.o.z,
+                        r.d.x, r.d.y, r.d.z, r.tMin, r.tMax);
+}
+
+// What brute force says about one ray (and about the same ray stopped just before its hit).
+struct Expected {
+    bool hit = false;
+    Hit h;
+    bool occluded = false;
+    int crossings = 0;
+    Ray shortened;  // tMax = 0.99·t (only when hit)
+    bool shortOccluded = false;
+    int shortCrossings = 0;
+};
+
+struct Reference {
+    std::vector<TestRay> rays;
+    std::vector<Expected> expected;
+};
+
+constexpr int kRaysPerScene = 10000;
+
+const Reference& GetReference(const std::string& sceneName) {
+    static std::mutex mutex;
+    static std::map<std::string, std::unique_ptr<Reference>> cache;
+    std::lock_guard<std::mutex> lock(mutex);
+    auto& slot = cache[sceneName];
+    if (!slot) {
+        const TriangleMesh& mesh = GetScene(sceneName).mesh;
+        slot = std::make_unique<Reference>();
+        slot->rays = MakeRays(mesh, kRaysPerScene, 1234u + uint32_t(sceneName.size()));
+        slot->expected.resize(slot->rays.size());
+        BruteForceAccel brute(mesh);
+        tbb::parallel_for(size_t(0), slot->rays.size(), [&](size_t i) {
+            const Ray& r = slot->rays[i].ray;
+            Expected& e = slot->expected[i];
+            e.hit = brute.Intersect(r, &e.h);
+            e.occluded = brute.Occluded(r);
+            e.crossings = brute.CountCrossings(r);
+            if (e.hit) {
+                e.shortened = r;
+                e.shortened.tMax = 0.99f * e.h.t;
+                e.shortOccluded = brute.Occluded(e.shortened);
+                e.shortCrossings = brute.CountCrossings(e.shortened);
+            }
+        });
+    }
+    return *slot;
+}
+
+// The t of the ray with the plane of triangle `prim` (for judging Embree's ties).
+float PlaneT(const TriangleMesh& mesh, uint32_t prim, const Ray& r) {
+    const Vec3 p0 = mesh.Vertex(prim, 0), p1 = mesh.Vertex(prim, 1), p2 = mesh.Vertex(prim, 2);
+    const Vec3 n = TriangleNormal(p0, p1, p2);
+    return Dot(n, p0 - r.o) / Dot(n, r.d);
+}
+
+// Distance from the ray's line to the segment ab, in double.
+double LineSegmentDistance(const Ray& r, const Vec3& a, const Vec3& b) {
+    const double o[3] = {r.o.x, r.o.y, r.o.z}, d[3] = {r.d.x, r.d.y, r.d.z};
+    const double pa[3] = {a.x, a.y, a.z}, u[3] = {double(b.x) - a.x, double(b.y) - a.y, double(b.z) - a.z};
+    auto dot = [](const double* x, const double* y) { return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]; };
+    double w[3] = {pa[0] - o[0], pa[1] - o[1], pa[2] - o[2]};
+    const double uu = dot(u, u), uv = dot(u, d), vv = dot(d, d), uw = dot(u, w), vw = dot(d, w);
+    const double den = uu * vv - uv * uv;
+    double s = den > 1e-30 * uu * vv ? (uv * vw - vv * uw) / den : 0.0;
+    s = std::clamp(s, 0.0, 1.0);
+    double q[3] = {w[0] + s * u[0], w[1] + s * u[1], w[2] + s * u[2]};  // segment point - o
+    const double t = dot(q, d) / vv;
+    for (int k = 0; k < 3; ++k) q[k] -= t * d[k];
+    return std::sqrt(dot(q, q));
+}
+
+// Whether Embree's closest hit (he, e) and brute force's (hb, b) differ only because the
+// ray grazes a triangle's boundary or starts on a surface: the first hit of one side is on a
+// triangle whose boundary passes within 1e-5 of the scene's size from the ray's line (for
+// Embree's, one IntersectTriangle does not hit at all), or is at the ray's start.
+bool Grazes(const TriangleMesh& mesh, const Ray& r, bool hb, const Hit& b, bool he, const Hit& e,
+            float tol) {
+    const double near = 1e-5 * Length(mesh.Bounds().Diagonal());
+    auto onBoundary = [&](const Hit& h) {
+        const Vec3 p0 = mesh.Vertex(h.prim, 0), p1 = mesh.Vertex(h.prim, 1), p2 = mesh.Vertex(h.prim, 2);
+        return std::min({LineSegmentDistance(r, p0, p1), LineSegmentDistance(r, p1, p2),
+                         LineSegmentDistance(r, p2, p0)}) <= near;
+    };
+    auto atStart = [&](const Hit& h) { return h.t - r.tMin <= tol; };
+    if (he && (!hb || e.t < b.t)) {
+        TriangleHit th;
+        const bool ours = IntersectTriangle(r, mesh.Vertex(e.prim, 0), mesh.Vertex(e.prim, 1),
+                                            mesh.Vertex(e.prim, 2), &th);
+        return !ours && (onBoundary(e) || atStart(e));
+    }
+    if (hb && (!he || b.t < e.t)) return onBoundary(b) || atStart(b);
+    return false;
+}
+
+// ---------------------------------------------------------------------------------------
+// The differential test
+
+struct AccelCase {
+    std::string accel;
+    std::string scene;
+};
+
+void PrintTo(const AccelCase& c, std::ostream* os) { *os << c.accel << " on " << c.scene; }
+
+std::string CaseName(const ::testing::TestParamInfo<AccelCase>& info) {
+    return info.param.accel + "_" + info.param.scene;
+}
+
+class AccelDifferentialTest : public ::testing::TestWithParam<AccelCase> {};
+
+TEST_P(AccelDifferentialTest, MatchesBruteForce) {
+    const AccelCase& c = GetParam();
+    if (c.accel == "embree" && !HasEmbree()) GTEST_SKIP() << "built without Embree";
+    const TriangleMesh& mesh = GetScene(c.scene).mesh;
+    const Reference& ref = GetReference(c.scene);
+    const auto accel = CreateAccelerator(c.accel, mesh);
+    // Our back-ends run the very same IntersectTriangle, so they must agree bit for bit.
+    // Embree computes t its own way: a relative tolerance, and a different triangle is
+    // accepted only as a tie (its plane is hit at the same t within tolerance).
+    const bool exact = c.accel != "embree";
+    const float radius = Length(mesh.Bounds().Diagonal());
+
+    int failures = 0, grazes = 0;
+    std::string first;
+    auto fail = [&](size_t i, const std::string& what) {
+        if (failures++ == 0)
+            first = StringPrintf("ray %zu (%s): %s\n  %s", i, ref.rays[i].kind, what.c_str(),
+                                 RayString(ref.rays[i].ray).c_str());
+    };
+    for (size_t i = 0; i < ref.rays.size(); ++i) {
+        const Ray& r = ref.rays[i].ray;
+        const Expected& e = ref.expected[i];
+        const float tol = exact ? 0.0f : 1e-4f * (std::abs(e.h.t) + radius / Length(r.d));
+        Hit h;
+        const bool hit = accel->Intersect(r, &h);
+        bool same = hit == e.hit;
+        if (same && hit) {
+            same = std::abs(h.t - e.h.t) <= tol;
+            // A different triangle is fine for Embree at a tie: its plane is hit at that t.
+            if (same && h.prim != e.h.prim)
+                same = !exact && std::abs(PlaneT(mesh, h.prim, r) - e.h.t) <= tol;
+        }
+        // Embree's edges are inclusive and its arithmetic is its own: a ray aimed exactly at
+        // a vertex, or starting on a face, may hit a triangle there that IntersectTriangle
+        // misses (or the reverse). Accepted for those two kinds of ray only, and only when
+        // the hit in question lies on the triangle's boundary or at the ray's start.
+        const bool grazeKind = std::string(ref.rays[i].kind) == "at a vertex" ||
+                               std::string(ref.rays[i].kind) == "on box boundary";
+        const bool graze = !same && !exact && grazeKind && Grazes(mesh, r, e.hit, e.h, hit, h, tol);
+        if (graze) ++grazes;
+        if (!same && !graze)
+            fail(i, StringPrintf("Intersect %d t=%a prim %u, brute force %d t=%a prim %u", hit, h.t,
+                                 h.prim, e.hit, e.h.t, e.h.prim));
+        const bool occ = accel->Occluded(r);
+        if (occ != e.occluded && !graze)
+            fail(i, StringPrintf("Occluded %d, brute force %d", occ, e.occluded));
+        // Crossing counts are exact for every back-end and every ray.
+        const int n = accel->CountCrossings(r);
+        if (n != e.crossings)
+            fail(i, StringPrintf("CountCrossings %d, brute force %d", n, e.crossings));
+        if (e.hit) {
+            const bool so = accel->Occluded(e.shortened);
+            const int sn = accel->CountCrossings(e.shortened);
+            if ((so != e.shortOccluded && !graze) || sn != e.shortCrossings)
+                fail(i, StringPrintf("with tMax=0.99t=%a: Occluded %d (brute %d), crossings %d (brute %d)",
+                                     e.shortened.tMax, so, e.shortOccluded, sn, e.shortCrossings));
+        }
+    }
+    EXPECT_EQ(failures, 0) << c.accel << " on " << c.scene << ", " << mesh.TriangleCount()
+                           << " triangles: " << failures << " of " << ref.rays.size()
+                           << " rays differ; first: " << first;
+    if (grazes) std::printf("  %s on %s: %d grazing rays hit in one test only\n", c.accel.c_str(),
+                            c.scene.c_str(), grazes);
+}
+
+std::vector<AccelCase> DifferentialCases() {
+    std::vector<AccelCase> cases;
+    for (const char* a : {"grid", "embree"})
+        for (const char* s : {"soup", "heightfield", "longthin", "onecell", "sphere", "box"})
+            cases.push_back({a, s});
+    return cases;
+}
+
+INSTANTIATE_TEST_SUITE_P(Accel, AccelDifferentialTest, ::testing::ValuesIn(DifferentialCases()),
+                         CaseName);
+
+// ---------------------------------------------------------------------------------------
+// Parity through exact shared edges and vertices of closed meshes
+
+class AccelParityTest : public ::testing::TestWithParam<std::string> {
+  protected:
+    void SetUp() override {
+        if (GetParam() == "embree" && !HasEmbree()) GTEST_SKIP() << "built without Embree";
+    }
+};
+
+// A segment from an outside point to an inside point crosses a closed surface an odd number
+// of times, and one between two outside points an even number: even when it passes exactly
+// through a shared vertex or edge, thanks to IntersectTriangle's tie-break. Directions are
+// axis-parallel or dyadic, so "exactly" holds in float arithmetic too.
+struct ParityCheck {
+    explicit ParityCheck(const Accelerator& a) : accel(a) {}
+    const Accelerator& accel;
+    int checked = 0, failures = 0;
+    std::string first;
+    void Expect(const Vec3& a, const Vec3& b, bool odd, const char* what) {
+        const Ray r = Segment(a, b);
+        const int n = accel.CountCrossings(r);
+        ++checked;
+        if ((n % 2 == 1) != odd && failures++ == 0)
+            first = StringPrintf("%s: %d crossings, expected %s\n  %s", what, n, odd ? "odd" : "even",
+                                 RayString(r).c_str());
+    }
+};
+
+TEST_P(AccelParityTest, SphereThroughVerticesAndPoles) {
+    const TriangleMesh& mesh = GetScene("sphere").mesh;
+    const auto accel = CreateAccelerator(GetParam(), mesh);
+    ParityCheck check(*accel);
+    // Along z through the poles: both pole fans are hit exactly at their common vertex.
+    check.Expect({0, 0, -3}, {0, 0, 0}, true, "south pole to centre");
+    check.Expect({0, 0, -3}, {0, 0, 3}, false, "through both poles");
+    check.Expect({0, 0, 3}, {0, 0, 0.5f}, true, "north pole to inside");
+    // Axis-parallel through every vertex: for a direction e_a the ray's 2D frame is exactly
+    // the other two coordinates, so each vertex is hit exactly. The closest point of the line
+    // to the centre is inside when it is well within the inscribed sphere (0.99 for 24x32).
+    for (const Vec3& v : mesh.positions)
+        for (int a = 0; a < 3; ++a) {
+            Vec3 mid = v;
+            mid[a] = 0;
+            if (Length(mid) > 0.9f) continue;  // tangent-ish lines: no clear inside point
+            Vec3 from = v, to = v;
+            from[a] = -3;
+            to[a] = 3;
+            check.Expect(from, mid, true, "outside to inside through a vertex");
+            check.Expect(from, to, false, "outside to outside through a vertex");
+            check.Expect(to, mid, true, "outside to inside through a vertex (reversed)");
+        }
+    EXPECT_GT(check.checked, 1000);
+    EXPECT_EQ(check.failures, 0) << check.failures << " of " << check.checked << "; first: "
+                                 << check.first;
+}
+
+TEST_P(AccelParityTest, BoxThroughEdgesAndVertices) {
+    const TriangleMesh& mesh = GetScene("box").mesh;  // [-1, 1]³, 8 × 8 quads a face
+    const auto accel = CreateAccelerator(GetParam(), mesh);
+    ParityCheck check(*accel);
+    // Points on the x = -1 face at multiples of 1/16: vertices (multiples of 1/4), edge
+    // midpoints of the axis-aligned edges and of the quad diagonals, and face interiors;
+    // the box's own edges (|y| or |z| = 1) are left out, where the ray would graze a face.
+    for (int j = -15; j <= 15; ++j)
+        for (int k = -15; k <= 15; ++k) {
+            const float y = float(j) / 16, z = float(k) / 16;
+            for (int a = 0; a < 3; ++a) {
+                // Permute so the crossing axis is a.
+                auto place = [&](Vec3 v, float along) {
+                    Vec3 q;
+                    q[a] = along;
+                    q[(a + 1) % 3] = v.y;
+                    q[(a + 2) % 3] = v.z;
+                    return q;
+                };
+                const Vec3 yz(0, y, z);
+                check.Expect(place(yz, -3), place(yz, 0.125f), true, "axis-parallel, out to in");
+                check.Expect(place(yz, -3), place(yz, 3), false, "axis-parallel, out to out");
+                check.Expect(place(yz, 3), place(yz, -0.5f), true, "axis-parallel, in from +side");
+                // Dyadic skew direction (1, 1/2, 1/4) through the face point: the shear
+                // factors are exact, so vertices and edges are still hit exactly.
+                const Vec3 d = place(Vec3(0, 0.5f, 0.25f), 1.0f);
+                const Vec3 onFace = place(yz, -1);
+                const Vec3 o = onFace - d * 0.5f, inPt = onFace + d * 0.25f;
+                const Vec3 outPt = onFace + d * 4.0f;
+                auto isInside = [](const Vec3& q) {
+                    return std::abs(q.x) < 1 && std::abs(q.y) < 1 && std::abs(q.z) < 1;
+                };
+                auto isOutside = [](const Vec3& q) {
+                    return std::abs(q.x) > 1 || std::abs(q.y) > 1 || std::abs(q.z) > 1;
+                };
+                if (isInside(inPt)) check.Expect(o, inPt, true, "skew, out to in");
+                // The far end must leave through a face interior or a shared edge of the
+                // tessellation, not graze the box's outer edge: keep it well outside.
+                if (isOutside(outPt)) check.Expect(o, outPt, false, "skew, out to out");
+            }
+        }
+    EXPECT_GT(check.checked, 5000);
+    EXPECT_EQ(check.failures, 0) << check.failures << " of " << check.checked << "; first: "
+                                 << check.first;
+}
+
+TEST_P(AccelParityTest, RandomSegmentsThroughClosedMeshes) {
+    // Generic segments: from outside the bounding sphere to points well inside (odd), and
+    // between two outside points (even).
+    for (const char* name : {"sphere", "box"}) {
+        const TriangleMesh& mesh = GetScene(name).mesh;
+        const auto accel = CreateAccelerator(GetParam(), mesh);
+        ParityCheck check(*accel);
+        ts::Rng rng(77);
+        for (int i = 0; i < 2000; ++i) {
+            const Vec3 out = rng.Direction() * rng.Uniform(2.0f, 5.0f);
+            const Vec3 in = rng.Direction() * rng.Uniform(0.0f, 0.95f);
+            const Vec3 out2 = rng.Direction() * rng.Uniform(2.0f, 5.0f);
+            check.Expect(out, in, true, "outside to inside");
+            check.Expect(out, out2, false, "outside to outside");
+        }
+        EXPECT_EQ(check.failures, 0) << name << ": " << check.failures << " of " << check.checked
+                                     << "; first: " << check.first;
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Accel, AccelParityTest, ::testing::Values("brute", "grid", "embree"),
+                         [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
+
+// ---------------------------------------------------------------------------------------
+// Scale: the same scene a million times larger and smaller, and far from the origin.
+
+TEST(AccelScale, HugeAndTinyScenesMatchBruteForce) {
+    for (const char* accelName : {"grid", "embree"}) {
+        if (std::string(accelName) == "embree" && !HasEmbree()) continue;
+        for (float scale : {1e6f, 1e-6f}) {
+            for (const Vec3 offset : {Vec3(0.0f), Vec3(3.0f * scale, -7.0f * scale, 11.0f * scale)}) {
+                const TriangleMesh mesh = ts::Transformed(ts::Soup(300, 9), scale, offset);
+                BruteForceAccel brute(mesh);
+                const auto accel = CreateAccelerator(accelName, mesh);
+                const auto rays = MakeRays(mesh, 2000, 99);
+                int failures = 0;
+                std::string first;
+                const bool exact = std::string(accelName) == "grid";
+                const float radius = Length(mesh.Bounds().Diagonal());
+                for (const TestRay& tr : rays) {
+                    const Ray& r = tr.ray;
+                    bool ok = accel->CountCrossings(r) == brute.CountCrossings(r);
+                    // Embree's own hits are compared on rays that graze nothing by design.
+                    const std::string kind = tr.kind;
+                    if (exact || (kind != "at a vertex" && kind != "on box boundary")) {
+                        Hit a, b;
+                        const bool ha = accel->Intersect(r, &a), hb = brute.Intersect(r, &b);
+                        const float tol = exact ? 0.0f : 1e-4f * (std::abs(b.t) + radius / Length(r.d));
+                        ok = ok && ha == hb && accel->Occluded(r) == brute.Occluded(r);
+                        if (ok && ha)
+                            ok = std::abs(a.t - b.t) <= tol &&
+                                 (a.prim == b.prim ||
+                                  (!exact && std::abs(PlaneT(mesh, a.prim, r) - b.t) <= tol));
+                    }
+                    if (!ok && failures++ == 0) first = kind + " " + RayString(r);
+                }
+                EXPECT_EQ(failures, 0) << accelName << " at scale " << scale << ": first " << first;
+            }
+        }
+    }
+}
+
+TEST(AccelFactory, NamesAndErrors) {
+    EXPECT_EQ(AcceleratorNames(), (std::vector<std::string>{"brute", "grid", "embree"}));
+    const TriangleMesh mesh = ts::Soup(10, 1);
+    EXPECT_THROW(CreateAccelerator("octree", mesh), Error);
+    EXPECT_EQ(CreateAccelerator("grid", mesh)->Name(), "grid");
+    if (HasEmbree()) EXPECT_EQ(CreateAccelerator("embree", mesh)->Name(), "embree");
+    else EXPECT_THROW(CreateAccelerator("embree", mesh), Error);
+}
+
+TEST(AccelEmpty, EmptyMeshHasNoHits) {
+    const TriangleMesh empty;
+    for (const char* name : {"brute", "grid", "embree"}) {
+        if (std::string(name) == "embree" && !HasEmbree()) continue;
+        const auto accel = CreateAccelerator(name, empty);
+        Hit h;
+        const Ray r{{0, 0, 0}, {1, 0, 0}};
+        EXPECT_FALSE(accel->Intersect(r, &h)) << name;
+        EXPECT_FALSE(accel->Occluded(r)) << name;
+        EXPECT_EQ(accel->CountCrossings(r), 0) << name;
+        EXPECT_FALSE(accel->Figures().empty()) << name;
+    }
+}
+
+}  // namespace
+}  // namespace lm

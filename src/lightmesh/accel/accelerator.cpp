@@ -1,0 +1,30 @@
+#include "lightmesh/accel/accelerator.h"
+
+#include "lightmesh/accel/brute_force.h"
+#include "lightmesh/accel/grid.h"
+#ifdef LIGHTMESH_HAS_EMBREE
+#include "lightmesh/accel/embree_accel.h"
+#endif
+#include "lightmesh/util/error.h"
+
+namespace lm {
+
+std::vector<std::string> AcceleratorNames() { return {"brute", "grid", "embree"}; }
+
+std::unique_ptr<Accelerator> CreateAccelerator(std::string_view name, const TriangleMesh& mesh,
+                                               const AccelOptions& options) {
+    if (name == "brute") return std::make_unique<BruteForceAccel>(mesh);
+    if (name == "grid") return std::make_unique<NestedGridAccel>(mesh, options);
+    if (name == "embree") {
+#ifdef LIGHTMESH_HAS_EMBREE
+        return std::make_unique<EmbreeAccel>(mesh);
+#else
+        ThrowError("--accel embree: this build has no Embree back-end (install libembree-dev "
+                   "and configure with -DLIGHTMESH_ENABLE_EMBREE=ON)");
+#endif
+    }
+    ThrowError("unknown ray-query back-end \"%.*s\" (choose brute, grid or embree)",
+               static_cast<int>(name.size()), name.data());
+}
+
+}  // namespace lm

@@ -1,0 +1,70 @@
+// accelerator.h -- the ray-query interface every back-end implements, and its factory.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "lightmesh/geometry/mesh.h"
+#include "lightmesh/math/ray.h"
+
+namespace lm {
+
+/// Closest hit of a ray: parameter t, primitive id (index into TriangleMesh::triangles)
+/// and barycentrics (b1, b2) of the hit point for vertices 1 and 2 (b0 = 1 - b1 - b2).
+struct Hit {
+    float t = Infinity;
+    uint32_t prim = UINT32_MAX;
+    float b1 = 0, b2 = 0;
+};
+
+/// Tuning of the back-ends, from the CLI or the scene file.
+struct AccelOptions {
+    /// Nested grid (paper §2): top-level resolution along the longest side of the scene's
+    /// box; 0 picks it from the triangle count and the box's proportions.
+    int gridResolution = 0;
+    /// A cell with more triangles than this is subdivided into a sub-grid.
+    int gridMaxTrianglesPerCell = 63;
+    /// Levels of grids including the top one (the paper used 2).
+    int gridMaxDepth = 2;
+};
+
+/// Named figures about a built back-end, for `lightmesh info` and `--stats`.
+using AccelFigures = std::vector<std::pair<std::string, std::string>>;
+
+/// Ray-scene queries over a fixed TriangleMesh. All queries are const and thread-safe.
+/// A hit counts when ray.tMin < t < ray.tMax.
+class Accelerator {
+  public:
+    virtual ~Accelerator() = default;
+
+    /// The name it was created by: "brute", "grid" or "embree".
+    virtual std::string_view Name() const = 0;
+
+    /// Closest hit along the ray; false if none.
+    virtual bool Intersect(const Ray& ray, Hit* hit) const = 0;
+
+    /// True if any triangle is hit (shadow rays and local-visibility segments).
+    virtual bool Occluded(const Ray& ray) const = 0;
+
+    /// The number of surface crossings along the ray: each triangle hit counts once, and
+    /// a ray through a shared edge or vertex of a closed mesh counts one crossing (the
+    /// tie-breaking rule of IntersectTriangle). Parity gives inside/outside (paper §4).
+    virtual int CountCrossings(const Ray& ray) const = 0;
+
+    /// Build figures: cells, empty cells, triangles per cell, depth, bytes, build time.
+    virtual AccelFigures Figures() const = 0;
+};
+
+/// The back-end names CreateAccelerator accepts, in the order of the help text.
+std::vector<std::string> AcceleratorNames();
+
+/// Builds the back-end called `name` over `mesh` (which must outlive it). Throws Error
+/// naming the valid choices for an unknown name, or when a back-end was not compiled in.
+std::unique_ptr<Accelerator> CreateAccelerator(std::string_view name, const TriangleMesh& mesh,
+                                               const AccelOptions& options = {});
+
+}  // namespace lm

@@ -1,0 +1,272 @@
+// embree_accel.cpp -- the Embree 3 back-end (the only file that calls rtc*).
+#include "lightmesh/accel/embree_accel.h"
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <string>
+
+#include "lightmesh/geometry/triangle.h"
+#include "lightmesh/util/error.h"
+#include "lightmesh/util/log.h"
+
+namespace lm {
+namespace {
+
+const char* ErrorName(RTCError code) {
+    switch (code) {
+        case RTC_ERROR_NONE: return "no error";
+        case RTC_ERROR_UNKNOWN: return "unknown error";
+        case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
+        case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
+        case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
+        case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
+        case RTC_ERROR_CANCELLED: return "cancelled";
+    }
+    return "error";
+}
+
+// Embree's hit parameter range is [tnear, tfar] with tnear >= 0; ours is (tMin, tMax) and
+// tMin may be negative. Such a ray is moved to start at tMin; `shift` is added back to t.
+struct EmbreeRayRange {
+    Vec3 o;
+    float tnear, tfar, shift;
+};
+// Embree counts hits at tnear and tfar, we do not: the range is narrowed by one ulp at each
+// end (a ray starting exactly on a surface must not hit it at t = 0).
+EmbreeRayRange ToEmbree(const Ray& r) {
+    EmbreeRayRange e{r.o, r.tMin, r.tMax, 0.0f};
+    if (r.tMin < 0) e = {r.At(r.tMin), 0.0f, r.tMax - r.tMin, r.tMin};
+    e.tnear = std::nextafter(e.tnear, Infinity);
+    if (e.tfar < Infinity) e.tfar = std::nextafter(e.tfar, -Infinity);
+    return e;
+}
+
+void SetRay(RTCRay* ray, const Vec3& o, const Vec3& d, float tnear, float tfar) {
+    ray->org_x = o.x;
+    ray->org_y = o.y;
+    ray->org_z = o.z;
+    ray->dir_x = d.x;
+    ray->dir_y = d.y;
+    ray->dir_z = d.z;
+    ray->tnear = tnear;
+    ray->tfar = tfar;
+    ray->time = 0.0f;
+    ray->mask = 0xFFFFFFFFu;
+    ray->id = 0;
+    ray->flags = 0;
+}
+
+// The context CountCrossings passes to Embree; Embree hands it back to the callbacks
+// (Embree's documented way to carry per-query data: a struct that begins with the
+// RTCIntersectContext).
+struct CountContext {
+    RTCIntersectContext context;
+    const Ray* ray;                  // the query, as the caller gave it
+    const TriangleMesh* mesh;
+    std::vector<uint32_t>* hits;     // triangles IntersectTriangle accepted
+};
+
+}  // namespace
+
+struct EmbreeAccel::Impl {
+    const TriangleMesh& mesh;
+    RTCDevice device = nullptr;
+    RTCScene scene = nullptr;
+    std::vector<float> vertices;  // x, y, z, pad: Embree reads 16 bytes per vertex
+    float extent = 1.0f;
+    double buildMs = 0;
+    std::mutex errorMutex;
+    std::string error;  // first error Embree reported
+
+    // CountCrossings' scene (built on first use): the triangles as user primitives whose
+    // boxes are padded, so Embree's conservative box traversal offers every triangle the ray
+    // could touch, and IntersectTriangle decides. (Gathering candidates through a filter on
+    // the triangle geometry is not enough: where Embree's own test rounds a vertex or edge
+    // hit of an open mesh to a miss, the filter never sees the triangle.)
+    std::once_flag countOnce;
+    RTCScene countScene = nullptr;
+    float pad = 0;  // box padding of the count scene
+
+    explicit Impl(const TriangleMesh& m) : mesh(m) {}
+    ~Impl() {
+        if (countScene) rtcReleaseScene(countScene);
+        if (scene) rtcReleaseScene(scene);
+        if (device) rtcReleaseDevice(device);
+    }
+
+    static void OnError(void* user, RTCError code, const char* str) {
+        auto* self = static_cast<Impl*>(user);
+        std::string message = StringPrintf("Embree: %s%s%s", ErrorName(code), str ? ": " : "",
+                                           str ? str : "");
+        LogWarning(message);
+        std::lock_guard<std::mutex> lock(self->errorMutex);
+        if (self->error.empty()) self->error = message;
+    }
+    void CheckError(const char* step) {
+        std::lock_guard<std::mutex> lock(errorMutex);
+        if (!error.empty()) ThrowError("cannot build the Embree back-end (%s): %s", step, error.c_str());
+    }
+
+    static void PrimBounds(const RTCBoundsFunctionArguments* args) {
+        const Impl& m = *static_cast<const Impl*>(args->geometryUserPtr);
+        const auto& t = m.mesh.triangles[args->primID];
+        Bounds3 b;
+        for (uint32_t v : t) b.Extend(m.mesh.positions[v]);
+        RTCBounds* o = args->bounds_o;
+        o->lower_x = b.lo.x - m.pad;
+        o->lower_y = b.lo.y - m.pad;
+        o->lower_z = b.lo.z - m.pad;
+        o->upper_x = b.hi.x + m.pad;
+        o->upper_y = b.hi.y + m.pad;
+        o->upper_z = b.hi.z + m.pad;
+    }
+    // Called for each primitive whose box the ray meets; it never reports occlusion, so
+    // traversal visits every box along the ray.
+    static void PrimOccluded(const RTCOccludedFunctionNArguments* args) {
+        const auto* c = reinterpret_cast<const CountContext*>(args->context);
+        for (unsigned i = 0; i < args->N; ++i) {
+            if (args->valid[i] == 0) continue;
+            const uint32_t prim = args->primID;
+            TriangleHit th;
+            if (IntersectTriangle(*c->ray, c->mesh->Vertex(prim, 0), c->mesh->Vertex(prim, 1),
+                                  c->mesh->Vertex(prim, 2), &th))
+                c->hits->push_back(prim);
+        }
+    }
+    static void PrimIntersect(const RTCIntersectFunctionNArguments*) {}  // never used
+
+    void BuildCountScene() {
+        pad = 1e-5f * extent;
+        countScene = rtcNewScene(device);
+        rtcSetSceneFlags(countScene, RTC_SCENE_FLAG_ROBUST);
+        if (!mesh.triangles.empty()) {
+            RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+            rtcSetGeometryUserPrimitiveCount(geom, unsigned(mesh.triangles.size()));
+            rtcSetGeometryUserData(geom, this);
+            rtcSetGeometryBoundsFunction(geom, &PrimBounds, this);
+            rtcSetGeometryIntersectFunction(geom, &PrimIntersect);
+            rtcSetGeometryOccludedFunction(geom, &PrimOccluded);
+            rtcCommitGeometry(geom);
+            rtcAttachGeometry(countScene, geom);
+            rtcReleaseGeometry(geom);
+        }
+        rtcCommitScene(countScene);
+        CheckError("building the crossing-count scene");
+    }
+};
+
+EmbreeAccel::EmbreeAccel(const TriangleMesh& mesh) : impl_(std::make_unique<Impl>(mesh)) {
+    const auto start = std::chrono::steady_clock::now();
+    Impl& m = *impl_;
+    // Device: Embree's errors go to our log, and the first one fails the build.
+    m.device = rtcNewDevice(nullptr);
+    if (!m.device)
+        ThrowError("cannot create the Embree device: %s", ErrorName(rtcGetDeviceError(nullptr)));
+    rtcSetDeviceErrorFunction(m.device, &Impl::OnError, &m);
+
+    // Scene: robust traversal (no precision-reducing shortcuts). Build quality stays
+    // Embree's default (medium), what a renderer gets without tuning.
+    m.scene = rtcNewScene(m.device);
+    rtcSetSceneFlags(m.scene, RTC_SCENE_FLAG_ROBUST);
+
+    // One triangle geometry sharing our buffers: indices straight from the mesh, vertices
+    // copied to a 16-byte stride because Embree loads each vertex with one 16-byte read.
+    if (!mesh.triangles.empty()) {
+        m.vertices.resize(mesh.positions.size() * 4 + 4, 0.0f);
+        for (size_t i = 0; i < mesh.positions.size(); ++i) {
+            m.vertices[4 * i + 0] = mesh.positions[i].x;
+            m.vertices[4 * i + 1] = mesh.positions[i].y;
+            m.vertices[4 * i + 2] = mesh.positions[i].z;
+        }
+        RTCGeometry geom = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                   m.vertices.data(), 0, 4 * sizeof(float), mesh.positions.size());
+        rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                   mesh.triangles.data(), 0, 3 * sizeof(uint32_t),
+                                   mesh.triangles.size());
+        rtcCommitGeometry(geom);
+        rtcAttachGeometry(m.scene, geom);  // geometry id 0
+        rtcReleaseGeometry(geom);          // the scene holds it now
+    }
+    rtcCommitScene(m.scene);  // builds the BVH
+    m.CheckError("building the scene");
+
+    RTCBounds b;
+    rtcGetSceneBounds(m.scene, &b);
+    const float ext = std::max({b.upper_x - b.lower_x, b.upper_y - b.lower_y, b.upper_z - b.lower_z});
+    m.extent = ext > 0 && std::isfinite(ext) ? ext : 1.0f;
+    m.buildMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                    .count();
+}
+
+EmbreeAccel::~EmbreeAccel() = default;
+
+bool EmbreeAccel::Intersect(const Ray& ray, Hit* hit) const {
+    const EmbreeRayRange r = ToEmbree(ray);
+    if (!(r.tnear <= r.tfar)) return false;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rh;
+    SetRay(&rh.ray, r.o, ray.d, r.tnear, r.tfar);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(impl_->scene, &context, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    *hit = Hit{rh.ray.tfar + r.shift, rh.hit.primID, rh.hit.u, rh.hit.v};
+    return true;
+}
+
+bool EmbreeAccel::Occluded(const Ray& ray) const {
+    const EmbreeRayRange r = ToEmbree(ray);
+    if (!(r.tnear <= r.tfar)) return false;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRay er;
+    SetRay(&er, r.o, ray.d, r.tnear, r.tfar);
+    rtcOccluded1(impl_->scene, &context, &er);
+    return er.tfar < 0;  // Embree sets tfar to -inf when something is hit
+}
+
+int EmbreeAccel::CountCrossings(const Ray& ray) const {
+    Impl& m = *impl_;
+    if (!(ray.tMin < ray.tMax) || LengthSquared(ray.d) == 0) return 0;
+    std::call_once(m.countOnce, [&] { m.BuildCountScene(); });
+    // Embree walks a slightly longer interval than (tMin, tMax), so rounding at its ends
+    // never drops a box; IntersectTriangle applies the exact range.
+    const float margin = 1e-5f * m.extent / Length(ray.d);
+    Ray wide = ray;
+    wide.tMin = ray.tMin - margin;
+    wide.tMax = ray.tMax + margin;
+    const EmbreeRayRange r = ToEmbree(wide);
+    std::vector<uint32_t> hits;
+    CountContext c;
+    rtcInitIntersectContext(&c.context);
+    c.ray = &ray;
+    c.mesh = &m.mesh;
+    c.hits = &hits;
+    RTCRay er;
+    SetRay(&er, r.o, ray.d, r.tnear, r.tfar);
+    rtcOccluded1(m.countScene, &c.context, &er);
+    // A primitive is offered once per BVH leaf that holds it; dedupe to be sure.
+    std::sort(hits.begin(), hits.end());
+    return int(std::unique(hits.begin(), hits.end()) - hits.begin());
+}
+
+AccelFigures EmbreeAccel::Figures() const {
+    const Impl& m = *impl_;
+    const size_t tris = std::max<size_t>(m.mesh.triangles.size(), 1);
+    const size_t bytes = m.vertices.size() * sizeof(float);
+    return {
+        {"embree version", RTC_VERSION_STRING},
+        {"embree scene", "1 triangle geometry, robust, default build quality"},
+        {"embree vertex copy bytes", StringPrintf("%zu (%.1f per triangle; BVH not counted)", bytes,
+                                                  double(bytes) / double(tris))},
+        {"embree build ms", StringPrintf("%.1f", m.buildMs)},
+    };
+}
+
+}  // namespace lm

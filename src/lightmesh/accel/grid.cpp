@@ -1,0 +1,574 @@
+// grid.cpp -- the nested uniform grid of the paper's section 2: build and 3D-DDA traversal.
+#include "lightmesh/accel/grid.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <utility>
+
+#include "lightmesh/geometry/triangle.h"
+#include "lightmesh/util/error.h"
+
+namespace lm {
+namespace {
+
+constexpr uint32_t kChild = 0x80000000u;  // an item that names a sub-grid node, not a triangle
+
+bool IsFiniteTri(const NestedGridAccel::Tri& t) {
+    return IsFinite(t.p0) && IsFinite(t.p1) && IsFinite(t.p2);
+}
+
+// Triangle/box overlap by the separating-axis theorem (Akenine-Möller, "Fast 3D
+// Triangle-Box Overlap Testing", JGT 2001): 3 box normals, the triangle's normal and the 9
+// edge cross products. In double, on a box already grown by the assignment epsilon, so a
+// triangle touching a cell is assigned to it. Exact assignment instead of the triangle's
+// bounding box keeps long diagonal triangles out of the cells they only pass near.
+bool TriBoxOverlap(const double c[3], const double h[3], const NestedGridAccel::Tri& t) {
+    double v[3][3];
+    for (int a = 0; a < 3; ++a) {
+        v[0][a] = double(t.p0[a]) - c[a];
+        v[1][a] = double(t.p1[a]) - c[a];
+        v[2][a] = double(t.p2[a]) - c[a];
+    }
+    // Box normals: the bounding boxes overlap.
+    for (int a = 0; a < 3; ++a) {
+        double lo = std::min({v[0][a], v[1][a], v[2][a]});
+        double hi = std::max({v[0][a], v[1][a], v[2][a]});
+        if (lo > h[a] || hi < -h[a]) return false;
+    }
+    double e[3][3];
+    for (int a = 0; a < 3; ++a) {
+        e[0][a] = v[1][a] - v[0][a];
+        e[1][a] = v[2][a] - v[1][a];
+        e[2][a] = v[0][a] - v[2][a];
+    }
+    // Triangle normal: the plane passes through the box.
+    {
+        double n[3] = {e[0][1] * e[1][2] - e[0][2] * e[1][1], e[0][2] * e[1][0] - e[0][0] * e[1][2],
+                       e[0][0] * e[1][1] - e[0][1] * e[1][0]};
+        double d = n[0] * v[0][0] + n[1] * v[0][1] + n[2] * v[0][2];
+        double r = h[0] * std::abs(n[0]) + h[1] * std::abs(n[1]) + h[2] * std::abs(n[2]);
+        if (std::abs(d) > r) return false;
+    }
+    // Edge × axis.
+    for (int i = 0; i < 3; ++i) {
+        for (int a = 0; a < 3; ++a) {
+            // axis = e_i × unit(a)
+            const int b = (a + 1) % 3, c2 = (a + 2) % 3;
+            double ax[3];
+            ax[a] = 0;
+            ax[b] = e[i][c2];
+            ax[c2] = -e[i][b];
+            double p0 = ax[b] * v[0][b] + ax[c2] * v[0][c2];
+            double p1 = ax[b] * v[1][b] + ax[c2] * v[1][c2];
+            double p2 = ax[b] * v[2][b] + ax[c2] * v[2][c2];
+            double r = h[b] * std::abs(ax[b]) + h[c2] * std::abs(ax[c2]);
+            if (std::min({p0, p1, p2}) > r || std::max({p0, p1, p2}) < -r) return false;
+        }
+    }
+    return true;
+}
+
+// A direct-mapped cache of the triangles this query already tested (mailboxing, Amanatides
+// & Woo §4): a triangle spanning several cells is tested once, usually. It lives on the
+// query's stack, so concurrent queries share nothing. An evicted id is merely tested again;
+// correctness never depends on it (CountCrossings dedupes its hits exactly).
+struct Mailbox {
+    static constexpr uint32_t kSize = 32;
+    uint32_t ids[kSize];
+    Mailbox() { std::fill(ids, ids + kSize, UINT32_MAX); }
+    bool Seen(uint32_t id) {
+        uint32_t& slot = ids[id & (kSize - 1)];
+        if (slot == id) return true;
+        slot = id;
+        return false;
+    }
+};
+
+// The three kinds of query the one traversal serves. Cell() tests a leaf cell's triangles
+// and returns true to stop the walk; tCellExit is where the ray leaves the cell.
+struct ClosestQuery {
+    ClosestQuery(const NestedGridAccel::Tri* t, const Ray& r) : tris(t), ray(r) {}
+    const NestedGridAccel::Tri* tris;
+    Ray ray;
+    Hit best;
+    bool found = false;
+    Mailbox mailbox;
+
+    bool Cell(const uint32_t* p, const uint32_t* end, float tCellExit) {
+        for (; p != end; ++p) {
+            const uint32_t id = *p;
+            if (mailbox.Seen(id)) continue;
+            const NestedGridAccel::Tri& t = tris[id];
+            TriangleHit th;
+            if (!IntersectTriangle(ray, t.p0, t.p1, t.p2, &th)) continue;
+            // ray.tMax is just above the best t, so equal-t hits arrive here too: brute
+            // force keeps the lowest primitive id among them, and so do we.
+            if (found && th.t == best.t && id > best.prim) continue;
+            best = Hit{th.t, id, th.b1, th.b2};
+            found = true;
+            ray.tMax = std::nextafter(th.t, Infinity);
+        }
+        // Every triangle that could be hit before the ray leaves this cell overlaps this
+        // cell (or an earlier one), so a hit within the cell is final.
+        return found && best.t <= tCellExit;
+    }
+};
+
+struct AnyQuery {
+    AnyQuery(const NestedGridAccel::Tri* t, const Ray& r) : tris(t), ray(r) {}
+    const NestedGridAccel::Tri* tris;
+    Ray ray;
+    bool found = false;
+    Mailbox mailbox;
+
+    bool Cell(const uint32_t* p, const uint32_t* end, float) {
+        for (; p != end; ++p) {
+            if (mailbox.Seen(*p)) continue;
+            const NestedGridAccel::Tri& t = tris[*p];
+            TriangleHit th;
+            if (IntersectTriangle(ray, t.p0, t.p1, t.p2, &th)) {
+                found = true;
+                return true;
+            }
+        }
+        return false;
+    }
+};
+
+struct CountQuery {
+    CountQuery(const NestedGridAccel::Tri* t, const Ray& r) : tris(t), ray(r) {}
+    const NestedGridAccel::Tri* tris;
+    Ray ray;
+    Mailbox mailbox;
+    // The triangles hit so far: a triangle spanning cells must count once even when the
+    // mailbox has forgotten it. Hits are few (crossings along one ray), so a linear search
+    // of a small array is the cheapest exact set.
+    static constexpr int kLocal = 64;
+    uint32_t local[kLocal];
+    int count = 0;
+    std::vector<uint32_t> overflow;
+
+    bool Counted(uint32_t id) const {
+        const int n = std::min(count, kLocal);
+        for (int i = 0; i < n; ++i)
+            if (local[i] == id) return true;
+        return std::find(overflow.begin(), overflow.end(), id) != overflow.end();
+    }
+    bool Cell(const uint32_t* p, const uint32_t* end, float) {
+        for (; p != end; ++p) {
+            const uint32_t id = *p;
+            if (mailbox.Seen(id)) continue;
+            const NestedGridAccel::Tri& t = tris[id];
+            TriangleHit th;
+            if (!IntersectTriangle(ray, t.p0, t.p1, t.p2, &th) || Counted(id)) continue;
+            if (count < kLocal)
+                local[count] = id;
+            else
+                overflow.push_back(id);
+            ++count;
+        }
+        return false;
+    }
+};
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+// Build
+
+std::array<int, 3> NestedGridAccel::AutoResolution(size_t triangles, const Bounds3& box,
+                                                   int resolution) {
+    const Vec3 e = box.Diagonal();
+    const float longest = MaxComponent(e);
+    std::array<int, 3> res{1, 1, 1};
+    if (!(longest > 0)) return res;
+    double side;  // target cell side
+    if (resolution > 0) {
+        side = double(longest) / resolution;
+    } else {
+        // s = (Π e_a over the free axes / λN)^(1/k); an axis thinner than s gets one cell
+        // and leaves the product, which can only shrink s for the others (≤ 3 rounds).
+        const double target = std::max(1.0, kCellsPerTriangle * double(std::max<size_t>(triangles, 1)));
+        bool free[3] = {true, true, true};
+        side = longest;
+        for (int round = 0; round < 3; ++round) {
+            double prod = 1;
+            int k = 0;
+            for (int a = 0; a < 3; ++a)
+                if (free[a]) prod *= e[a], ++k;
+            side = std::pow(prod / target, 1.0 / k);
+            bool changed = false;
+            for (int a = 0; a < 3; ++a)
+                if (free[a] && e[a] < side) free[a] = false, changed = true;
+            if (!changed) break;
+        }
+    }
+    for (int a = 0; a < 3; ++a) {
+        double n = double(e[a]) / side;
+        res[a] = static_cast<int>(std::clamp(std::lround(n), 1L, long(kMaxResolution)));
+    }
+    if (resolution > 0) res[MaxDimension(e)] = std::min(resolution, kMaxResolution);
+    return res;
+}
+
+// One level under construction: its cells as CSR, and the sub-grids of its crowded cells.
+struct NestedGridAccel::Builder {
+    struct Level {
+        Node node{};
+        int depth = 1;
+        std::vector<uint32_t> start;  // CSR over this level's cells
+        std::vector<uint32_t> prims;
+        std::vector<std::pair<uint32_t, std::unique_ptr<Level>>> children;  // by local cell
+    };
+
+    const std::vector<Tri>& tris;
+    const AccelOptions& options;
+    double epsAbs;  // the least a cell is grown by when assigning triangles
+
+    // Which cells of `node` the triangle overlaps, each reported once through emit(cell).
+    template <typename Emit>
+    void Rasterize(const Node& node, const Tri& t, Emit&& emit) const {
+        double eps[3];
+        int lo[3], hi[3];
+        for (int a = 0; a < 3; ++a) {
+            // Grow cells by a little: the DDA's plane crossings are computed in float, and
+            // a hit point rounded into the neighbouring cell must still find its triangle
+            // there. 1e-4 of a cell is far above float error at the scene's own scale.
+            eps[a] = std::max(1e-4 * node.cellSize[a], epsAbs);
+            const double bmin = std::min({t.p0[a], t.p1[a], t.p2[a]}) - eps[a];
+            const double bmax = std::max({t.p0[a], t.p1[a], t.p2[a]}) + eps[a];
+            const double inv = node.invCellSize[a];
+            lo[a] = static_cast<int>(std::clamp(std::floor((bmin - node.lo[a]) * inv), 0.0,
+                                                double(node.res[a] - 1)));
+            hi[a] = static_cast<int>(std::clamp(std::floor((bmax - node.lo[a]) * inv), 0.0,
+                                                double(node.res[a] - 1)));
+        }
+        const int nx = node.res[0], ny = node.res[1];
+        if (lo[0] == hi[0] && lo[1] == hi[1] && lo[2] == hi[2]) {
+            emit(uint32_t((lo[2] * ny + lo[1]) * nx + lo[0]));
+            return;
+        }
+        double h[3], c[3];
+        for (int a = 0; a < 3; ++a) h[a] = 0.5 * node.cellSize[a] + eps[a];
+        for (int z = lo[2]; z <= hi[2]; ++z) {
+            c[2] = node.lo[2] + (z + 0.5) * double(node.cellSize[2]);
+            for (int y = lo[1]; y <= hi[1]; ++y) {
+                c[1] = node.lo[1] + (y + 0.5) * double(node.cellSize[1]);
+                for (int x = lo[0]; x <= hi[0]; ++x) {
+                    c[0] = node.lo[0] + (x + 0.5) * double(node.cellSize[0]);
+                    if (TriBoxOverlap(c, h, t)) emit(uint32_t((z * ny + y) * nx + x));
+                }
+            }
+        }
+    }
+
+    static Node MakeNode(const Vec3& lo, const Vec3& hi, const std::array<int, 3>& res) {
+        Node n{};
+        n.lo = lo;
+        for (int a = 0; a < 3; ++a) {
+            n.res[a] = res[a];
+            n.cellSize[a] = (hi[a] - lo[a]) / float(res[a]);
+            n.invCellSize[a] = float(res[a]) / (hi[a] - lo[a]);
+        }
+        return n;
+    }
+
+    // Fills level.start/prims with the given triangles, then builds sub-grids (paper §2:
+    // a cell with more than the threshold gets ⌈∛n⌉ cells per side, recursively).
+    void Fill(Level& level, const uint32_t* ids, size_t n, bool parallel) const {
+        const Node& node = level.node;
+        const size_t cells = size_t(node.res[0]) * node.res[1] * node.res[2];
+        // (cell, triangle) pairs gathered per block of triangles; concatenating the blocks in
+        // order and counting-sorting by cell keeps each cell's triangles in id order, so the
+        // structure does not depend on the thread schedule.
+        constexpr size_t kBlock = 4096;
+        const size_t blocks = (n + kBlock - 1) / kBlock;
+        std::vector<std::vector<std::pair<uint32_t, uint32_t>>> pairs(blocks);
+        auto gather = [&](size_t b) {
+            auto& out = pairs[b];
+            const size_t end = std::min(n, (b + 1) * kBlock);
+            for (size_t i = b * kBlock; i < end; ++i) {
+                const uint32_t id = ids[i];
+                Rasterize(node, tris[id], [&](uint32_t cell) { out.emplace_back(cell, id); });
+            }
+        };
+        if (parallel && blocks > 1)
+            tbb::parallel_for(size_t(0), blocks, gather);
+        else
+            for (size_t b = 0; b < blocks; ++b) gather(b);
+
+        level.start.assign(cells + 1, 0);
+        size_t total = 0;
+        for (const auto& block : pairs) {
+            total += block.size();
+            for (const auto& [cell, id] : block) ++level.start[cell + 1];
+        }
+        for (size_t c = 0; c < cells; ++c) level.start[c + 1] += level.start[c];
+        level.prims.resize(total);
+        {
+            std::vector<uint32_t> cursor(level.start.begin(), level.start.end() - 1);
+            for (const auto& block : pairs)
+                for (const auto& [cell, id] : block) level.prims[cursor[cell]++] = id;
+        }
+        pairs.clear();
+
+        if (level.depth >= options.gridMaxDepth) return;
+        const size_t threshold = size_t(std::max(1, options.gridMaxTrianglesPerCell));
+        std::vector<uint32_t> crowded;
+        for (uint32_t c = 0; c < cells; ++c)
+            if (level.start[c + 1] - level.start[c] > threshold) crowded.push_back(c);
+        level.children.resize(crowded.size());
+        auto sub = [&](size_t k) {
+            const uint32_t c = crowded[k];
+            const int x = int(c % node.res[0]), y = int(c / node.res[0] % node.res[1]),
+                      z = int(c / (size_t(node.res[0]) * node.res[1]));
+            const Vec3 lo(node.lo.x + x * node.cellSize.x, node.lo.y + y * node.cellSize.y,
+                          node.lo.z + z * node.cellSize.z);
+            const Vec3 hi = lo + node.cellSize;
+            const size_t count = level.start[c + 1] - level.start[c];
+            const int r = std::max(2, int(std::ceil(std::cbrt(double(count)) - 1e-9)));
+            auto child = std::make_unique<Level>();
+            child->node = MakeNode(lo, hi, {r, r, r});
+            child->depth = level.depth + 1;
+            Fill(*child, level.prims.data() + level.start[c], count, false);
+            level.children[k] = {c, std::move(child)};
+        };
+        if (parallel && crowded.size() > 1)
+            tbb::parallel_for(size_t(0), crowded.size(), sub);
+        else
+            for (size_t k = 0; k < crowded.size(); ++k) sub(k);
+    }
+};
+
+NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& options)
+    : mesh_(mesh), options_(options) {
+    const auto startTime = std::chrono::steady_clock::now();
+    if (mesh.triangles.size() >= kChild)
+        ThrowError("the grid holds at most %u triangles, the scene has %zu", kChild - 1,
+                   mesh.triangles.size());
+
+    tris_.resize(mesh.triangles.size());
+    for (size_t i = 0; i < tris_.size(); ++i)
+        tris_[i] = Tri{mesh.Vertex(uint32_t(i), 0), mesh.Vertex(uint32_t(i), 1),
+                       mesh.Vertex(uint32_t(i), 2)};
+
+    // The box of the triangles (not of stray vertices). Triangles with a non-finite vertex
+    // are left out: they would make the box infinite, and IntersectTriangle never reports
+    // them (every comparison with NaN fails).
+    std::vector<uint32_t> ids;
+    ids.reserve(tris_.size());
+    Bounds3 b;
+    for (uint32_t i = 0; i < tris_.size(); ++i) {
+        if (!IsFiniteTri(tris_[i])) continue;
+        ids.push_back(i);
+        b.Extend(tris_[i].p0);
+        b.Extend(tris_[i].p1);
+        b.Extend(tris_[i].p2);
+    }
+    if (b.IsEmpty()) b = Bounds3(Vec3(-1), Vec3(1));
+    // A flat scene (a single plane) has a zero-thickness box: give every axis at least 1e-3
+    // of the longest side (or 1e-3 if the box is a point), then pad by a little so triangles
+    // on the boundary are strictly inside and the DDA's clamping never matters.
+    const float maxAbs = std::max(MaxComponent(Abs(b.lo)), MaxComponent(Abs(b.hi)));
+    float extent = b.MaxExtent();
+    if (!(extent > 1e-6f * maxAbs)) extent = std::max(1e-3f, 1e-3f * maxAbs);
+    const float minThick = 1e-3f * extent;
+    const float pad = 1e-5f * extent + 4e-7f * maxAbs;
+    for (int a = 0; a < 3; ++a) {
+        float lo = b.lo[a], hi = b.hi[a];
+        if (hi - lo < minThick) {
+            const float mid = 0.5f * (lo + hi);
+            lo = mid - 0.5f * minThick;
+            hi = mid + 0.5f * minThick;
+        }
+        b.lo[a] = lo - pad;
+        b.hi[a] = hi + pad;
+    }
+    box_ = b;
+
+    Builder builder{tris_, options_, 2e-7 * double(extent) + 2.5e-7 * double(maxAbs)};
+    Builder::Level top;
+    const auto res = AutoResolution(ids.size(), box_, options_.gridResolution);
+    top.node = Builder::MakeNode(box_.lo, box_.hi, res);
+    builder.Fill(top, ids.data(), ids.size(), true);
+
+    // Flatten breadth-first: a node's index is its order in the queue, known when its
+    // parent's cells are written.
+    std::vector<Builder::Level*> queue{&top};
+    stats_ = Stats{};
+    stats_.resolution = res;
+    stats_.topCells = size_t(res[0]) * res[1] * res[2];
+    cellStart_.push_back(0);
+    for (size_t q = 0; q < queue.size(); ++q) {
+        Builder::Level& level = *queue[q];
+        Node node = level.node;
+        node.firstCell = uint32_t(cellStart_.size() - 1);
+        nodes_.push_back(node);
+        stats_.depth = std::max(stats_.depth, level.depth);
+        const size_t cells = level.start.size() - 1;
+        size_t k = 0;  // next child, children are sorted by cell
+        for (size_t c = 0; c < cells; ++c) {
+            if (k < level.children.size() && level.children[k].first == c) {
+                items_.push_back(kChild | uint32_t(queue.size()));
+                queue.push_back(level.children[k].second.get());
+                ++k;
+            } else {
+                const uint32_t n = level.start[c + 1] - level.start[c];
+                items_.insert(items_.end(), level.prims.begin() + level.start[c],
+                              level.prims.begin() + level.start[c + 1]);
+                if (n == 0) ++stats_.emptyCells;
+                else {
+                    ++stats_.leafCells;
+                    stats_.references += n;
+                    stats_.maxPerCell = std::max<size_t>(stats_.maxPerCell, n);
+                }
+            }
+            cellStart_.push_back(uint32_t(items_.size()));
+        }
+        level.start = {};
+        level.prims = {};
+    }
+    if (items_.size() >= kChild) ThrowError("the grid is too large (%zu references)", items_.size());
+    stats_.totalCells = cellStart_.size() - 1;
+    stats_.subGrids = nodes_.size() - 1;
+    nodes_.shrink_to_fit();
+    cellStart_.shrink_to_fit();
+    items_.shrink_to_fit();
+    stats_.bytes = nodes_.size() * sizeof(Node) + cellStart_.size() * sizeof(uint32_t) +
+                   items_.size() * sizeof(uint32_t) + tris_.size() * sizeof(Tri);
+    stats_.buildMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() -
+                                                               startTime).count();
+}
+
+NestedGridAccel::~NestedGridAccel() = default;
+
+AccelFigures NestedGridAccel::Figures() const {
+    const Stats& s = stats_;
+    const double nonEmpty = double(std::max<size_t>(s.leafCells, 1));
+    const double tris = double(std::max<size_t>(tris_.size(), 1));
+    return {
+        {"grid resolution", StringPrintf("%d x %d x %d", s.resolution[0], s.resolution[1],
+                                         s.resolution[2])},
+        {"grid cells", StringPrintf("%zu top level, %zu in all", s.topCells, s.totalCells)},
+        {"empty cells", StringPrintf("%zu (%.1f%%)", s.emptyCells,
+                                     100.0 * double(s.emptyCells) / double(std::max<size_t>(s.totalCells, 1)))},
+        {"triangles per non-empty cell",
+         StringPrintf("mean %.2f, max %zu", double(s.references) / nonEmpty, s.maxPerCell)},
+        {"references per triangle", StringPrintf("%.2f", double(s.references) / tris)},
+        {"sub-grids", StringPrintf("%zu, depth reached %d of %d", s.subGrids, s.depth,
+                                   options_.gridMaxDepth)},
+        {"grid bytes", StringPrintf("%zu (%.1f per triangle)", s.bytes, double(s.bytes) / tris)},
+        {"grid build ms", StringPrintf("%.1f", s.buildMs)},
+    };
+}
+
+// ---------------------------------------------------------------------------------------
+// Traversal: one 3D-DDA (Amanatides & Woo, "A Fast Voxel Traversal Algorithm for Ray
+// Tracing", 1987) for all three query kinds.
+
+template <typename Query>
+bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD, float tEnter,
+                           float tExit, Query& query) const {
+    const Node& g = nodes_[nodeIndex];
+    int cell[3], step[3], stop[3];
+    float nextT[3];
+    const int stride[3] = {1, g.res[0], g.res[0] * g.res[1]};
+    // The plane crossings are recomputed from the plane's index at every step rather than
+    // accumulated (nextT += deltaT), so their error does not grow along a long ray.
+    auto planeT = [&](int a, int k) {
+        return (g.lo[a] + float(k) * g.cellSize[a] - ray.o[a]) * invD[a];
+    };
+    for (int a = 0; a < 3; ++a) {
+        const float p = ray.o[a] + ray.d[a] * tEnter;
+        const float f = std::floor((p - g.lo[a]) * g.invCellSize[a]);
+        cell[a] = f < 0 ? 0 : (f >= float(g.res[a]) ? g.res[a] - 1 : int(f));
+        if (ray.d[a] > 0) {
+            step[a] = 1;
+            stop[a] = g.res[a];
+            nextT[a] = planeT(a, cell[a] + 1);
+        } else if (ray.d[a] < 0) {
+            step[a] = -1;
+            stop[a] = -1;
+            nextT[a] = planeT(a, cell[a]);
+        } else {
+            step[a] = 0;
+            stop[a] = -1;
+            nextT[a] = Infinity;
+        }
+    }
+    uint32_t idx = g.firstCell + uint32_t(cell[0] + cell[1] * stride[1] + cell[2] * stride[2]);
+    float tCell = tEnter;
+    for (;;) {
+        const int axis = nextT[0] < nextT[1] ? (nextT[0] < nextT[2] ? 0 : 2)
+                                             : (nextT[1] < nextT[2] ? 1 : 2);
+        const float tNext = nextT[axis];
+        const float tCellExit = std::min(tNext, tExit);
+        const uint32_t b = cellStart_[idx], e = cellStart_[idx + 1];
+        if (b != e) {
+            const uint32_t first = items_[b];
+            if (first & kChild) {
+                if (Walk(first & ~kChild, ray, invD, tCell, tCellExit, query)) return true;
+            } else if (query.Cell(items_.data() + b, items_.data() + e, tCellExit)) {
+                return true;
+            }
+        }
+        if (tNext >= tExit) return false;
+        cell[axis] += step[axis];
+        if (cell[axis] == stop[axis]) return false;
+        idx += uint32_t(step[axis] * stride[axis]);
+        tCell = tNext;
+        nextT[axis] = planeT(axis, cell[axis] + (step[axis] > 0 ? 1 : 0));
+    }
+}
+
+template <typename Query>
+void NestedGridAccel::Traverse(const Ray& ray, Query& query) const {
+    // Clip [tMin, tMax] to the box; a zero direction component cannot cross that axis'
+    // slabs, so it only has to start between them (and 0 · ∞ never happens).
+    float t0 = ray.tMin, t1 = ray.tMax;
+    Vec3 invD;
+    bool moves = false;
+    for (int a = 0; a < 3; ++a) {
+        const float d = ray.d[a];
+        if (d == 0) {
+            if (!(ray.o[a] >= box_.lo[a] && ray.o[a] <= box_.hi[a])) return;
+            invD[a] = Infinity;
+            continue;
+        }
+        moves = true;
+        invD[a] = 1.0f / d;
+        float tn = (box_.lo[a] - ray.o[a]) * invD[a];
+        float tf = (box_.hi[a] - ray.o[a]) * invD[a];
+        if (tn > tf) std::swap(tn, tf);
+        t0 = std::max(t0, tn);
+        t1 = std::min(t1, tf);
+    }
+    if (!moves || !(t0 <= t1)) return;
+    Walk(0, ray, invD, t0, t1, query);
+}
+
+bool NestedGridAccel::Intersect(const Ray& ray, Hit* hit) const {
+    ClosestQuery q(tris_.data(), ray);
+    Traverse(ray, q);
+    if (q.found) *hit = q.best;
+    return q.found;
+}
+
+bool NestedGridAccel::Occluded(const Ray& ray) const {
+    AnyQuery q(tris_.data(), ray);
+    Traverse(ray, q);
+    return q.found;
+}
+
+int NestedGridAccel::CountCrossings(const Ray& ray) const {
+    CountQuery q(tris_.data(), ray);
+    Traverse(ray, q);
+    return q.count;
+}
+
+}  // namespace lm

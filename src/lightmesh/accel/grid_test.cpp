@@ -1,0 +1,213 @@
+// grid_test.cpp -- the nested grid's own rules: resolution, nesting, figures, DDA limits.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "lightmesh/accel/brute_force.h"
+#include "lightmesh/accel/grid.h"
+#include "lightmesh/accel/test_scenes.h"
+
+namespace lm {
+namespace {
+
+namespace ts = testing_scenes;
+
+std::string FigureValue(const AccelFigures& figures, const std::string& key) {
+    for (const auto& [k, v] : figures)
+        if (k == key) return v;
+    return "<missing " + key + ">";
+}
+
+TEST(GridResolution, AutoHeuristicBounds) {
+    const Bounds3 cube(Vec3(0), Vec3(1));
+    // A cube gets ≈ ∛(λN) cells per side.
+    for (size_t n : {size_t(1), size_t(100), size_t(10000), size_t(1000000)}) {
+        const auto r = NestedGridAccel::AutoResolution(n, cube);
+        const double expected = std::cbrt(NestedGridAccel::kCellsPerTriangle * double(n));
+        for (int a = 0; a < 3; ++a) {
+            EXPECT_GE(r[a], 1);
+            EXPECT_LE(r[a], NestedGridAccel::kMaxResolution);
+            EXPECT_NEAR(r[a], std::max(1.0, expected), 1.0) << n;
+        }
+    }
+    // Cells stay cubic: an 8:2:1 box gets resolutions in about that ratio, and about λN cells.
+    const Bounds3 slab(Vec3(0), Vec3(8, 2, 1));
+    const auto r = NestedGridAccel::AutoResolution(50000, slab);
+    EXPECT_NEAR(double(r[0]) / r[1], 4.0, 0.3);
+    EXPECT_NEAR(double(r[0]) / r[2], 8.0, 0.8);
+    const double cells = double(r[0]) * r[1] * r[2];
+    EXPECT_GT(cells, 0.6 * NestedGridAccel::kCellsPerTriangle * 50000);
+    EXPECT_LT(cells, 1.6 * NestedGridAccel::kCellsPerTriangle * 50000);
+    // A nearly flat box: one cell across, a 2D grid of ≈ λN cells over the rest.
+    const Bounds3 flat(Vec3(0), Vec3(10, 10, 1e-3f));
+    const auto f = NestedGridAccel::AutoResolution(20000, flat);
+    EXPECT_EQ(f[2], 1);
+    EXPECT_NEAR(double(f[0]) * f[1], NestedGridAccel::kCellsPerTriangle * 20000, 0.1 * 40000);
+    // Never beyond the clamp, even for absurd counts.
+    const auto big = NestedGridAccel::AutoResolution(size_t(1) << 40, cube);
+    EXPECT_EQ(big[0], NestedGridAccel::kMaxResolution);
+}
+
+TEST(GridResolution, OptionOverridesLongestSide) {
+    const TriangleMesh mesh = ts::Transformed(ts::Soup(2000, 5), 1.0f, Vec3(0));
+    AccelOptions options;
+    options.gridResolution = 81;  // the paper's "Child park" grid
+    const NestedGridAccel grid(mesh, options);
+    const auto& res = grid.GetStats().resolution;
+    EXPECT_EQ(std::max({res[0], res[1], res[2]}), 81);
+    EXPECT_NE(FigureValue(grid.Figures(), "grid resolution").find("81"), std::string::npos);
+}
+
+TEST(GridNesting, SubGridsOnlyWhereCrowdedAndNotBeyondMaxDepth) {
+    // 3000 tiny triangles in one spot of a large box: the top cell holding them is crowded.
+    const TriangleMesh mesh = ts::OneCell(3000, 7);
+    AccelOptions options;
+    options.gridMaxDepth = 1;
+    const NestedGridAccel flat(mesh, options);
+    EXPECT_EQ(flat.GetStats().subGrids, 0u);
+    EXPECT_EQ(flat.GetStats().depth, 1);
+    EXPECT_GT(flat.GetStats().maxPerCell, 63u);
+
+    options.gridMaxDepth = 2;  // the paper's two levels
+    const NestedGridAccel two(mesh, options);
+    EXPECT_GT(two.GetStats().subGrids, 0u);
+    EXPECT_EQ(two.GetStats().depth, 2);
+    EXPECT_LT(two.GetStats().maxPerCell, flat.GetStats().maxPerCell);
+
+    options.gridMaxDepth = 4;
+    const NestedGridAccel deep(mesh, options);
+    EXPECT_GE(deep.GetStats().depth, 3);
+    EXPECT_LE(deep.GetStats().depth, 4);
+    EXPECT_LE(deep.GetStats().maxPerCell, two.GetStats().maxPerCell);
+
+    // With a high threshold nothing is subdivided.
+    options.gridMaxTrianglesPerCell = 100000;
+    const NestedGridAccel none(mesh, options);
+    EXPECT_EQ(none.GetStats().subGrids, 0u);
+
+    // A uniform soup with the auto resolution has no crowded cell.
+    const NestedGridAccel soup(ts::Soup(5000, 3), AccelOptions{});
+    EXPECT_LE(soup.GetStats().maxPerCell, 63u);
+}
+
+TEST(GridFigures, ReportsTheBuild) {
+    const TriangleMesh mesh = ts::OneCell(2000, 8);
+    const NestedGridAccel grid(mesh, AccelOptions{});
+    const AccelFigures f = grid.Figures();
+    for (const char* key : {"grid resolution", "grid cells", "empty cells", "triangles per non-empty cell",
+                            "references per triangle", "sub-grids", "grid bytes", "grid build ms"})
+        EXPECT_EQ(FigureValue(f, key).find("<missing"), std::string::npos) << key;
+    EXPECT_NE(FigureValue(f, "empty cells").find('%'), std::string::npos);
+    EXPECT_NE(FigureValue(f, "sub-grids").find("depth reached 2 of 2"), std::string::npos)
+        << FigureValue(f, "sub-grids");
+    const auto& s = grid.GetStats();
+    EXPECT_GT(s.bytes, mesh.TriangleCount() * sizeof(NestedGridAccel::Tri));
+    EXPECT_GE(s.buildMs, 0.0);
+    EXPECT_EQ(s.leafCells + s.emptyCells + s.subGrids, s.totalCells);
+    EXPECT_GE(s.references, mesh.TriangleCount());
+}
+
+// Two parallel squares at z = 0 and z = 1 over [0, 1]², as four triangles (ids 0-1 and 2-3).
+TriangleMesh TwoPlanes() {
+    TriangleMesh m;
+    for (float z : {0.0f, 1.0f}) {
+        ts::AddTriangle(&m, {0, 0, z}, {1, 0, z}, {1, 1, z});
+        ts::AddTriangle(&m, {0, 0, z}, {1, 1, z}, {0, 1, z});
+    }
+    return m;
+}
+
+TEST(GridTraversal, RayStartingInsideFindsTheHitAhead) {
+    const TriangleMesh mesh = TwoPlanes();
+    const NestedGridAccel grid(mesh, AccelOptions{});
+    Hit h;
+    // From between the planes, upwards: the z = 1 plane at t = 0.5 (d has length 1).
+    ASSERT_TRUE(grid.Intersect(Ray{{0.3f, 0.6f, 0.5f}, {0, 0, 1}}, &h));
+    EXPECT_EQ(h.t, 0.5f);
+    EXPECT_GE(h.prim, 2u);
+    // Downwards, with |d| = 4: t = 0.5 / 4.
+    ASSERT_TRUE(grid.Intersect(Ray{{0.3f, 0.6f, 0.5f}, {0, 0, -4}}, &h));
+    EXPECT_EQ(h.t, 0.125f);
+    EXPECT_LE(h.prim, 1u);
+    EXPECT_EQ(grid.CountCrossings(Ray{{0.3f, 0.6f, 0.5f}, {0, 0, 1}}), 1);
+    EXPECT_EQ(grid.CountCrossings(Ray{{0.3f, 0.6f, -0.5f}, {0, 0, 1}}), 2);
+}
+
+TEST(GridTraversal, TMaxStopsTheWalk) {
+    const TriangleMesh mesh = TwoPlanes();
+    const NestedGridAccel grid(mesh, AccelOptions{});
+    const Ray up{{0.7f, 0.2f, -0.5f}, {0, 0, 1}, 0.0f, 1.2f};  // reaches z = 0.7 only
+    Hit h;
+    ASSERT_TRUE(grid.Intersect(up, &h));
+    EXPECT_EQ(h.t, 0.5f);
+    EXPECT_EQ(grid.CountCrossings(up), 1);  // the z = 1 plane is beyond tMax
+    const Ray shortRay{{0.7f, 0.2f, 0.1f}, {0, 0, 1}, 0.0f, 0.8f};
+    EXPECT_FALSE(grid.Occluded(shortRay));
+    EXPECT_FALSE(grid.Intersect(shortRay, &h));
+    EXPECT_EQ(grid.CountCrossings(shortRay), 0);
+    // tMin skips the first plane.
+    const Ray late{{0.7f, 0.2f, -0.5f}, {0, 0, 1}, 0.6f, Infinity};
+    ASSERT_TRUE(grid.Intersect(late, &h));
+    EXPECT_EQ(h.t, 1.5f);
+}
+
+TEST(GridTraversal, ZeroThicknessBox) {
+    // One plane: the box has no thickness on z and gets some, so rays still walk it.
+    TriangleMesh mesh = ts::HeightField(16, 1, 0.0f);  // flat at z = 0 (amplitude 0)
+    for (Vec3& p : mesh.positions) p.z = 0.0f;
+    const NestedGridAccel grid(mesh, AccelOptions{});
+    EXPECT_GT(grid.GridBounds().Diagonal().z, 0.0f);
+    EXPECT_EQ(grid.GetStats().resolution[2], 1);
+    const BruteForceAccel brute(mesh);
+    ts::Rng rng(3);
+    for (int i = 0; i < 2000; ++i) {
+        const Vec3 o(rng.Uniform(-0.2f, 1.2f), rng.Uniform(-0.2f, 1.2f), rng.Uniform(-1, 1));
+        Vec3 d = rng.Direction();
+        if (i % 3 == 0) d = Vec3(0, 0, o.z > 0 ? -1.0f : 1.0f);    // perpendicular
+        if (i % 3 == 1) d.z = 0;                                  // in the plane: never hits
+        Hit a, b;
+        const bool ha = grid.Intersect(Ray{o, d}, &a), hb = brute.Intersect(Ray{o, d}, &b);
+        ASSERT_EQ(ha, hb) << i;
+        if (ha) {
+            EXPECT_EQ(a.t, b.t);
+            EXPECT_EQ(a.prim, b.prim);
+        }
+        EXPECT_EQ(grid.CountCrossings(Ray{o, d}), brute.CountCrossings(Ray{o, d}));
+    }
+    // A ray lying in the plane starting on the box's boundary.
+    EXPECT_FALSE(grid.Occluded(Ray{{0, 0.5f, 0}, {1, 0, 0}}));
+}
+
+TEST(GridTraversal, DegenerateInputs) {
+    const TriangleMesh mesh = TwoPlanes();
+    const NestedGridAccel grid(mesh, AccelOptions{});
+    Hit h;
+    EXPECT_FALSE(grid.Intersect(Ray{{0.5f, 0.5f, 0.5f}, {0, 0, 0}}, &h));  // no direction
+    EXPECT_FALSE(grid.Occluded(Ray{{0.5f, 0.5f, 0.5f}, {0, 0, 1}, 2.0f, 1.0f}));  // empty range
+    EXPECT_FALSE(grid.Occluded(Ray{{5, 5, 5}, {0, 0, 1}}));  // parallel, outside the box
+    // A triangle with a NaN vertex is ignored, not poisoning the box.
+    TriangleMesh bad = TwoPlanes();
+    ts::AddTriangle(&bad, {0, 0, 0}, {std::nanf(""), 0, 0}, {0, 1, 0});
+    const NestedGridAccel g2(bad, AccelOptions{});
+    EXPECT_TRUE(std::isfinite(g2.GridBounds().MaxExtent()));
+    ASSERT_TRUE(g2.Intersect(Ray{{0.3f, 0.6f, 0.5f}, {0, 0, 1}}, &h));
+    EXPECT_EQ(h.t, 0.5f);
+}
+
+TEST(GridTraversal, ShortSegmentsMatchBruteForce) {
+    // The light-mesh workload: segments a few cells long starting inside the grid.
+    const TriangleMesh mesh = ts::Soup(3000, 11);
+    const NestedGridAccel grid(mesh, AccelOptions{});
+    const BruteForceAccel brute(mesh);
+    ts::Rng rng(5);
+    for (int i = 0; i < 3000; ++i) {
+        const Vec3 a = rng.InBox(Vec3(0), Vec3(1));
+        const Vec3 b = a + rng.Direction() * rng.Uniform(0.0f, 0.03f);
+        EXPECT_EQ(grid.Occluded(Segment(a, b)), brute.Occluded(Segment(a, b)));
+        EXPECT_EQ(grid.CountCrossings(Segment(a, b)), brute.CountCrossings(Segment(a, b)));
+    }
+}
+
+}  // namespace
+}  // namespace lm

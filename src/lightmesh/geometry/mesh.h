@@ -1,0 +1,53 @@
+// mesh.h -- the scene's triangles in world space, as one indexed mesh.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "lightmesh/math/bounds.h"
+
+namespace lm {
+
+/// All triangles of a scene in world space. A primitive id is an index into `triangles`.
+/// Meshes of a scene file are flattened into one (instances expanded), which keeps every
+/// ray-query back-end a plain array walk.
+struct TriangleMesh {
+    std::vector<Vec3> positions;
+    /// Optional per-vertex shading normals (empty, or one per position).
+    std::vector<Vec3> normals;
+    std::vector<std::array<uint32_t, 3>> triangles;
+    /// Material index per triangle (same length as `triangles`).
+    std::vector<uint32_t> materialIds;
+
+    size_t TriangleCount() const { return triangles.size(); }
+    Bounds3 Bounds() const;
+    const Vec3& Vertex(uint32_t prim, int k) const { return positions[triangles[prim][k]]; }
+
+    /// Appends another mesh (its material ids offset by `materialOffset`).
+    void Append(const TriangleMesh& other, uint32_t materialOffset = 0);
+};
+
+/// What CleanMesh removed.
+struct CleanReport {
+    size_t degenerate = 0;  ///< zero-area triangles (or with a non-finite vertex) dropped
+    size_t duplicate = 0;   ///< exact duplicates (same three positions, any order) dropped
+};
+
+/// Drops degenerate triangles and exact duplicates (real models have them, and a doubled
+/// triangle would count two crossings in an inside/outside parity test).
+CleanReport CleanMesh(TriangleMesh* mesh);
+
+/// Topology of the mesh with vertices welded by exact position.
+struct EdgeReport {
+    size_t edges = 0;        ///< distinct undirected edges
+    size_t open = 0;         ///< edges used by exactly one triangle (a hole or a sheet's rim)
+    size_t nonManifold = 0;  ///< edges used by more than two triangles
+    bool Closed() const { return open == 0 && nonManifold == 0; }
+};
+
+/// Counts open and non-manifold edges: the inside-a-solid test (paper §4, "СТ") assumes
+/// closed objects and is unreliable where these exist.
+EdgeReport AnalyzeEdges(const TriangleMesh& mesh);
+
+}  // namespace lm

@@ -1,0 +1,119 @@
+#include "lightmesh/geometry/triangle.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "lightmesh/scene/shapes.h"
+
+namespace lm {
+namespace {
+
+const Vec3 A(0, 0, 0), B(1, 0, 0), C(0, 1, 0);
+
+Ray Down(float x, float y) { return Ray{Vec3(x, y, 1), Vec3(0, 0, -1), 0, Infinity}; }
+
+TEST(Triangle, InteriorHitGivesDistanceAndBarycentrics) {
+    TriangleHit h;
+    ASSERT_TRUE(IntersectTriangle(Down(0.25f, 0.5f), A, B, C, &h));
+    EXPECT_FLOAT_EQ(h.t, 1.0f);
+    EXPECT_FLOAT_EQ(h.b1, 0.25f);
+    EXPECT_FLOAT_EQ(h.b2, 0.5f);
+    EXPECT_FLOAT_EQ(h.b0, 0.25f);
+    // Both windings are hit.
+    ASSERT_TRUE(IntersectTriangle(Down(0.25f, 0.5f), A, C, B, &h));
+    EXPECT_FLOAT_EQ(h.t, 1.0f);
+}
+
+TEST(Triangle, MissesOutsideBehindAndBeyondTmax) {
+    TriangleHit h;
+    EXPECT_FALSE(IntersectTriangle(Down(0.6f, 0.6f), A, B, C, &h));
+    EXPECT_FALSE(IntersectTriangle(Down(-0.1f, 0.5f), A, B, C, &h));
+    // Triangle behind the origin.
+    EXPECT_FALSE(IntersectTriangle(Ray{Vec3(0.2f, 0.2f, -1), Vec3(0, 0, -1), 0, Infinity}, A, B, C, &h));
+    // tMax stops before the plane, tMin starts after it.
+    EXPECT_FALSE(IntersectTriangle(Ray{Vec3(0.2f, 0.2f, 1), Vec3(0, 0, -1), 0, 0.99f}, A, B, C, &h));
+    EXPECT_FALSE(IntersectTriangle(Ray{Vec3(0.2f, 0.2f, 1), Vec3(0, 0, -1), 1.01f, Infinity}, A, B, C, &h));
+}
+
+TEST(Triangle, DegenerateTrianglesAndParallelRaysNeverHit) {
+    TriangleHit h;
+    EXPECT_FALSE(IntersectTriangle(Down(0.5f, 0), A, B, Vec3(2, 0, 0), &h));  // collinear
+    EXPECT_FALSE(IntersectTriangle(Down(0, 0), A, A, A, &h));                 // a point
+    // A ray in the triangle's plane.
+    EXPECT_FALSE(IntersectTriangle(Ray{Vec3(-1, 0.2f, 0), Vec3(1, 0, 0), 0, Infinity}, A, B, C, &h));
+    // A zero direction.
+    EXPECT_FALSE(IntersectTriangle(Ray{Vec3(0.2f, 0.2f, 1), Vec3(0, 0, 0), 0, Infinity}, A, B, C, &h));
+}
+
+// Two triangles sharing the edge B-C of a unit square: a ray through the shared edge hits
+// exactly one of them, whichever way each is wound and whichever way the ray goes.
+TEST(Triangle, SharedEdgeIsHitExactlyOnce) {
+    const Vec3 D(1, 1, 0);
+    for (float s : {0.5f, 0.25f, 0.125f, 0.75f}) {
+        const Vec3 onEdge = B + (C - B) * s;  // exactly representable
+        for (float dir : {-1.0f, 1.0f}) {
+            const Ray r{Vec3(onEdge.x, onEdge.y, -dir), Vec3(0, 0, dir), 0, Infinity};
+            for (bool flip1 : {false, true}) {
+                for (bool flip2 : {false, true}) {
+                    TriangleHit h;
+                    int hits = (flip1 ? IntersectTriangle(r, A, C, B, &h) : IntersectTriangle(r, A, B, C, &h)) +
+                               (flip2 ? IntersectTriangle(r, B, C, D, &h) : IntersectTriangle(r, C, B, D, &h));
+                    EXPECT_EQ(hits, 1) << "s=" << s << " dir=" << dir << " flips " << flip1 << flip2;
+                }
+            }
+        }
+    }
+}
+
+// A vertex shared by a fan of triangles covering its neighbourhood: a ray through the
+// vertex hits exactly one triangle of the fan.
+TEST(Triangle, SharedVertexIsHitExactlyOnce) {
+    const Vec3 centre(0, 0, 0);
+    const Vec3 ring[6] = {{1, 0, 0}, {0.5f, 1, 0}, {-0.5f, 1, 0}, {-1, 0, 0}, {-0.5f, -1, 0}, {0.5f, -1, 0}};
+    for (Vec3 d : {Vec3(0, 0, -1), Vec3(0, 0, 1), Vec3(0.3f, 0.1f, -1), Vec3(-0.2f, 0.7f, 1)}) {
+        const Ray r{centre - d, d, 0, Infinity};
+        int hits = 0;
+        TriangleHit h;
+        for (int i = 0; i < 6; ++i) hits += IntersectTriangle(r, centre, ring[i], ring[(i + 1) % 6], &h);
+        EXPECT_EQ(hits, 1) << "d=" << d.x << "," << d.y << "," << d.z;
+    }
+}
+
+// Rays from a point inside a closed sphere mesh cross its surface an odd number of times
+// (once), rays between two outside points an even number, also when aimed exactly at the
+// mesh's vertices, which are shared by many triangles.
+TEST(Triangle, ClosedMeshParityThroughVertices) {
+    TriangleMesh mesh;
+    ShapeBuilder(&mesh).Sphere(Vec3(0, 0, 0), 1.0f, 8, 12, 0);
+    auto crossings = [&](const Ray& r) {
+        int n = 0;
+        TriangleHit h;
+        for (uint32_t i = 0; i < mesh.TriangleCount(); ++i)
+            n += IntersectTriangle(r, mesh.Vertex(i, 0), mesh.Vertex(i, 1), mesh.Vertex(i, 2), &h);
+        return n;
+    };
+    const Vec3 inside(0, 0, 0);
+    for (const Vec3& v : mesh.positions) {
+        // From the centre through the vertex to twice as far: one crossing.
+        EXPECT_EQ(crossings(Segment(inside, v * 2.0f)), 1) << v.x << " " << v.y << " " << v.z;
+        // From far outside on one side, through the vertex, to the other side: parity even.
+        EXPECT_EQ(crossings(Segment(v * 3.0f, -v * 3.0f)) % 2, 0);
+    }
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(-3, 3);
+    for (int i = 0; i < 2000; ++i) {
+        const Vec3 out(u(rng), u(rng), 3.5f);
+        EXPECT_EQ(crossings(Segment(inside, out)) % 2, 1);
+    }
+}
+
+// Exact-float regressions: each fixed bug in the intersection test adds a case here.
+TEST(Triangle, BadCases) {
+    TriangleHit h;
+    // Grazing a vertex with a ray along an edge direction.
+    EXPECT_FALSE(IntersectTriangle(Ray{Vec3(-1, 0, 0), Vec3(1, 0, 0), 0, Infinity}, A, B, C, &h));
+}
+
+}  // namespace
+}  // namespace lm

@@ -1,0 +1,40 @@
+// image.h -- a linear RGB float image, and reading/writing PNG and EXR files.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "lightmesh/math/vec.h"
+
+namespace lm {
+
+/// Linear RGB pixels, row-major from the top-left corner.
+struct Image {
+    int width = 0, height = 0;
+    std::vector<Color> pixels;
+
+    Image() = default;
+    Image(int w, int h) : width(w), height(h), pixels(static_cast<size_t>(w) * h) {}
+    Color& At(int x, int y) { return pixels[static_cast<size_t>(y) * width + x]; }
+    const Color& At(int x, int y) const { return pixels[static_cast<size_t>(y) * width + x]; }
+};
+
+/// The image formats we read and write, chosen by file extension.
+enum class ImageFormat { Png, Exr };
+
+/// The format for `path`'s extension (.png or .exr, any case); throws Error otherwise.
+ImageFormat ImageFormatFor(const std::string& path);
+
+/// Writes PNG (8-bit, sRGB-encoded, clamped) or EXR (32-bit float, linear) by extension,
+/// atomically: a failure or an interruption leaves an existing file untouched.
+void WriteImage(const std::string& path, const Image& image);
+
+/// Reads a PNG (decoded from sRGB to linear) or an EXR. Throws Error naming the file.
+Image ReadImage(const std::string& path);
+
+/// The 8-bit sRGB bytes of a linear value (clamped to [0, 1], rounded to nearest).
+unsigned char EncodeSrgb8(float linear);
+/// The linear value of an 8-bit sRGB byte.
+float DecodeSrgb8(unsigned char encoded);
+
+}  // namespace lm

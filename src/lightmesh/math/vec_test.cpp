@@ -1,0 +1,64 @@
+#include "lightmesh/math/vec.h"
+
+#include <gtest/gtest.h>
+
+#include "lightmesh/math/bounds.h"
+#include "lightmesh/math/ray.h"
+
+namespace lm {
+namespace {
+
+TEST(Vec3, ArithmeticAndProducts) {
+    const Vec3 a(1, 2, 3), b(-4, 5, 0.5f);
+    EXPECT_EQ(a + b, Vec3(-3, 7, 3.5f));
+    EXPECT_EQ(a - b, Vec3(5, -3, 2.5f));
+    EXPECT_EQ(a * 2.0f, Vec3(2, 4, 6));
+    EXPECT_FLOAT_EQ(Dot(a, b), -4 + 10 + 1.5f);
+    // The cross product is orthogonal to both and follows the right-hand rule.
+    EXPECT_EQ(Cross(Vec3(1, 0, 0), Vec3(0, 1, 0)), Vec3(0, 0, 1));
+    EXPECT_FLOAT_EQ(Dot(Cross(a, b), a), 0);
+    EXPECT_FLOAT_EQ(Dot(Cross(a, b), b), 0);
+    EXPECT_FLOAT_EQ(Length(Normalize(b)), 1.0f);
+    EXPECT_EQ(MaxDimension(Vec3(1, -7, 3)), 2);
+    EXPECT_EQ(MaxDimension(Abs(Vec3(1, -7, 3))), 1);
+}
+
+TEST(Vec3, ReflectKeepsTangentAndFlipsNormal) {
+    const Vec3 r = Reflect(Vec3(1, -1, 0), Vec3(0, 1, 0));
+    EXPECT_EQ(r, Vec3(1, 1, 0));
+}
+
+TEST(Vec3, CoordinateSystemIsOrthonormal) {
+    for (Vec3 n : {Vec3(0, 0, 1), Vec3(0, 0, -1), Normalize(Vec3(1, 2, 3)), Normalize(Vec3(-1, 0.1f, -0.2f))}) {
+        Vec3 s, t;
+        CoordinateSystem(n, &s, &t);
+        EXPECT_NEAR(Length(s), 1, 1e-6);
+        EXPECT_NEAR(Length(t), 1, 1e-6);
+        EXPECT_NEAR(Dot(s, t), 0, 1e-6);
+        EXPECT_NEAR(Dot(s, n), 0, 1e-6);
+        EXPECT_NEAR(Dot(t, n), 0, 1e-6);
+    }
+}
+
+TEST(Bounds3, EmptyExtendContains) {
+    Bounds3 b;
+    EXPECT_TRUE(b.IsEmpty());
+    EXPECT_EQ(b.MaxExtent(), 0);
+    b.Extend(Vec3(1, 2, 3));
+    b.Extend(Vec3(-1, 0, 5));
+    EXPECT_FALSE(b.IsEmpty());
+    EXPECT_EQ(b.lo, Vec3(-1, 0, 3));
+    EXPECT_EQ(b.hi, Vec3(1, 2, 5));
+    EXPECT_TRUE(b.Contains(Vec3(0, 1, 4)));
+    EXPECT_FALSE(b.Contains(Vec3(0, 1, 6)));
+    EXPECT_EQ(b.MaxExtent(), 2);
+}
+
+TEST(Ray, SegmentSpansZeroToOne) {
+    const Ray r = Segment(Vec3(1, 1, 1), Vec3(3, 1, 1));
+    EXPECT_EQ(r.At(r.tMax), Vec3(3, 1, 1));
+    EXPECT_EQ(r.At(0.5f), Vec3(2, 1, 1));
+}
+
+}  // namespace
+}  // namespace lm

@@ -1,0 +1,40 @@
+// options.h -- everything that controls a render, from the scene file and the CLI.
+#pragma once
+
+#include <string>
+
+#include "lightmesh/accel/accelerator.h"
+
+namespace lm {
+
+/// Settings of the light mesh method (paper §2–4).
+struct LightMeshOptions {
+    /// Cells across the longest side of the scene's box (the paper's CC: 100, 200, 400).
+    int cc = 100;
+    /// Interpolation radius in mesh steps, r = kI·h (the paper's kI: 1.1 … 3).
+    float ki = 2.0f;
+    /// Variant of the paper's tables: "grid", "templates"(Ш), "reduced"(У), "none"(Нет),
+    /// "inside"(СТ), "object"(ОТ). Filled in by the light-mesh module.
+    std::string variant;
+    /// Template sub-steps per cell side (paper §3.1); 0 means the documented default.
+    int ns = 0;
+    /// Template cache folder; empty means the XDG cache.
+    std::string templateDir;
+};
+
+struct RenderOptions {
+    int width = 640;
+    int height = 480;
+    /// Anti-aliasing: aa × aa camera rays per pixel on a regular sub-grid.
+    int aa = 1;
+    /// Mirror recursion limit (1 = no reflected rays).
+    int maxDepth = 5;
+    /// Shadow method: "none", "rt" (one shadow ray per light) or "lmm".
+    std::string shadows = "rt";
+    /// Ray-query back-end: "brute", "grid" or "embree".
+    std::string accel = "grid";
+    AccelOptions accelOptions;
+    LightMeshOptions lightMesh;
+};
+
+}  // namespace lm

@@ -1,0 +1,152 @@
+#include "lightmesh/render/whitted.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+
+#include "lightmesh/geometry/triangle.h"
+#include "lightmesh/util/error.h"
+
+namespace lm {
+
+WhittedRenderer::WhittedRenderer(const Scene& scene, const Accelerator& accel,
+                                 const ShadowMethod& shadows, const RenderOptions& options)
+    : scene_(scene), accel_(accel), shadows_(shadows), options_(options),
+      camera_(scene.camera, options.width, options.height) {
+    if (scene.lights.size() > static_cast<size_t>(kMaxLights))
+        ThrowError("%s: %zu lights; at most %d are supported", scene.name.c_str(),
+                   scene.lights.size(), kMaxLights);
+    if (options.aa < 1 || options.aa > 16) ThrowError("--aa %d: must be 1 to 16", options.aa);
+    if (options.maxDepth < 1 || options.maxDepth > 64)
+        ThrowError("max depth %d: must be 1 to 64", options.maxDepth);
+}
+
+ShadingPoint WhittedRenderer::MakeShadingPoint(const TriangleMesh& mesh, const Ray& ray,
+                                               const Hit& hit) {
+    const Vec3 &p0 = mesh.Vertex(hit.prim, 0), &p1 = mesh.Vertex(hit.prim, 1),
+               &p2 = mesh.Vertex(hit.prim, 2);
+    const float b0 = 1.0f - hit.b1 - hit.b2;
+    ShadingPoint sp;
+    sp.prim = hit.prim;
+    // The point from barycentrics is accurate to a few ulps of the vertices, unlike
+    // o + t·d, whose error grows with the ray's length (pbrt-v4 §6.8).
+    sp.p = p0 * b0 + p1 * hit.b1 + p2 * hit.b2;
+    Vec3 n = Normalize(TriangleNormal(p0, p1, p2));
+    if (Dot(n, ray.d) > 0) n = -n;
+    sp.n = n;
+    // Push the origin off the surface so rays leaving it never hit its own triangle. The
+    // rounding errors of the hit point and of the intersection test's t both scale with
+    // the magnitude of the coordinates involved, so the offset is a few dozen ulps of the
+    // triangle's largest coordinate (a flat bound, unlike pbrt-v4's per-axis one, which is
+    // zero for a floor at y = 0 and needs a matching conservative t test).
+    const float magnitude = std::max({MaxComponent(Abs(p0)), MaxComponent(Abs(p1)), MaxComponent(Abs(p2))});
+    const float offset = magnitude * 4e-6f + 1e-30f;
+    sp.origin = sp.p + n * offset;
+    return sp;
+}
+
+Color WhittedRenderer::Li(const Ray& ray, int depth, RenderCounters& counters) const {
+    Hit hit;
+    if (!accel_.Intersect(ray, &hit)) return scene_.background;
+    ++counters.shadingPoints;
+    const TriangleMesh& mesh = scene_.mesh;
+    const ShadingPoint sp = MakeShadingPoint(mesh, ray, hit);
+    const Material& mat = scene_.materials[mesh.materialIds[hit.prim]];
+
+    // Shading normal: interpolated vertex normals when the mesh has them, on the same side
+    // as the geometric normal.
+    Vec3 ns = sp.n;
+    if (!mesh.normals.empty()) {
+        const auto& t = mesh.triangles[hit.prim];
+        const Vec3 interp = mesh.normals[t[0]] * (1.0f - hit.b1 - hit.b2) +
+                            mesh.normals[t[1]] * hit.b1 + mesh.normals[t[2]] * hit.b2;
+        if (LengthSquared(interp) > 0 && IsFinite(interp)) {
+            ns = Normalize(interp);
+            if (Dot(ns, sp.n) < 0) ns = -ns;
+        }
+    }
+    const Vec3 toEye = Normalize(-ray.d);
+
+    Color result = scene_.ambient * mat.kd;
+    const size_t nLights = scene_.lights.size();
+    Color omega[kMaxLights];
+    bool needed[kMaxLights];
+    float vis[kMaxLights];
+    bool any = false;
+    for (size_t i = 0; i < nLights; ++i) {
+        const PointLight& light = scene_.lights[i];
+        const Vec3 toLight = light.position - sp.p;
+        const float dist2 = LengthSquared(toLight);
+        const Vec3 l = toLight / std::sqrt(dist2);
+        // A light behind the geometric surface cannot light it, whatever the shading normal.
+        const float cosN = Dot(ns, l);
+        needed[i] = Dot(sp.n, l) > 0 && cosN > 0;
+        vis[i] = 0.0f;
+        if (!needed[i]) continue;
+        Color local = mat.kd * cosN;
+        if (!mat.ks.IsBlack()) {
+            const float cosR = Dot(Reflect(-l, ns), toEye);
+            if (cosR > 0) local += mat.ks * std::pow(cosR, mat.phong);
+        }
+        const float falloff = light.falloff == Falloff::InverseSquare ? 1.0f / dist2 : 1.0f;
+        omega[i] = light.intensity * local * falloff;
+        any = any || !omega[i].IsBlack();
+        needed[i] = !omega[i].IsBlack();
+    }
+    if (any) {
+        shadows_.Visibility(sp, needed, vis, counters);
+        for (size_t i = 0; i < nLights; ++i)
+            if (needed[i]) result += omega[i] * vis[i];
+    }
+
+    if (!mat.mirror.IsBlack() && depth + 1 < options_.maxDepth) {
+        Vec3 r = Reflect(ray.d, ns);
+        // A shading normal can send the mirror ray below the surface; reflect about the
+        // geometric normal instead then.
+        if (Dot(r, sp.n) <= 0) r = Reflect(ray.d, sp.n);
+        ++counters.reflectionRays;
+        result += mat.mirror * Li(Ray{sp.origin, r, 0.0f, Infinity}, depth + 1, counters);
+    }
+    return result;
+}
+
+Color WhittedRenderer::Pixel(int x, int y, RenderCounters& counters) const {
+    const int aa = options_.aa;
+    Color sum;
+    for (int sy = 0; sy < aa; ++sy) {
+        for (int sx = 0; sx < aa; ++sx) {
+            const float px = static_cast<float>(x) + (static_cast<float>(sx) + 0.5f) / aa;
+            const float py = static_cast<float>(y) + (static_cast<float>(sy) + 0.5f) / aa;
+            ++counters.cameraRays;
+            sum += Li(camera_.Generate(px, py), 0, counters);
+        }
+    }
+    return sum * (1.0f / static_cast<float>(aa * aa));
+}
+
+RenderResult WhittedRenderer::Render(ProgressReporter* progress) const {
+    constexpr int kTile = 16;
+    const int w = options_.width, h = options_.height;
+    const int tilesX = (w + kTile - 1) / kTile, tilesY = (h + kTile - 1) / kTile;
+    RenderResult result;
+    result.image = Image(w, h);
+    std::vector<RenderCounters> tileCounters(static_cast<size_t>(tilesX) * tilesY);
+    const auto start = std::chrono::steady_clock::now();
+    tbb::parallel_for(tbb::blocked_range<int>(0, tilesX * tilesY, 1), [&](const tbb::blocked_range<int>& range) {
+        for (int tile = range.begin(); tile != range.end(); ++tile) {
+            const int x0 = (tile % tilesX) * kTile, y0 = (tile / tilesX) * kTile;
+            RenderCounters& counters = tileCounters[tile];
+            for (int y = y0; y < std::min(y0 + kTile, h); ++y)
+                for (int x = x0; x < std::min(x0 + kTile, w); ++x)
+                    result.image.At(x, y) = Pixel(x, y, counters);
+            if (progress) progress->Update(1);
+        }
+    });
+    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    for (const RenderCounters& c : tileCounters) result.counters += c;
+    return result;
+}
+
+}  // namespace lm

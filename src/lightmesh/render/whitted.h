@@ -1,0 +1,55 @@
+// whitted.h -- Whitted ray tracing, formula (1) of the paper, with a pluggable shadow term.
+#pragma once
+
+#include "lightmesh/accel/accelerator.h"
+#include "lightmesh/io/image.h"
+#include "lightmesh/render/counters.h"
+#include "lightmesh/render/options.h"
+#include "lightmesh/scene/camera.h"
+#include "lightmesh/scene/scene.h"
+#include "lightmesh/shadow/shadow.h"
+#include "lightmesh/util/progress.h"
+
+namespace lm {
+
+/// Most lights a scene may have (visibility is gathered in fixed-size arrays).
+inline constexpr int kMaxLights = 64;
+
+struct RenderResult {
+    Image image;
+    RenderCounters counters;
+    double seconds = 0;  ///< wall time of the pixel loop
+};
+
+/// Renders I(P) = A·kd + Σ_i V_i·Ω(i, P) + mirror·I_r at the nearest hit P of each camera
+/// ray, recursing along mirror rays up to RenderOptions::maxDepth. V_i comes from the
+/// ShadowMethod: one shadow ray (formula (1), "rt"), or the light mesh (formula (2)).
+class WhittedRenderer {
+  public:
+    /// Throws Error for a degenerate camera, a bad image size or too many lights.
+    WhittedRenderer(const Scene& scene, const Accelerator& accel, const ShadowMethod& shadows,
+                    const RenderOptions& options);
+
+    /// Radiance arriving along `ray`; depth counts the rays already followed.
+    Color Li(const Ray& ray, int depth, RenderCounters& counters) const;
+
+    /// The value of pixel (x, y): the mean over aa × aa sub-pixel camera rays.
+    Color Pixel(int x, int y, RenderCounters& counters) const;
+
+    /// Renders the whole image in parallel over 16×16 tiles. Every pixel depends only on
+    /// its own rays, so the image is the same for any number of threads.
+    RenderResult Render(ProgressReporter* progress = nullptr) const;
+
+    /// Builds the shading point for a hit of `ray` (also used by tests and the shadow
+    /// methods' tests).
+    static ShadingPoint MakeShadingPoint(const TriangleMesh& mesh, const Ray& ray, const Hit& hit);
+
+  private:
+    const Scene& scene_;
+    const Accelerator& accel_;
+    const ShadowMethod& shadows_;
+    const RenderOptions options_;
+    CameraRays camera_;
+};
+
+}  // namespace lm

@@ -1,0 +1,299 @@
+// Tests of LoadMeshFile (Assimp import, node walk, materials, excludes) and Affine.
+#include "lightmesh/scene/mesh_loader.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+namespace lm {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string DataDir = std::string(LIGHTMESH_TEST_DATA) + "/scene_file";
+
+std::string TempFolder() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    const fs::path p = fs::path(::testing::TempDir()) /
+                       ("lightmesh_" + std::string(info->test_suite_name()) + "_" + info->name());
+    fs::remove_all(p);
+    fs::create_directories(p);
+    return p.string();
+}
+
+std::string WriteFile(const std::string& folder, const std::string& name, const std::string& text) {
+    const std::string path = folder + "/" + name;
+    std::ofstream(path, std::ios::binary) << text;
+    return path;
+}
+
+bool Near(const Vec3& a, const Vec3& b, float eps = 1e-5f) { return Length(a - b) <= eps; }
+bool Near(const Color& a, const Color& b, float eps = 1e-5f) {
+    return std::abs(a.r - b.r) <= eps && std::abs(a.g - b.g) <= eps && std::abs(a.b - b.b) <= eps;
+}
+
+/// The three corners of every triangle, for order-independent checks.
+std::vector<std::array<Vec3, 3>> Corners(const TriangleMesh& mesh) {
+    std::vector<std::array<Vec3, 3>> out;
+    for (uint32_t t = 0; t < mesh.TriangleCount(); ++t) out.push_back({mesh.Vertex(t, 0), mesh.Vertex(t, 1), mesh.Vertex(t, 2)});
+    return out;
+}
+
+bool HasTriangle(const TriangleMesh& mesh, const std::array<Vec3, 3>& expected) {
+    for (const auto& c : Corners(mesh)) {
+        for (int rot = 0; rot < 3; ++rot) {  // same winding, any starting corner
+            if (Near(c[rot], expected[0]) && Near(c[(rot + 1) % 3], expected[1]) && Near(c[(rot + 2) % 3], expected[2]))
+                return true;
+        }
+    }
+    return false;
+}
+
+std::string LoadError(const std::string& path) {
+    try {
+        LoadMeshFile(path);
+    } catch (const MeshFileError& e) {
+        return e.what();
+    } catch (const std::exception& e) {
+        return std::string("<not a MeshFileError> ") + e.what();
+    }
+    return "<no error>";
+}
+
+TEST(MeshLoader, ObjWithMtlMaterials) {
+    const LoadedMesh m = LoadMeshFile(DataDir + "/two_boxes.obj");
+    EXPECT_EQ(m.mesh.TriangleCount(), 16u);  // 6 quads → 12, plus the tetrahedron's 4
+    EXPECT_EQ(m.meshesPlaced, 2u);
+    EXPECT_EQ(m.meshesExcluded, 0u);
+    EXPECT_TRUE(m.mesh.normals.empty()) << "no vn lines: no normals, none generated";
+    EXPECT_TRUE(m.warnings.empty());
+    ASSERT_EQ(m.materials.size(), 2u);  // only the materials in use, in order of use
+    const Material& red = m.materials[0];
+    EXPECT_EQ(red.name, "Red");
+    EXPECT_TRUE(Near(red.kd, Color(0.8f, 0.1f, 0.1f)));
+    EXPECT_TRUE(Near(red.ks, Color(0.5f)));  // Ks
+    EXPECT_EQ(red.phong, 50.0f);             // Ns
+    EXPECT_TRUE(red.mirror.IsBlack());
+    EXPECT_EQ(m.materials[1].name, "Hidden");
+    EXPECT_TRUE(Near(m.materials[1].kd, Color(0, 1, 0)));
+    EXPECT_TRUE(m.materials[1].ks.IsBlack());
+    for (uint32_t t = 0; t < 12; ++t) EXPECT_EQ(m.mesh.materialIds[t], 0u);
+    for (uint32_t t = 12; t < 16; ++t) EXPECT_EQ(m.mesh.materialIds[t], 1u);
+    const Bounds3 b = m.mesh.Bounds();
+    EXPECT_TRUE(Near(b.lo, Vec3(-1, -1, -1)) && Near(b.hi, Vec3(4, 1, 1)));
+}
+
+TEST(MeshLoader, ExcludeByMaterialAndByName) {
+    MeshLoadOptions byMaterial;
+    byMaterial.excludeMaterials = {"Hid*", "Nothing?"};
+    LoadedMesh m = LoadMeshFile(DataDir + "/two_boxes.obj", byMaterial);
+    EXPECT_EQ(m.mesh.TriangleCount(), 12u);
+    EXPECT_EQ(m.meshesExcluded, 1u);
+    EXPECT_EQ(m.excludeMaterialsMatched, (std::vector<bool>{true, false}));
+    ASSERT_EQ(m.materials.size(), 1u);
+    EXPECT_EQ(m.materials[0].name, "Red");
+
+    MeshLoadOptions byName;
+    byName.excludeNames = {"Collision?ull"};
+    m = LoadMeshFile(DataDir + "/two_boxes.obj", byName);
+    EXPECT_EQ(m.mesh.TriangleCount(), 12u);
+    EXPECT_EQ(m.meshesExcluded, 1u);
+    EXPECT_EQ(m.excludeNamesMatched, std::vector<bool>{true});
+    EXPECT_TRUE(Near(m.mesh.Bounds().hi, Vec3(1, 1, 1)));
+
+    MeshLoadOptions everything;
+    everything.excludeNames = {"*"};
+    m = LoadMeshFile(DataDir + "/two_boxes.obj", everything);  // not an error: the caller decides
+    EXPECT_EQ(m.mesh.TriangleCount(), 0u);
+    EXPECT_EQ(m.meshesExcluded, 2u);
+}
+
+TEST(MeshLoader, PlyQuadIsTriangulated) {
+    const LoadedMesh m = LoadMeshFile(DataDir + "/quad.ply");
+    ASSERT_EQ(m.mesh.TriangleCount(), 2u);
+    const Bounds3 b = m.mesh.Bounds();
+    EXPECT_TRUE(Near(b.lo, Vec3(0, 0, 0)) && Near(b.hi, Vec3(1, 1, 0)));
+    ASSERT_EQ(m.materials.size(), 1u);
+    EXPECT_EQ(m.materials[0].kd, Color(0.8f)) << "no materials in the file: the default grey";
+    EXPECT_TRUE(m.materials[0].ks.IsBlack());
+    for (uint32_t t = 0; t < 2; ++t) {  // the quad's winding (counter-clockwise from +z) is kept
+        EXPECT_GT(Cross(m.mesh.Vertex(t, 1) - m.mesh.Vertex(t, 0), m.mesh.Vertex(t, 2) - m.mesh.Vertex(t, 0)).z, 0);
+    }
+}
+
+std::string Base64(const std::vector<unsigned char>& bytes) {
+    static const char* table = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    for (size_t i = 0; i < bytes.size(); i += 3) {
+        const uint32_t n = (uint32_t(bytes[i]) << 16) | (i + 1 < bytes.size() ? uint32_t(bytes[i + 1]) << 8 : 0) |
+                           (i + 2 < bytes.size() ? uint32_t(bytes[i + 2]) : 0);
+        out += table[(n >> 18) & 63];
+        out += table[(n >> 12) & 63];
+        out += i + 1 < bytes.size() ? table[(n >> 6) & 63] : '=';
+        out += i + 2 < bytes.size() ? table[n & 63] : '=';
+    }
+    return out;
+}
+
+/// A glTF 2 file with one triangle mesh (positions, normals, indices in an embedded
+/// base64 buffer) placed twice under a scaled root node:
+///   Root (scale 2, 2, 2) ── InstanceA (translation 1, 0, 0) ── mesh "Tri"
+///                        └─ InstanceB (translation 0, 0, 5) ── mesh "Tri"
+/// Tri = (0,0,0) (1,0,0) (0,1,0), normals +z, material "Paint".
+std::string TinyGltf() {
+    const float positions[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    const float normals[9] = {0, 0, 1, 0, 0, 1, 0, 0, 1};
+    const uint16_t indices[4] = {0, 1, 2, 0};  // three indices + padding
+    std::vector<unsigned char> buffer(80);
+    std::memcpy(buffer.data(), positions, 36);
+    std::memcpy(buffer.data() + 36, normals, 36);
+    std::memcpy(buffer.data() + 72, indices, 8);
+    return R"({
+  "asset": {"version": "2.0"},
+  "scene": 0,
+  "scenes": [{"nodes": [0]}],
+  "nodes": [
+    {"name": "Root", "children": [1, 2], "scale": [2, 2, 2]},
+    {"name": "InstanceA", "mesh": 0, "translation": [1, 0, 0]},
+    {"name": "InstanceB", "mesh": 0, "translation": [0, 0, 5]}
+  ],
+  "meshes": [{"name": "Tri", "primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}, "indices": 2, "material": 0}]}],
+  "materials": [{"name": "Paint", "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.4, 0.6, 1], "metallicFactor": 0, "roughnessFactor": 0.5}}],
+  "buffers": [{"byteLength": 80, "uri": "data:application/octet-stream;base64,)" + Base64(buffer) + R"("}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 72}, {"buffer": 0, "byteOffset": 72, "byteLength": 6}],
+  "accessors": [
+    {"bufferView": 0, "byteOffset": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+    {"bufferView": 0, "byteOffset": 36, "componentType": 5126, "count": 3, "type": "VEC3"},
+    {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}
+  ]
+})";
+}
+
+TEST(MeshLoader, GltfHierarchyInstancesAndBaseColour) {
+    const std::string path = WriteFile(TempFolder(), "tiny.gltf", TinyGltf());
+    const LoadedMesh m = LoadMeshFile(path);
+    ASSERT_EQ(m.mesh.TriangleCount(), 2u) << "the shared mesh is expanded once per node";
+    EXPECT_EQ(m.meshesPlaced, 2u);
+    // World = Root · Instance: 2 · (p + translation).
+    EXPECT_TRUE(HasTriangle(m.mesh, {Vec3(2, 0, 0), Vec3(4, 0, 0), Vec3(2, 2, 0)}));
+    EXPECT_TRUE(HasTriangle(m.mesh, {Vec3(0, 0, 10), Vec3(2, 0, 10), Vec3(0, 2, 10)}));
+    ASSERT_EQ(m.mesh.normals.size(), m.mesh.positions.size()) << "the file's normals are kept";
+    for (const Vec3& n : m.mesh.normals) EXPECT_TRUE(Near(n, Vec3(0, 0, 1)));
+
+    // Base colour → kd; a rough dielectric: ks = 0.04·(1 − roughness), phong = 2/r⁴ − 2.
+    ASSERT_EQ(m.materials.size(), 1u);
+    const Material& paint = m.materials[0];
+    EXPECT_EQ(paint.name, "Paint");
+    EXPECT_TRUE(Near(paint.kd, Color(0.2f, 0.4f, 0.6f)));
+    EXPECT_TRUE(Near(paint.ks, Color(0.02f)));
+    EXPECT_NEAR(paint.phong, 30.0f, 1e-3f);
+    EXPECT_TRUE(paint.mirror.IsBlack());
+
+    MeshLoadOptions options;
+    options.excludeNames = {"*B"};
+    const LoadedMesh a = LoadMeshFile(path, options);
+    EXPECT_EQ(a.mesh.TriangleCount(), 1u);
+    EXPECT_EQ(a.meshesExcluded, 1u);
+    EXPECT_TRUE(HasTriangle(a.mesh, {Vec3(2, 0, 0), Vec3(4, 0, 0), Vec3(2, 2, 0)}));
+
+    options.excludeNames = {"Root"};  // a node excludes its whole subtree
+    EXPECT_EQ(LoadMeshFile(path, options).meshesExcluded, 2u);
+    options.excludeNames = {"Tri"};  // mesh names match too
+    EXPECT_EQ(LoadMeshFile(path, options).meshesExcluded, 2u);
+    options.excludeNames = {};
+    options.excludeMaterials = {"Pai?t"};
+    EXPECT_EQ(LoadMeshFile(path, options).meshesExcluded, 2u);
+}
+
+TEST(MeshLoader, ErrorsNameTheFile) {
+    const std::string folder = TempFolder();
+    EXPECT_EQ(LoadError(folder + "/missing.obj"), folder + "/missing.obj: no such file");
+    EXPECT_EQ(LoadError(folder), folder + ": is a directory, not a mesh file");
+    EXPECT_EQ(LoadError("/dev/null"), "/dev/null: is not a regular file");
+    WriteFile(folder, "empty.obj", "");
+    EXPECT_EQ(LoadError(folder + "/empty.obj"), folder + "/empty.obj: the file is empty");
+    WriteFile(folder, "lines.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2 3\n");
+    EXPECT_EQ(LoadError(folder + "/lines.obj"), folder + "/lines.obj: no triangles (only points/lines)");
+    WriteFile(folder, "nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n");
+    EXPECT_EQ(LoadError(folder + "/nan.obj"),
+              folder + "/nan.obj: vertex 2 of mesh \"defaultobject\" has a non-finite coordinate (0, nan, 0)");
+    WriteFile(folder, "garbage.gltf", "{\"asset\": {\"version\": \"2.0\"}, \"buffers\": [{\"byteLength\": 8");
+    const std::string garbage = LoadError(folder + "/garbage.gltf");
+    EXPECT_EQ(garbage.rfind(folder + "/garbage.gltf: ", 0), 0u) << garbage;
+    // A truncated binary PLY: the header promises more than the file holds.
+    WriteFile(folder, "short.ply",
+              "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+              "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\x01\x02");
+    const std::string truncated = LoadError(folder + "/short.ply");
+    EXPECT_EQ(truncated.rfind(folder + "/short.ply: ", 0), 0u) << truncated;
+    EXPECT_EQ(truncated.find("<no error>"), std::string::npos);
+}
+
+TEST(MeshLoader, TruncatedFilesThrowOnlyMeshFileErrors) {
+    // Every prefix of a few files: each loads or throws MeshFileError naming the file.
+    const std::string folder = TempFolder();
+    std::ifstream in(DataDir + "/two_boxes.obj");
+    const std::string obj((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string gltf = TinyGltf();
+    for (const auto& [name, text] : {std::pair<std::string, std::string>{"cut.obj", obj}, {"cut.gltf", gltf}}) {
+        for (size_t n = 0; n < text.size(); n += 7) {
+            const std::string path = WriteFile(folder, name, text.substr(0, n));
+            try {
+                LoadMeshFile(path);
+            } catch (const MeshFileError& e) {
+                EXPECT_EQ(std::string(e.what()).rfind(path + ": ", 0), 0u) << e.what();
+            }
+        }
+    }
+}
+
+TEST(MeshLoader, Glob) {
+    EXPECT_TRUE(GlobMatch("*", ""));
+    EXPECT_TRUE(GlobMatch("*", "anything"));
+    EXPECT_TRUE(GlobMatch("Collision*", "Collision"));
+    EXPECT_TRUE(GlobMatch("Collision*", "CollisionHull"));
+    EXPECT_FALSE(GlobMatch("Collision*", "collisionHull")) << "case-sensitive";
+    EXPECT_FALSE(GlobMatch("Collision*", "MyCollision"));
+    EXPECT_TRUE(GlobMatch("*Mat", "SkyBoxMat"));
+    EXPECT_TRUE(GlobMatch("a?c", "abc"));
+    EXPECT_FALSE(GlobMatch("a?c", "ac"));
+    EXPECT_TRUE(GlobMatch("*a*b*c*", "xxaxxbxxcxx"));
+    EXPECT_FALSE(GlobMatch("*a*b*c*", "xxcxxbxxaxx"));
+    EXPECT_TRUE(GlobMatch("a**b", "ab"));
+    EXPECT_FALSE(GlobMatch("", "a"));
+    EXPECT_TRUE(GlobMatch("", ""));
+}
+
+TEST(MeshLoader, AffineComposesScaleRotateTranslate) {
+    const Affine t = Affine::Translate(Vec3(0, 1, 0)) * Affine::Rotate(Vec3(0, 2, 0), 90) * Affine::Scale(Vec3(2, 1, 1));
+    EXPECT_TRUE(Near(t.ApplyPoint(Vec3(1, 1, 1)), Vec3(1, 2, -2)));
+    EXPECT_TRUE(Near(t.ApplyVector(Vec3(1, 0, 0)), Vec3(0, 0, -2)));
+    EXPECT_NEAR(t.Determinant(), 2.0f, 1e-6f);
+    EXPECT_TRUE(Near(Affine::Rotate(Vec3(0, 0, 1), 90).ApplyPoint(Vec3(1, 0, 0)), Vec3(0, 1, 0)));
+}
+
+TEST(MeshLoader, TransformMeshUsesInverseTransposeForNormals) {
+    TriangleMesh mesh;
+    mesh.positions = {Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
+    const Vec3 n = Normalize(Vec3(1, 1, 1));
+    mesh.normals = {n, n, n};
+    mesh.triangles = {{0, 1, 2}};
+    mesh.materialIds = {0};
+    TransformMesh(&mesh, Affine::Scale(Vec3(2, 1, 1)));
+    // The plane x/2 + y + z = 1 has normal ∝ (1/2, 1, 1).
+    for (const Vec3& m : mesh.normals) EXPECT_TRUE(Near(m, Normalize(Vec3(0.5f, 1, 1))));
+    const Vec3 face = Cross(mesh.Vertex(0, 1) - mesh.Vertex(0, 0), mesh.Vertex(0, 2) - mesh.Vertex(0, 0));
+    EXPECT_GT(Dot(face, mesh.normals[0]), 0);
+
+    // A mirror keeps the normals outward and the winding consistent with them.
+    TransformMesh(&mesh, Affine::Scale(Vec3(-1, 1, 1)));
+    for (const Vec3& m : mesh.normals) EXPECT_TRUE(Near(m, Normalize(Vec3(-0.5f, 1, 1))));
+    const Vec3 mirrored = Cross(mesh.Vertex(0, 1) - mesh.Vertex(0, 0), mesh.Vertex(0, 2) - mesh.Vertex(0, 0));
+    EXPECT_GT(Dot(mirrored, mesh.normals[0]), 0);
+}
+
+}  // namespace
+}  // namespace lm

@@ -1,0 +1,64 @@
+// scene.h -- what a scene is once loaded: triangles, materials, lights, camera, settings.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "lightmesh/geometry/mesh.h"
+#include "lightmesh/render/options.h"
+
+namespace lm {
+
+/// Phong material of formula (1): I = A·kd + Σ V·Ω + mirror·I_r, with
+/// Ω = I_light·(kd·max(0, n·l) + ks·max(0, r·v)^phong).
+struct Material {
+    std::string name = "default";
+    Color kd{0.8f};      ///< diffuse reflectance
+    Color ks{0.0f};      ///< Phong specular reflectance
+    float phong = 32.0f; ///< Phong exponent
+    Color mirror{0.0f};  ///< mirror reflectance: weight of the reflected ray
+};
+
+/// How a point light's intensity falls off with distance d.
+enum class Falloff {
+    None,           ///< Ω uses the intensity as it is (the paper's formula (1))
+    InverseSquare,  ///< Ω uses intensity / d²
+};
+
+struct PointLight {
+    Vec3 position;
+    Color intensity{1.0f};
+    Falloff falloff = Falloff::InverseSquare;
+};
+
+/// A pinhole camera.
+struct Camera {
+    Vec3 position{0, 0, 5};
+    Vec3 lookAt{0, 0, 0};
+    Vec3 up{0, 1, 0};
+    float fovY = 45.0f;  ///< vertical field of view in degrees
+};
+
+/// What loading removed or found, for `lightmesh info` and warnings.
+struct SceneReport {
+    size_t degenerateRemoved = 0;
+    size_t duplicatesRemoved = 0;
+    size_t meshesExcluded = 0;
+    std::vector<std::string> sources;  ///< mesh files loaded (or "builtin:...")
+    std::vector<std::string> notes;    ///< choices made for the user (e.g. auto framing)
+};
+
+struct Scene {
+    std::string name;   ///< file name or builtin:NAME, used in messages
+    TriangleMesh mesh;  ///< every triangle in world space, ground plane included
+    std::vector<Material> materials;  ///< indexed by TriangleMesh::materialIds
+    std::vector<PointLight> lights;
+    Camera camera;
+    Color ambient{0.05f};
+    Color background{0.0f};
+    /// Render settings the scene asks for; command-line options override them.
+    RenderOptions render;
+    SceneReport report;
+};
+
+}  // namespace lm

@@ -1,0 +1,36 @@
+// scene_file.h -- loads a scene: "builtin:NAME", a JSON scene file, or a bare mesh file.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "lightmesh/scene/scene.h"
+
+namespace lm {
+
+struct SceneLoadOptions {
+    /// Unknown or duplicate keys in a scene file are errors instead of warnings.
+    bool strict = false;
+    /// The image size the caller will render at when it overrides the scene's (e.g. from
+    /// --width/--height); 0 means the scene's own. Only used to frame bare meshes, so the
+    /// whole model is in view whatever the aspect ratio.
+    int frameWidth = 0, frameHeight = 0;
+};
+
+/// Loads "builtin:NAME", a JSON scene file (*.json; the format is described at the top of
+/// scene_file.cpp), or a bare mesh file in any format Assimp reads. A bare mesh is framed
+/// automatically: a camera that sees the whole model, a ground plane under it and two
+/// point lights above it, each choice recorded in scene.report.notes.
+///
+/// Every scene is then cleaned (degenerate and duplicate triangles dropped, counted in
+/// scene.report, with a warning) and validated: at least one triangle, a finite non-zero
+/// extent, at least one light, a usable camera, render options in range.
+///
+/// Warnings (unknown keys with their JSON path, dropped triangles, importer complaints)
+/// are appended to *warnings, or logged with LogWarning when `warnings` is null. Throws
+/// Error for bad input; its message names the file and, for scene files, the JSON path:
+/// `scene.json /lights/1/position: expected 3 numbers, got 2`.
+Scene LoadScene(const std::string& spec, const SceneLoadOptions& options,
+                std::vector<std::string>* warnings);
+
+}  // namespace lm

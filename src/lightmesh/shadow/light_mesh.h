@@ -1,0 +1,97 @@
+// light_mesh.h -- the light mesh method (LMM): visibility interpolated from a lazily
+// evaluated uniform grid of nodes (Debelov & Novikov; docs/light-mesh-method.md §2-3).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include "lightmesh/shadow/shadow.h"
+
+namespace lm {
+
+/// The lattice of light-mesh nodes (paper §2; method note §2). Step h = longest side of
+/// the scene's box / CC; the lattice covers the box grown by ceil(kI) cells on each side,
+/// so every interpolation sphere of radius r = kI·h around a surface point has its nodes.
+/// On the longest axis there are CC + 2·ceil(kI) + 1 nodes.
+struct LightMeshLattice {
+    Vec3 origin;      ///< position of node (0, 0, 0)
+    float h = 0;      ///< step between nodes
+    float r = 0;      ///< interpolation radius kI·h
+    int nx = 0, ny = 0, nz = 0;
+
+    /// Throws Error for CC or kI out of range or an empty box.
+    static LightMeshLattice Make(const Bounds3& sceneBounds, int cc, float ki);
+
+    uint64_t NodeCount() const { return static_cast<uint64_t>(nx) * ny * nz; }
+    uint64_t Index(int i, int j, int k) const {
+        return (static_cast<uint64_t>(k) * ny + static_cast<uint64_t>(j)) * nx + static_cast<uint64_t>(i);
+    }
+    Vec3 Node(int i, int j, int k) const {
+        return origin + Vec3(static_cast<float>(i) * h, static_cast<float>(j) * h, static_cast<float>(k) * h);
+    }
+    Vec3 NodeAt(uint64_t index) const {
+        const uint64_t i = index % nx, j = (index / nx) % ny, k = index / (static_cast<uint64_t>(nx) * ny);
+        return Node(static_cast<int>(i), static_cast<int>(j), static_cast<int>(k));
+    }
+};
+
+/// How the nodes within r of P are enumerated.
+enum class SphereEnumeration {
+    Cube,  ///< the paper's "Grid": loop over the cube around the sphere, test distances
+};
+
+/// Which candidate nodes are dropped as not seeing P (light leaks, paper §1.4).
+enum class LocalVisibility {
+    None,    ///< "Нет": no test
+    Object,  ///< "ОТ": a segment from every candidate node to P, at every shading point
+};
+
+/// A variant of the paper's tables: how spheres are enumerated and how local visibility
+/// is tested.
+struct LightMeshVariant {
+    SphereEnumeration enumeration = SphereEnumeration::Cube;
+    LocalVisibility local = LocalVisibility::Object;
+
+    /// The paper's name ("Grid", ...) where the combination has one, else a description.
+    std::string PaperName() const;
+    /// The command-line name ("grid", ...).
+    std::string Name() const;
+};
+
+/// Parses a --variant name: "grid" (Grid: cube loop, segment test at every point) or
+/// "grid-none" (cube loop, no local-visibility test). Throws Error naming the choices.
+LightMeshVariant ParseLightMeshVariant(std::string_view name);
+/// The names ParseLightMeshVariant accepts.
+std::vector<std::string> LightMeshVariantNames();
+
+/// The shadow method of formula (2): V(L_i, P) is replaced by the mean of V(L_i, x_k)
+/// over the m nodes x_k within r of P, in front of the surface, and passing the local
+/// visibility test; with m = 0 it falls back to one shadow ray per light.
+class LightMeshShadows : public ShadowMethod {
+  public:
+    std::string_view Name() const override { return "lmm"; }
+
+    virtual const LightMeshLattice& Lattice() const = 0;
+    virtual const LightMeshVariant& Variant() const = 0;
+    /// Bytes of node storage per node (1 for up to 6 lights).
+    virtual int BytesPerNode() const = 0;
+    /// Distinct nodes evaluated so far.
+    virtual uint64_t NodesEvaluated() const = 0;
+    /// Whether node `index` has been evaluated (for tests of laziness).
+    virtual bool IsEvaluated(uint64_t index) const = 0;
+    /// The node's visibility bits (bit i: light i visible), evaluating it if need be.
+    virtual uint64_t NodeVisibility(uint64_t index) const = 0;
+};
+
+/// Builds the light mesh for `scene`. Refuses, before allocating, a mesh whose node
+/// storage would not fit in memory. `scene` and `accel` must outlive it.
+std::unique_ptr<LightMeshShadows> CreateLightMeshShadows(const Scene& scene, const Accelerator& accel,
+                                                         const LightMeshOptions& options);
+
+/// Bytes of node storage per node for a number of lights: visibility bits plus the
+/// "initialised" and "inside a solid" flags, rounded up to 1, 2, 4 or 8 bytes.
+int LightMeshBytesPerNode(size_t lights);
+
+}  // namespace lm

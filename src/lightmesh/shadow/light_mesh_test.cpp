@@ -1,0 +1,263 @@
+#include "lightmesh/shadow/light_mesh.h"
+
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <unordered_map>
+
+#include "lightmesh/render/test_scenes.h"
+#include "lightmesh/render/whitted.h"
+#include "lightmesh/scene/demo_scene.h"
+#include "lightmesh/util/error.h"
+
+namespace lm {
+namespace {
+
+using testing::AddBox;
+using testing::FloorScene;
+
+// A shading point on the floor y = 0 seen from above.
+ShadingPoint FloorPoint(float x, float z) {
+    ShadingPoint sp;
+    sp.p = Vec3(x, 0, z);
+    sp.n = Vec3(0, 1, 0);
+    sp.origin = Vec3(x, 1e-5f, z);
+    return sp;
+}
+
+struct Lmm {
+    std::unique_ptr<Accelerator> accel;
+    std::unique_ptr<LightMeshShadows> lmm;
+    Lmm(const Scene& s, int cc, float ki, const std::string& variant = "grid") {
+        accel = CreateAccelerator("grid", s.mesh);
+        LightMeshOptions o;
+        o.cc = cc;
+        o.ki = ki;
+        o.variant = variant;
+        lmm = CreateLightMeshShadows(s, *accel, o);
+    }
+    float Vis(const ShadingPoint& sp, int light = 0) const {
+        bool needed[kMaxLights];
+        float vis[kMaxLights] = {};
+        std::fill(needed, needed + kMaxLights, true);
+        RenderCounters c;
+        lmm->Visibility(sp, needed, vis, c);
+        return vis[light];
+    }
+};
+
+TEST(LightMesh, LatticeDimensionsFollowCcAndKi) {
+    // A box shaped like the paper's Gazebo: 86 x 64 x 100 cells at CC 100.
+    const Bounds3 box(Vec3(0, 0, 0), Vec3(8.6f, 6.4f, 10.0f));
+    const LightMeshLattice l = LightMeshLattice::Make(box, 100, 2.0f);
+    EXPECT_EQ(l.nx, 91);
+    EXPECT_EQ(l.ny, 69);
+    EXPECT_EQ(l.nz, 105);  // CC + 2·ceil(kI) + 1
+    EXPECT_FLOAT_EQ(l.h, 0.1f);
+    EXPECT_FLOAT_EQ(l.r, 0.2f);
+    EXPECT_EQ(LightMeshLattice::Make(box, 400, 3.0f).nz, 407);
+    EXPECT_EQ(LightMeshLattice::Make(box, 100, 1.1f).nz, 105);  // ceil(1.1) = 2 cells of padding
+    // The lattice covers the box with ceil(kI) cells to spare on every side.
+    EXPECT_LE(l.origin.x, box.lo.x - 2 * l.h + 1e-5f);
+    EXPECT_GE(l.Node(l.nx - 1, l.ny - 1, l.nz - 1).z, box.hi.z + 2 * l.h - 1e-4f);
+    EXPECT_THROW(LightMeshLattice::Make(box, 0, 2.0f), Error);
+    EXPECT_THROW(LightMeshLattice::Make(box, 100, 0.0f), Error);
+    EXPECT_THROW(LightMeshLattice::Make(Bounds3(), 100, 2.0f), Error);
+}
+
+TEST(LightMesh, OneBytePerNodeUpToSixLights) {
+    EXPECT_EQ(LightMeshBytesPerNode(1), 1);
+    EXPECT_EQ(LightMeshBytesPerNode(6), 1);
+    EXPECT_EQ(LightMeshBytesPerNode(7), 2);
+    EXPECT_EQ(LightMeshBytesPerNode(14), 2);
+    EXPECT_EQ(LightMeshBytesPerNode(15), 4);
+    EXPECT_EQ(LightMeshBytesPerNode(62), 8);
+}
+
+TEST(LightMesh, RefusesAMeshThatWouldNotFitBeforeAllocating) {
+    Scene s = FloorScene();
+    AddBox(&s, {-10, 0, -10}, {10, 20, 10});  // a cube-shaped scene: CC³ nodes
+    auto accel = CreateAccelerator("brute", s.mesh);
+    LightMeshOptions o;
+    o.cc = 4096;
+    try {
+        CreateLightMeshShadows(s, *accel, o);
+        FAIL() << "expected an error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("needs"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("GiB"), std::string::npos) << e.what();
+    }
+}
+
+// A plane with no occluder: every node sees the light, so LMM is RT, pixel for pixel.
+TEST(LightMesh, UnoccludedPlaneEqualsRtExactly) {
+    Scene s = FloorScene();
+    s.lights.push_back({{-2, 3, 1}, Color(5.0f), Falloff::InverseSquare});
+    auto accel = CreateAccelerator("grid", s.mesh);
+    s.render.shadows = "rt";
+    auto rt = CreateShadowMethod("rt", s, *accel, s.render);
+    auto lmm = CreateShadowMethod("lmm", s, *accel, s.render);
+    const RenderResult a = WhittedRenderer(s, *accel, *rt, s.render).Render();
+    const RenderResult b = WhittedRenderer(s, *accel, *lmm, s.render).Render();
+    EXPECT_EQ(a.image.pixels, b.image.pixels);
+    EXPECT_GT(b.counters.interpolations, 0u);
+    EXPECT_EQ(b.counters.fallbacks, 0u);
+}
+
+// A large occluder high above the floor: far inside its shadow, LMM gives 0 as RT does.
+TEST(LightMesh, DeepUmbraIsDark) {
+    Scene s = FloorScene();
+    AddBox(&s, {-4, 2, -4}, {4, 2.2f, 4});
+    Lmm lmm(s, 100, 2.0f);
+    EXPECT_EQ(lmm.Vis(FloorPoint(0.3f, -0.2f)), 0.0f);
+    EXPECT_EQ(lmm.Vis(FloorPoint(-1.0f, 1.0f)), 0.0f);
+    EXPECT_EQ(lmm.Vis(FloorPoint(9.0f, 9.0f)), 1.0f);  // far outside the shadow
+}
+
+// A straight shadow edge: a half-plane occluder at x < e with the light right above its
+// edge, so the shadow boundary is the vertical plane x = e. LMM's visibility across it
+// rises from 0 to 1 over a band about 2r wide, monotonically up to the weight of about one
+// node (the discrete sphere gains and loses nodes as P moves, which changes m).
+TEST(LightMesh, ShadowEdgeBandIsAboutTwoR) {
+    const float e = 0.37f;  // keeps nodes off the boundary plane
+    for (float ki : {1.5f, 3.0f}) {
+        Scene s = FloorScene(50.0f);
+        AddBox(&s, {-50, 5, -50}, {e, 5.2f, 50});
+        s.lights = {{{e, 10, 0}, Color(1.0f), Falloff::None}};
+        Lmm lmm(s, 100, ki);
+        const float r = lmm.lmm->Lattice().r, h = lmm.lmm->Lattice().h;
+        float prev = -1, firstLit = NAN, lastShadowed = NAN;
+        for (float x = e - 2 * r; x <= e + 2 * r; x += h / 16) {
+            const float v = lmm.Vis(FloorPoint(x, 0.13f));
+            EXPECT_GE(v, prev - 0.02f) << "not monotonic at x = " << x << ", kI " << ki;
+            prev = v;
+            if (v > 0 && std::isnan(firstLit)) firstLit = x;
+            if (v < 1) lastShadowed = x;
+        }
+        const float band = lastShadowed - firstLit;
+        EXPECT_LE(band, 2 * r) << "kI " << ki;
+        EXPECT_GE(band, 2 * r - 2 * h) << "kI " << ki;
+        EXPECT_EQ(lmm.Vis(FloorPoint(e - r - h / 8, 0)), 0.0f);
+        EXPECT_EQ(lmm.Vis(FloorPoint(e + r + h / 8, 0)), 1.0f);
+    }
+}
+
+// Light leaks (paper §1.4): a thin closed slab, much thinner than r, between the light and
+// a receiver floor just below it. Nodes above the slab see the light; with no local
+// visibility test they leak light under the slab, deep inside RT's shadow. The segment test
+// (ОТ) drops them: no point that RT puts in shadow farther than r from its shadow edge
+// gets any light.
+TEST(LightMesh, SegmentTestStopsLeaksThatNoTestLetsThrough) {
+    Scene s = FloorScene();
+    const float h = 20.0f / 100.0f, r = 2.0f * h;  // CC 100, kI 2 over the 20-wide floor
+    // Slab between lattice layers y = 0 and y = h, so the layer y = h lies above it, within r.
+    const float y0 = 0.25f * r, thickness = 0.1f * h;
+    const float half = 3.0f;
+    AddBox(&s, {-half, y0, -half}, {half, y0 + thickness, half});
+    s.lights = {{{0.1f, 8, 0.2f}, Color(1.0f), Falloff::None}};
+    Lmm ot(s, 100, 2.0f, "grid"), none(s, 100, 2.0f, "grid-none");
+    ASSERT_FLOAT_EQ(ot.lmm->Lattice().r, r);
+    // The RT shadow of the slab on the floor is about the slab's footprint (the light is
+    // high above); sample points deeper inside it than r.
+    int leaksOt = 0, leaksNone = 0, samples = 0;
+    const float inner = half * (8.0f - y0) / 8.0f - r - h;
+    for (float x = -inner; x <= inner; x += h / 3) {
+        for (float z = -inner; z <= inner; z += h / 3) {
+            const ShadingPoint sp = FloorPoint(x, z);
+            ASSERT_FALSE(LightVisible(*ot.accel, sp.origin, s.lights[0].position));
+            ++samples;
+            leaksOt += ot.Vis(sp) > 0;
+            leaksNone += none.Vis(sp) > 0;
+        }
+    }
+    EXPECT_GT(samples, 100);
+    EXPECT_EQ(leaksOt, 0);
+    EXPECT_GT(leaksNone, samples / 2) << "the leak test must be able to fail";
+}
+
+// Laziness: only nodes near visible surfaces are ever evaluated.
+TEST(LightMesh, EvaluatesOnlyNodesNearShadedPoints) {
+    Scene s = MakeBuiltinScene("gazebo");
+    for (Material& m : s.materials) m.mirror = Color(0.0f);  // shading points = camera hits
+    s.render.width = 80;
+    s.render.height = 60;
+    auto accel = CreateAccelerator("grid", s.mesh);
+    LightMeshOptions o;
+    auto lmm = CreateLightMeshShadows(s, *accel, o);
+    WhittedRenderer renderer(s, *accel, *lmm, s.render);
+    renderer.Render();
+    const LightMeshLattice& L = lmm->Lattice();
+    const uint64_t evaluated = lmm->NodesEvaluated();
+    EXPECT_GT(evaluated, 0u);
+    EXPECT_LT(static_cast<double>(evaluated), 0.05 * static_cast<double>(L.NodeCount()));
+
+    // Hash the camera-ray hit points by cells of size r, then check every evaluated node
+    // has one within r.
+    const CameraRays cam(s.camera, s.render.width, s.render.height);
+    std::unordered_map<uint64_t, std::vector<Vec3>> cells;
+    auto key = [&](int i, int j, int k) {
+        return (static_cast<uint64_t>(i + 4096) << 42) | (static_cast<uint64_t>(j + 4096) << 21) | (k + 4096);
+    };
+    auto cellOf = [&](const Vec3& p, int axis) { return static_cast<int>(std::floor(p[axis] / L.r)); };
+    for (int y = 0; y < s.render.height; ++y)
+        for (int x = 0; x < s.render.width; ++x) {
+            Hit hit;
+            const Ray ray = cam.Generate(x + 0.5f, y + 0.5f);
+            if (!accel->Intersect(ray, &hit)) continue;
+            const Vec3 p = WhittedRenderer::MakeShadingPoint(s.mesh, ray, hit).p;
+            cells[key(cellOf(p, 0), cellOf(p, 1), cellOf(p, 2))].push_back(p);
+        }
+    uint64_t checked = 0;
+    for (uint64_t idx = 0; idx < L.NodeCount(); ++idx) {
+        if (!lmm->IsEvaluated(idx)) continue;
+        const Vec3 x = L.NodeAt(idx);
+        bool near = false;
+        for (int dk = -1; dk <= 1 && !near; ++dk)
+            for (int dj = -1; dj <= 1 && !near; ++dj)
+                for (int di = -1; di <= 1 && !near; ++di) {
+                    auto it = cells.find(key(cellOf(x, 0) + di, cellOf(x, 1) + dj, cellOf(x, 2) + dk));
+                    if (it == cells.end()) continue;
+                    for (const Vec3& p : it->second)
+                        if (Length(x - p) <= L.r * 1.0001f) { near = true; break; }
+                }
+        EXPECT_TRUE(near) << "node " << idx << " evaluated far from every shading point";
+        if (!near) break;
+        ++checked;
+    }
+    EXPECT_EQ(checked, evaluated);
+}
+
+TEST(LightMesh, ImagesAreIdenticalForAnyThreadCount) {
+    Scene s = MakeBuiltinScene("gazebo");
+    s.render.width = 96;
+    s.render.height = 72;
+    auto accel = CreateAccelerator("grid", s.mesh);
+    for (const char* variant : {"grid", "grid-none"}) {
+        s.render.lightMesh.variant = variant;
+        RenderResult one, many;
+        uint64_t nodesOne = 0, nodesMany = 0;
+        tbb::task_arena(1).execute([&] {
+            auto lmm = CreateShadowMethod("lmm", s, *accel, s.render);
+            one = WhittedRenderer(s, *accel, *lmm, s.render).Render();
+            nodesOne = static_cast<LightMeshShadows&>(*lmm).NodesEvaluated();
+        });
+        tbb::task_arena(4).execute([&] {
+            auto lmm = CreateShadowMethod("lmm", s, *accel, s.render);
+            many = WhittedRenderer(s, *accel, *lmm, s.render).Render();
+            nodesMany = static_cast<LightMeshShadows&>(*lmm).NodesEvaluated();
+        });
+        EXPECT_EQ(one.image.pixels, many.image.pixels) << variant;
+        EXPECT_EQ(nodesOne, nodesMany) << variant;
+        EXPECT_EQ(one.counters.localSegments, many.counters.localSegments) << variant;
+    }
+}
+
+TEST(LightMesh, UnknownVariantIsAnError) {
+    EXPECT_THROW(ParseLightMeshVariant("fastest"), Error);
+    EXPECT_EQ(ParseLightMeshVariant("").local, LocalVisibility::Object);
+    EXPECT_EQ(ParseLightMeshVariant("grid-none").local, LocalVisibility::None);
+}
+
+}  // namespace
+}  // namespace lm

@@ -1,0 +1,61 @@
+#include "lightmesh/shadow/shadow.h"
+
+#include "lightmesh/shadow/light_mesh.h"
+#include "lightmesh/util/error.h"
+
+namespace lm {
+
+bool LightVisible(const Accelerator& accel, const Vec3& origin, const Vec3& light) {
+    // The segment stops just short of the light so geometry touching it does not count.
+    return !accel.Occluded(Ray{origin, light - origin, 0.0f, 1.0f - 1e-5f});
+}
+
+namespace {
+
+/// "none": every light is visible everywhere (the floor that shadow work sits on).
+class NoShadows final : public ShadowMethod {
+  public:
+    explicit NoShadows(size_t lights) : lights_(lights) {}
+    std::string_view Name() const override { return "none"; }
+    void Visibility(const ShadingPoint&, const bool*, float* vis, RenderCounters&) const override {
+        for (size_t i = 0; i < lights_; ++i) vis[i] = 1.0f;
+    }
+
+  private:
+    size_t lights_;
+};
+
+/// "rt": Whitted's hard shadows, one shadow ray per light (formula (1)).
+class HardShadows final : public ShadowMethod {
+  public:
+    HardShadows(const Scene& scene, const Accelerator& accel) : scene_(scene), accel_(accel) {}
+    std::string_view Name() const override { return "rt"; }
+    void Visibility(const ShadingPoint& sp, const bool* needed, float* vis,
+                    RenderCounters& counters) const override {
+        for (size_t i = 0; i < scene_.lights.size(); ++i) {
+            if (!needed[i]) continue;
+            ++counters.shadowRays;
+            vis[i] = LightVisible(accel_, sp.origin, scene_.lights[i].position) ? 1.0f : 0.0f;
+        }
+    }
+
+  private:
+    const Scene& scene_;
+    const Accelerator& accel_;
+};
+
+}  // namespace
+
+std::vector<std::string> ShadowMethodNames() { return {"none", "rt", "lmm"}; }
+
+std::unique_ptr<ShadowMethod> CreateShadowMethod(std::string_view name, const Scene& scene,
+                                                 const Accelerator& accel,
+                                                 const RenderOptions& options) {
+    if (name == "none") return std::make_unique<NoShadows>(scene.lights.size());
+    if (name == "rt") return std::make_unique<HardShadows>(scene, accel);
+    if (name == "lmm") return CreateLightMeshShadows(scene, accel, options.lightMesh);
+    ThrowError("unknown shadow method \"%.*s\" (choose none, rt or lmm)", static_cast<int>(name.size()),
+               name.data());
+}
+
+}  // namespace lm

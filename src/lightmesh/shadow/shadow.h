@@ -1,0 +1,57 @@
+// shadow.h -- the seam between the ray tracer and the ways of computing light visibility.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "lightmesh/accel/accelerator.h"
+#include "lightmesh/render/counters.h"
+#include "lightmesh/render/options.h"
+#include "lightmesh/scene/scene.h"
+
+namespace lm {
+
+/// A surface point being shaded.
+struct ShadingPoint {
+    Vec3 p;       ///< the hit point, on the surface
+    Vec3 n;       ///< unit geometric normal, on the side the ray came from
+    Vec3 origin;  ///< p pushed off the surface along n: where rays leaving it start
+    uint32_t prim = 0;
+};
+
+/// Named figures for --stats.
+using ShadowFigures = std::vector<std::pair<std::string, std::string>>;
+
+/// Computes V(L_i, P) of formula (1), or its replacement in formula (2).
+class ShadowMethod {
+  public:
+    virtual ~ShadowMethod() = default;
+    virtual std::string_view Name() const = 0;
+
+    /// Writes the visibility of each light in [0, 1] to vis[0 .. lights-1]. Only lights
+    /// with needed[i] true must be filled (the others light P from behind); the rest may
+    /// be left as they are. Must be thread-safe and deterministic: the result may depend
+    /// only on the point, never on the thread or on which points were shaded before.
+    virtual void Visibility(const ShadingPoint& sp, const bool* needed, float* vis,
+                            RenderCounters& counters) const = 0;
+
+    /// Figures gathered during rendering and set-up, for --stats.
+    virtual ShadowFigures Figures() const { return {}; }
+};
+
+/// Builds the method called `name` ("none", "rt", ...). `scene` and `accel` must
+/// outlive it. Throws Error for an unknown name.
+std::unique_ptr<ShadowMethod> CreateShadowMethod(std::string_view name, const Scene& scene,
+                                                 const Accelerator& accel,
+                                                 const RenderOptions& options);
+
+/// The names CreateShadowMethod accepts.
+std::vector<std::string> ShadowMethodNames();
+
+/// One shadow ray from sp.origin to the light: the hard-shadow visibility of formula (1).
+bool LightVisible(const Accelerator& accel, const Vec3& origin, const Vec3& light);
+
+}  // namespace lm
