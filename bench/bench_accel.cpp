@@ -1,1 +1,330 @@
-int main(){}
+// bench_accel.cpp -- the ray-query back-ends on the same seeded ray sets: build time,
+// camera rays (closest hit), shadow rays to a light and short light-mesh segments
+// (occlusion), on one thread and on all, with the grid/Embree ratios printed at the end.
+//
+//   bench_accel [--mesh=a.obj:b.obj] [benchmark flags]
+//   e.g. bench_accel --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
+//
+// Scenes: "gazebo" (builtin:gazebo, a few thousand triangles) and "garden", real meshes
+// from a Debian package (scripts/fetch-bench-mesh.sh: two trees, 385,704 triangles) on a
+// ground quad. The garden's files come from --mesh or LIGHTMESH_BENCH_MESH (':'-separated),
+// else from the fetch script's cache folder; without them the garden is skipped with a note.
+#include <benchmark/benchmark.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <memory>
+#include <string>
+#include <sys/stat.h>
+#include <vector>
+
+#include "lightmesh/accel/accelerator.h"
+#include "lightmesh/accel/test_scenes.h"
+#include "lightmesh/geometry/triangle.h"
+#include "lightmesh/scene/camera.h"
+#include "lightmesh/scene/demo_scene.h"
+#include "lightmesh/scene/mesh_loader.h"
+#include "lightmesh/util/error.h"
+
+namespace lm {
+namespace {
+
+constexpr int kWidth = 320, kHeight = 240;  // camera rays: one per pixel
+constexpr size_t kBruteRays = 1024;         // brute force gets a prefix of each ray set
+
+struct BenchScene {
+    std::string name;
+    TriangleMesh mesh;
+    Camera camera;
+    Vec3 light;
+    // Seeded ray sets, the same for every back-end.
+    std::vector<Ray> cameraRays, shadowRays, shortRays;
+};
+
+bool FileExists(const std::string& path) {
+    struct stat st;
+    return stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+
+std::vector<std::string> Split(const std::string& s, char sep) {
+    std::vector<std::string> parts;
+    size_t start = 0;
+    for (;;) {
+        const size_t end = s.find(sep, start);
+        const std::string part = s.substr(start, end - start);
+        if (!part.empty()) parts.push_back(part);
+        if (end == std::string::npos) return parts;
+        start = end + 1;
+    }
+}
+
+// The camera rays, then from their hits the shadow rays to the light and the light-mesh
+// segments: from a node up to 3 mesh steps (h = longest side / 100) away to the point,
+// stopping just short of it as the local-visibility test does (paper §2, §3).
+void MakeRays(BenchScene* s) {
+    const auto accel = CreateAccelerator("grid", s->mesh);
+    const CameraRays camera(s->camera, kWidth, kHeight);
+    testing_scenes::Rng rng(2024);
+    const float h = s->mesh.Bounds().MaxExtent() / 100.0f;
+    for (int y = 0; y < kHeight; ++y)
+        for (int x = 0; x < kWidth; ++x)
+            s->cameraRays.push_back(camera.Generate(float(x) + rng.Uniform(), float(y) + rng.Uniform()));
+    std::vector<Vec3> points;
+    for (const Ray& r : s->cameraRays) {
+        Hit hit;
+        if (accel->Intersect(r, &hit)) points.push_back(r.At(hit.t));
+    }
+    for (const Vec3& p : points) s->shadowRays.push_back(Ray{p, s->light - p, 1e-4f, 1.0f});
+    for (const Vec3& p : points) {
+        const Vec3 node = p + rng.Direction() * (3.0f * h * rng.Uniform(0.05f, 1.0f));
+        s->shortRays.push_back(Ray{node, p - node, 0.0f, 0.999f});
+    }
+}
+
+BenchScene Gazebo() {
+    Scene scene = MakeBuiltinScene("gazebo");
+    BenchScene s;
+    s.name = "gazebo";
+    s.mesh = std::move(scene.mesh);
+    s.camera = scene.camera;
+    s.light = scene.lights.empty() ? s.mesh.Bounds().hi * 2.0f : scene.lights[0].position;
+    MakeRays(&s);
+    return s;
+}
+
+// The garden: the given meshes side by side along x on a ground quad, y up (as the Sweet
+// Home 3D models are), seen from the front, lit from high above and to the left.
+std::unique_ptr<BenchScene> Garden(const std::vector<std::string>& paths) {
+    auto s = std::make_unique<BenchScene>();
+    s->name = "garden";
+    float x = 0;
+    for (const std::string& path : paths) {
+        TriangleMesh m = LoadMeshFile(path).mesh;
+        const Bounds3 b = m.Bounds();
+        const Vec3 shift(x - b.lo.x, -b.lo.y, -b.Center().z);
+        for (Vec3& p : m.positions) p += shift;
+        x += 1.1f * b.Diagonal().x;
+        s->mesh.Append(m);
+        std::printf("garden: %s, %zu triangles\n", path.c_str(), m.TriangleCount());
+    }
+    const Bounds3 b = s->mesh.Bounds();
+    const Vec3 c = b.Center(), e = b.Diagonal();
+    const float ground = 1.5f * std::max(e.x, e.z);
+    TriangleMesh quad;
+    testing_scenes::AddTriangle(&quad, {c.x - ground, 0, c.z - ground}, {c.x + ground, 0, c.z + ground},
+                                {c.x + ground, 0, c.z - ground});
+    testing_scenes::AddTriangle(&quad, {c.x - ground, 0, c.z - ground}, {c.x - ground, 0, c.z + ground},
+                                {c.x + ground, 0, c.z + ground});
+    s->mesh.Append(quad);
+    s->camera = Camera{c + Vec3(0.1f * e.x, 0.3f * e.y, 1.2f * std::max(e.x, e.y)), c, {0, 1, 0}, 45.0f};
+    s->light = c + Vec3(-0.6f * e.x, 2.0f * e.y, 0.4f * e.x);
+    MakeRays(s.get());
+    return s;
+}
+
+std::vector<std::string> GardenPaths(const std::string& flag) {
+    std::string list = flag;
+    if (list.empty())
+        if (const char* env = std::getenv("LIGHTMESH_BENCH_MESH")) list = env;
+    if (!list.empty()) return Split(list, ':');
+    std::string cache;
+    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) cache = xdg;
+    else if (const char* home = std::getenv("HOME")) cache = std::string(home) + "/.cache";
+    const std::string dir = cache + "/lightmesh/garden/scopia/";
+    std::vector<std::string> paths = {dir + "japaneseMaple/japaneseMaple.obj",
+                                      dir + "copperBeech/copperBeech.obj"};
+    for (const std::string& p : paths)
+        if (!FileExists(p)) return {};
+    return paths;
+}
+
+// ---------------------------------------------------------------------------------------
+// The benchmarks
+
+enum class Workload { Camera, Shadow, Short };
+const char* WorkloadName(Workload w) {
+    return w == Workload::Camera ? "camera" : w == Workload::Shadow ? "shadow" : "short";
+}
+
+// Accelerators are built once per scene and back-end, outside the timed loops.
+std::map<std::string, std::unique_ptr<Accelerator>> gAccels;
+const Accelerator& GetAccel(const BenchScene& s, const std::string& name) {
+    auto& slot = gAccels[s.name + "/" + name];
+    if (!slot) slot = CreateAccelerator(name, s.mesh);
+    return *slot;
+}
+
+void RunQueries(benchmark::State& state, const BenchScene& s, const std::string& accelName,
+                Workload w, bool allThreads) {
+    const Accelerator& accel = GetAccel(s, accelName);
+    const std::vector<Ray>& all =
+        w == Workload::Camera ? s.cameraRays : w == Workload::Shadow ? s.shadowRays : s.shortRays;
+    const size_t n = accelName == "brute" ? std::min(all.size(), kBruteRays) : all.size();
+    size_t hits = 0;
+    auto one = [&](size_t i) -> size_t {
+        if (w == Workload::Camera) {
+            Hit h;
+            return accel.Intersect(all[i], &h) ? 1 : 0;
+        }
+        return accel.Occluded(all[i]) ? 1 : 0;
+    };
+    for (auto _ : state) {
+        if (allThreads) {
+            std::atomic<size_t> count{0};
+            tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
+                size_t c = 0;
+                for (size_t i = r.begin(); i != r.end(); ++i) c += one(i);
+                count += c;
+            });
+            hits = count;
+        } else {
+            size_t c = 0;
+            for (size_t i = 0; i < n; ++i) c += one(i);
+            hits = c;
+        }
+        benchmark::DoNotOptimize(hits);
+    }
+    state.counters["rays/s"] = benchmark::Counter(double(n) * double(state.iterations()),
+                                                  benchmark::Counter::kIsRate);
+    state.counters["hit%"] = 100.0 * double(hits) / double(std::max<size_t>(n, 1));
+}
+
+void RunBuild(benchmark::State& state, const BenchScene& s, const std::string& accelName) {
+    for (auto _ : state) {
+        auto accel = CreateAccelerator(accelName, s.mesh);
+        benchmark::DoNotOptimize(accel.get());
+    }
+    state.counters["triangles"] = double(s.mesh.TriangleCount());
+}
+
+void Register(const BenchScene& s, const std::vector<std::string>& accels) {
+    for (const std::string& a : accels) {
+        if (a == "brute") continue;
+        benchmark::RegisterBenchmark((s.name + "/build/" + a).c_str(),
+                                     [&s, a](benchmark::State& st) { RunBuild(st, s, a); })
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime();
+    }
+    for (Workload w : {Workload::Camera, Workload::Shadow, Workload::Short})
+        for (const std::string& a : accels)
+            for (bool mt : {false, true}) {
+                if (a == "brute" && (mt || s.mesh.TriangleCount() > 20000)) continue;
+                const std::string name = s.name + "/" + WorkloadName(w) + "/" + a + (mt ? "/all" : "/1t");
+                benchmark::RegisterBenchmark(name.c_str(), [&s, a, w, mt](benchmark::State& st) {
+                    RunQueries(st, s, a, w, mt);
+                })->Unit(benchmark::kMillisecond)->UseRealTime();
+            }
+}
+
+// The console output, then one table: rays/s of each back-end per scene, workload and
+// thread count (median of the repetitions when there are several), and grid ÷ Embree.
+class RatioReporter : public benchmark::ConsoleReporter {
+  public:
+    void ReportRuns(const std::vector<Run>& runs) override {
+        ConsoleReporter::ReportRuns(runs);
+        for (const Run& r : runs) {
+            const bool aggregate = r.run_type == Run::RT_Aggregate;
+            if (aggregate && r.aggregate_name != "median") continue;
+            const std::string name = r.run_name.function_name;
+            const auto it = r.counters.find("rays/s");
+            double value;
+            if (it != r.counters.end()) value = it->second.value;
+            else value = r.GetAdjustedRealTime();  // build: ms per build
+            // Without repetitions each run reports once; with them, the median wins.
+            if (aggregate || !results_.count(name)) results_[name] = value;
+        }
+    }
+    void Finalize() override {
+        ConsoleReporter::Finalize();
+        std::printf("\nSummary (median where repeated): rays/s per back-end, ratio grid / embree\n");
+        std::printf("%-28s %14s %14s %14s %10s\n", "workload", "grid", "embree", "brute", "grid/embree");
+        std::map<std::string, std::map<std::string, double>> rows;  // "scene/work[/threads]" -> accel
+        for (const auto& [name, value] : results_) {
+            const auto parts = Split(name, '/');
+            if (parts.size() < 3) continue;
+            std::string key = parts[0] + "/" + parts[1] + (parts.size() > 3 ? "/" + parts[3] : "");
+            rows[key][parts[2]] = value;
+        }
+        for (const auto& [key, byAccel] : rows) {
+            auto get = [&](const char* a) {
+                const auto it = byAccel.find(a);
+                return it == byAccel.end() ? -1.0 : it->second;
+            };
+            const double g = get("grid"), e = get("embree"), b = get("brute");
+            const bool build = key.find("/build") != std::string::npos;
+            auto cell = [&](double v) {
+                if (v < 0) return std::string("-");
+                return build ? StringPrintf("%.1f ms", v) : StringPrintf("%.3g", v);
+            };
+            // For build times the ratio is embree/grid time, so > 1 means the grid is faster
+            // in both kinds of row.
+            const double ratio = g > 0 && e > 0 ? (build ? e / g : g / e) : -1;
+            std::printf("%-28s %14s %14s %14s %10s\n", key.c_str(), cell(g).c_str(), cell(e).c_str(),
+                        cell(b).c_str(), ratio > 0 ? StringPrintf("%.2f", ratio).c_str() : "-");
+        }
+        std::printf("(build rows: time per build, ratio = embree time / grid time)\n");
+    }
+
+  private:
+    std::map<std::string, double> results_;
+};
+
+}  // namespace
+}  // namespace lm
+
+int main(int argc, char** argv) {
+    using namespace lm;
+    std::string meshFlag;
+    std::vector<char*> args;
+    for (int i = 0; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a.rfind("--mesh=", 0) == 0) meshFlag = a.substr(7);
+        else args.push_back(argv[i]);
+    }
+    int n = int(args.size());
+    benchmark::Initialize(&n, args.data());
+    if (benchmark::ReportUnrecognizedArguments(n, args.data())) return 1;
+
+    std::vector<std::string> accels = {"grid"};
+#ifdef LIGHTMESH_HAS_EMBREE
+    accels.push_back("embree");
+#else
+    std::printf("note: built without Embree; only the grid (and brute force) run\n");
+#endif
+    accels.push_back("brute");
+
+    std::vector<std::unique_ptr<BenchScene>> scenes;
+    try {
+        scenes.push_back(std::make_unique<BenchScene>(Gazebo()));
+        const auto paths = GardenPaths(meshFlag);
+        if (paths.empty())
+            std::printf("note: no garden meshes (run scripts/fetch-bench-mesh.sh, or give --mesh= "
+                        "or LIGHTMESH_BENCH_MESH); the real-mesh scene is skipped\n");
+        else
+            scenes.push_back(Garden(paths));
+    } catch (const Error& e) {
+        std::fprintf(stderr, "bench_accel: %s\n", e.what());
+        return 1;
+    }
+    for (const auto& s : scenes) {
+        std::printf("%s: %zu triangles; rays: %zu camera, %zu shadow, %zu short (h = %g)\n",
+                    s->name.c_str(), s->mesh.TriangleCount(), s->cameraRays.size(),
+                    s->shadowRays.size(), s->shortRays.size(), s->mesh.Bounds().MaxExtent() / 100);
+        for (const std::string& a : accels) {
+            if (a == "brute") continue;
+            for (const auto& [k, v] : GetAccel(*s, a).Figures())
+                std::printf("  %s %s: %s\n", a.c_str(), k.c_str(), v.c_str());
+        }
+        Register(*s, accels);
+    }
+    std::fflush(stdout);
+    RatioReporter reporter;
+    benchmark::RunSpecifiedBenchmarks(&reporter);
+    benchmark::Shutdown();
+    return 0;
+}

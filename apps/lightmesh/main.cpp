@@ -3,7 +3,10 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -15,6 +18,7 @@
 #include "lightmesh/scene/scene_file.h"
 #include "lightmesh/shadow/light_mesh.h"
 #include "lightmesh/shadow/shadow.h"
+#include "lightmesh/shadow/sphere_templates.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/log.h"
 #include "lightmesh/util/progress.h"
@@ -55,9 +59,11 @@ void AddCommonOptions(CLI::App* cmd, CommonOptions* o) {
         ->check(CLI::Range(1, 1024));
 }
 
-lm::Scene LoadWithWarnings(const CommonOptions& o) {
+lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth = 0, int frameHeight = 0) {
     lm::SceneLoadOptions load;
     load.strict = o.strict;
+    load.frameWidth = frameWidth;
+    load.frameHeight = frameHeight;
     std::vector<std::string> warnings;
     lm::Scene scene = lm::LoadScene(o.scene, load, &warnings);
     for (const std::string& w : warnings) lm::LogWarning(w);
@@ -73,9 +79,9 @@ void ApplyLogLevel(const CommonOptions& o) {
 struct RenderCommand {
     CommonOptions common;
     std::string output;
-    std::optional<int> width, height, aa, maxDepth, grid, cc;
+    std::optional<int> width, height, aa, maxDepth, grid, cc, ns;
     std::optional<float> ki;
-    std::optional<std::string> shadows, accel, variant;
+    std::optional<std::string> shadows, accel, variant, templateDir;
     bool stats = false;
 };
 
@@ -91,7 +97,7 @@ int RunRender(const RenderCommand& cmd) {
     ApplyLogLevel(cmd.common);
     lm::InstallInterruptCleanup();
     const auto t0 = Clock::now();
-    lm::Scene scene = LoadWithWarnings(cmd.common);
+    lm::Scene scene = LoadWithWarnings(cmd.common, cmd.width.value_or(0), cmd.height.value_or(0));
     const double loadSeconds = SecondsSince(t0);
 
     lm::RenderOptions options = scene.render;
@@ -105,7 +111,10 @@ int RunRender(const RenderCommand& cmd) {
     if (cmd.cc) options.lightMesh.cc = *cmd.cc;
     if (cmd.ki) options.lightMesh.ki = *cmd.ki;
     if (cmd.variant) options.lightMesh.variant = *cmd.variant;
+    if (cmd.ns) options.lightMesh.ns = *cmd.ns;
+    if (cmd.templateDir) options.lightMesh.templateDir = *cmd.templateDir;
 
+    if (options.shadows == "lmm") lm::ParseLightMeshVariant(options.lightMesh.variant);
     // Check everything about the output before spending time on the render.
     std::string output = cmd.output;
     if (output.empty()) {
@@ -218,6 +227,61 @@ int RunInfo(const CommonOptions& common, const std::string& accelName, int grid)
     return 0;
 }
 
+/// `lightmesh templates`: build (or load) and cache sphere templates; with --measure, the
+/// error of snapping P to a sub-position for several ns, which is how the default was chosen.
+int RunTemplates(int ns, float ki, const std::string& dir, bool measure) {
+    const lm::TemplateLoad load = lm::LoadOrBuildSphereTemplates(ns, ki, dir);
+    if (!load.note.empty()) lm::LogWarning("templates: " + load.note);
+    const lm::SphereTemplates& t = load.templates;
+    size_t boundary = 0;
+    for (uint32_t b : t.boundaryCount) boundary += b;
+    std::printf("templates ns %d, kI %g: %d sub-positions, %s nodes (%.1f per sphere, %.1f on its boundary), "
+                "%s in %.2f ms%s%s\n",
+                t.ns, t.ki, t.SubPositionCount(), Count(t.offsets.size()).c_str(),
+                static_cast<double>(t.offsets.size()) / t.SubPositionCount(),
+                static_cast<double>(boundary) / t.SubPositionCount(),
+                load.loaded ? "loaded" : (load.written ? "built and cached" : "built"), load.seconds * 1e3,
+                load.path.empty() ? "" : ": ", load.path.c_str());
+    if (!measure) return 0;
+    // For random P in a cell, compare the snapped template's node set with the exact set
+    // |x - P| <= kI·h: mismatched nodes per sphere, as a share of the exact set's size.
+    std::printf("\n%4s %12s %14s %12s %12s\n", "ns", "entries", "mismatch/P", "mismatch %", "build ms");
+    for (int n : {1, 2, 4, 8, 16, 32}) {
+        const auto t0 = Clock::now();
+        const lm::SphereTemplates tn = lm::SphereTemplates::Build(n, ki);
+        const double buildMs = SecondsSince(t0) * 1e3;
+        uint64_t state = 0x9E3779B97F4A7C15ull;
+        auto uniform = [&state] {
+            state ^= state << 13; state ^= state >> 7; state ^= state << 17;
+            return static_cast<double>(state >> 11) * 0x1.0p-53;
+        };
+        const int reach = static_cast<int>(std::ceil(ki)) + 1;
+        double mismatched = 0, exactTotal = 0;
+        const int samples = 20000;
+        for (int s = 0; s < samples; ++s) {
+            const double px = uniform(), py = uniform(), pz = uniform();
+            const int a = static_cast<int>(std::lround(px * n)), b = static_cast<int>(std::lround(py * n)),
+                      c = static_cast<int>(std::lround(pz * n));
+            const int sp = tn.SubPosition(a, b, c);
+            std::vector<std::array<int8_t, 3>> list(tn.offsets.begin() + tn.begin[sp], tn.offsets.begin() + tn.begin[sp + 1]);
+            std::sort(list.begin(), list.end());
+            for (int dk = -reach; dk <= reach; ++dk)
+                for (int dj = -reach; dj <= reach; ++dj)
+                    for (int di = -reach; di <= reach; ++di) {
+                        const double dx = di - px, dy = dj - py, dz = dk - pz;
+                        const bool exact = dx * dx + dy * dy + dz * dz <= static_cast<double>(ki) * ki;
+                        const std::array<int8_t, 3> o{static_cast<int8_t>(di), static_cast<int8_t>(dj), static_cast<int8_t>(dk)};
+                        const bool inTemplate = std::binary_search(list.begin(), list.end(), o);
+                        exactTotal += exact;
+                        mismatched += exact != inTemplate;
+                    }
+        }
+        std::printf("%4d %12s %14.3f %11.2f%% %12.2f\n", n, Count(tn.offsets.size()).c_str(), mismatched / samples,
+                    100.0 * mismatched / exactTotal, buildMs);
+    }
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -244,7 +308,7 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember(lm::AcceleratorNames()));
     renderCmd->add_option("--grid", render.grid,
                           "Nested grid: top-level cells along the longest side (0: automatic)")
-        ->check(CLI::Range(0, 1024));
+        ->check(CLI::Range(0, 4096));
     renderCmd->add_option("--cc", render.cc,
                           "Light mesh: cells across the longest side of the scene (the paper's CC; default 100)")
         ->check(CLI::Range(1, 4096));
@@ -252,9 +316,14 @@ int main(int argc, char** argv) {
                           "Light mesh: interpolation radius in mesh steps, r = kI*h (default 2)")
         ->check(CLI::Range(0.01f, 16.0f));
     renderCmd->add_option("--variant", render.variant,
-                          "Light mesh variant: grid (the paper's Grid: cube loop, segment test from every "
-                          "node to every point; default) or grid-none (no local-visibility test)")
-        ->check(CLI::IsMember(lm::LightMeshVariantNames()));
+                          "Light mesh variant, as in the paper's tables: grid (Grid), templates (Ш), "
+                          "reduced (У, default), none (Нет), inside (СТ), object (ОТ); also grid-none. "
+                          "The paper's names are accepted too");
+    renderCmd->add_option("--ns", render.ns,
+                          "Light mesh templates: sub-steps per cell side (default 8)")
+        ->check(CLI::Range(1, 64));
+    renderCmd->add_option("--template-dir", render.templateDir,
+                          "Folder caching the sphere templates (default: $XDG_CACHE_HOME/lightmesh/templates)");
     renderCmd->add_flag("--stats", render.stats, "Print rays by kind, time by phase, back-end figures, peak memory");
 
     CommonOptions info;
@@ -267,12 +336,33 @@ int main(int argc, char** argv) {
     infoCmd->add_option("--grid", infoGrid, "Nested grid: top-level cells (0: automatic)")
         ->check(CLI::Range(0, 1024));
 
+    int templatesNs = lm::kDefaultTemplateSubsteps;
+    float templatesKi = 2.0f;
+    std::string templatesDir;
+    bool templatesMeasure = false;
+    CLI::App* templatesCmd = app.add_subcommand(
+        "templates", "Build and cache the light mesh's sphere templates for (ns, kI) (the paper's section 3.1)");
+    templatesCmd->add_option("--ns", templatesNs, "Sub-steps per cell side")->check(CLI::Range(1, 64));
+    templatesCmd->add_option("--ki", templatesKi, "Interpolation radius in mesh steps")->check(CLI::Range(0.01f, 16.0f));
+    templatesCmd->add_option("--template-dir", templatesDir, "Cache folder (default: $XDG_CACHE_HOME/lightmesh/templates)");
+    templatesCmd->add_flag("--measure", templatesMeasure,
+                           "Also print, for ns = 1 … 32, how many nodes snapping P to a sub-position gets wrong");
+    templatesCmd->add_flag("-q,--quiet", [](int64_t) { lm::SetLogLevel(lm::LogLevel::Error); }, "Print errors only");
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
         return app.exit(e);
     }
 
+    if (templatesCmd->parsed()) {
+        try {
+            return RunTemplates(templatesNs, templatesKi, templatesDir, templatesMeasure);
+        } catch (const lm::Error& e) {
+            std::fprintf(stderr, "lightmesh: error: %s\n", e.what());
+            return 1;
+        }
+    }
     const CommonOptions& common = renderCmd->parsed() ? render.common : info;
     std::unique_ptr<tbb::global_control> threadLimit;
     if (common.threads > 0)

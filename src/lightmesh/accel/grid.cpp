@@ -10,13 +10,20 @@
 #include <memory>
 #include <utility>
 
+#include "lightmesh/accel/prepared_ray.h"
 #include "lightmesh/geometry/triangle.h"
 #include "lightmesh/util/error.h"
 
 namespace lm {
+#ifdef LM_GRID_STATS
+thread_local uint64_t gCellsVisited = 0, gNonEmpty = 0, gTests = 0, gWalks = 0;
+#endif
 namespace {
 
 constexpr uint32_t kChild = 0x80000000u;  // an item that names a sub-grid node, not a triangle
+
+static_assert(sizeof(NestedGridAccel::Tri) == 9 * sizeof(float), "Tri must be 9 packed floats");
+inline const float* Floats(const NestedGridAccel::Tri& t) { return &t.p0.x; }
 
 bool IsFiniteTri(const NestedGridAccel::Tri& t) {
     return IsFinite(t.p0) && IsFinite(t.p1) && IsFinite(t.p2);
@@ -94,7 +101,7 @@ struct Mailbox {
 struct ClosestQuery {
     ClosestQuery(const NestedGridAccel::Tri* t, const Ray& r) : tris(t), ray(r) {}
     const NestedGridAccel::Tri* tris;
-    Ray ray;
+    detail::PreparedRay ray;
     Hit best;
     bool found = false;
     Mailbox mailbox;
@@ -103,9 +110,11 @@ struct ClosestQuery {
         for (; p != end; ++p) {
             const uint32_t id = *p;
             if (mailbox.Seen(id)) continue;
-            const NestedGridAccel::Tri& t = tris[id];
             TriangleHit th;
-            if (!IntersectTriangle(ray, t.p0, t.p1, t.p2, &th)) continue;
+#ifdef LM_GRID_STATS
+            ++gTests;
+#endif
+            if (!detail::IntersectPrepared(ray, Floats(tris[id]), &th)) continue;
             // ray.tMax is just above the best t, so equal-t hits arrive here too: brute
             // force keeps the lowest primitive id among them, and so do we.
             if (found && th.t == best.t && id > best.prim) continue;
@@ -122,16 +131,15 @@ struct ClosestQuery {
 struct AnyQuery {
     AnyQuery(const NestedGridAccel::Tri* t, const Ray& r) : tris(t), ray(r) {}
     const NestedGridAccel::Tri* tris;
-    Ray ray;
+    detail::PreparedRay ray;
     bool found = false;
     Mailbox mailbox;
 
     bool Cell(const uint32_t* p, const uint32_t* end, float) {
         for (; p != end; ++p) {
             if (mailbox.Seen(*p)) continue;
-            const NestedGridAccel::Tri& t = tris[*p];
             TriangleHit th;
-            if (IntersectTriangle(ray, t.p0, t.p1, t.p2, &th)) {
+            if (detail::IntersectPrepared(ray, Floats(tris[*p]), &th)) {
                 found = true;
                 return true;
             }
@@ -143,7 +151,7 @@ struct AnyQuery {
 struct CountQuery {
     CountQuery(const NestedGridAccel::Tri* t, const Ray& r) : tris(t), ray(r) {}
     const NestedGridAccel::Tri* tris;
-    Ray ray;
+    detail::PreparedRay ray;
     Mailbox mailbox;
     // The triangles hit so far: a triangle spanning cells must count once even when the
     // mailbox has forgotten it. Hits are few (crossings along one ray), so a linear search
@@ -163,9 +171,8 @@ struct CountQuery {
         for (; p != end; ++p) {
             const uint32_t id = *p;
             if (mailbox.Seen(id)) continue;
-            const NestedGridAccel::Tri& t = tris[id];
             TriangleHit th;
-            if (!IntersectTriangle(ray, t.p0, t.p1, t.p2, &th) || Counted(id)) continue;
+            if (!detail::IntersectPrepared(ray, Floats(tris[id]), &th) || Counted(id)) continue;
             if (count < kLocal)
                 local[count] = id;
             else
@@ -435,12 +442,16 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
     }
     if (items_.size() >= kChild) ThrowError("the grid is too large (%zu references)", items_.size());
     stats_.totalCells = cellStart_.size() - 1;
+    occupied_.assign((stats_.totalCells + 63) / 64, 0);
+    for (size_t c = 0; c < stats_.totalCells; ++c)
+        if (cellStart_[c + 1] != cellStart_[c]) occupied_[c >> 6] |= uint64_t(1) << (c & 63);
     stats_.subGrids = nodes_.size() - 1;
     nodes_.shrink_to_fit();
     cellStart_.shrink_to_fit();
     items_.shrink_to_fit();
     stats_.bytes = nodes_.size() * sizeof(Node) + cellStart_.size() * sizeof(uint32_t) +
-                   items_.size() * sizeof(uint32_t) + tris_.size() * sizeof(Tri);
+                   items_.size() * sizeof(uint32_t) + tris_.size() * sizeof(Tri) +
+                   occupied_.size() * sizeof(uint64_t);
     stats_.buildMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() -
                                                                startTime).count();
 }
@@ -475,6 +486,9 @@ template <typename Query>
 bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD, float tEnter,
                            float tExit, Query& query) const {
     const Node& g = nodes_[nodeIndex];
+#ifdef LM_GRID_STATS
+    ++gWalks;
+#endif
     int cell[3], step[3], stop[3];
     float nextT[3];
     const int stride[3] = {1, g.res[0], g.res[0] * g.res[1]};
@@ -508,8 +522,14 @@ bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD,
                                              : (nextT[1] < nextT[2] ? 1 : 2);
         const float tNext = nextT[axis];
         const float tCellExit = std::min(tNext, tExit);
-        const uint32_t b = cellStart_[idx], e = cellStart_[idx + 1];
-        if (b != e) {
+#ifdef LM_GRID_STATS
+        ++gCellsVisited;
+        gNonEmpty += (occupied_[idx >> 6] >> (idx & 63)) & 1;
+#endif
+        // Most cells are empty; their bit (a small array that stays in cache) spares the
+        // load from the much larger cellStart_.
+        if ((occupied_[idx >> 6] >> (idx & 63)) & 1) {
+            const uint32_t b = cellStart_[idx], e = cellStart_[idx + 1];
             const uint32_t first = items_[b];
             if (first & kChild) {
                 if (Walk(first & ~kChild, ray, invD, tCell, tCellExit, query)) return true;

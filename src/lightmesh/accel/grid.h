@@ -96,6 +96,7 @@ class NestedGridAccel final : public Accelerator {
     std::vector<Node> nodes_;            // [0] is the top level
     std::vector<uint32_t> cellStart_;    // CSR over all cells of all nodes, size cells + 1
     std::vector<uint32_t> items_;        // per cell: triangle ids, or one kChild | node id
+    std::vector<uint64_t> occupied_;     // one bit per cell: not empty
     std::vector<Tri> tris_;              // by primitive id
     Stats stats_;
 };

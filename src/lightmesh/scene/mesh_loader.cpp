@@ -62,7 +62,9 @@ Affine Affine::operator*(const Affine& b) const {
     return r;
 }
 
-Vec3 Affine::ApplyPoint(const Vec3& p) const { return ApplyVector(p) + Vec3(m[0][3], m[1][3], m[2][3]); }
+Vec3 Affine::ApplyPoint(const Vec3& p) const {
+    return ApplyVector(p) + Vec3(m[0][3], m[1][3], m[2][3]);
+}
 
 Vec3 Affine::ApplyVector(const Vec3& v) const {
     return {m[0][0] * v.x + m[0][1] * v.y + m[0][2] * v.z,
@@ -71,9 +73,13 @@ Vec3 Affine::ApplyVector(const Vec3& v) const {
 }
 
 float Affine::Determinant() const {
-    const double d = static_cast<double>(m[0][0]) * (static_cast<double>(m[1][1]) * m[2][2] - static_cast<double>(m[1][2]) * m[2][1]) -
-                     static_cast<double>(m[0][1]) * (static_cast<double>(m[1][0]) * m[2][2] - static_cast<double>(m[1][2]) * m[2][0]) +
-                     static_cast<double>(m[0][2]) * (static_cast<double>(m[1][0]) * m[2][1] - static_cast<double>(m[1][1]) * m[2][0]);
+    const double d =
+        static_cast<double>(m[0][0]) *
+            (static_cast<double>(m[1][1]) * m[2][2] - static_cast<double>(m[1][2]) * m[2][1]) -
+        static_cast<double>(m[0][1]) *
+            (static_cast<double>(m[1][0]) * m[2][2] - static_cast<double>(m[1][2]) * m[2][0]) +
+        static_cast<double>(m[0][2]) *
+            (static_cast<double>(m[1][0]) * m[2][1] - static_cast<double>(m[1][1]) * m[2][0]);
     return static_cast<float>(d);
 }
 
@@ -85,9 +91,12 @@ void TransformMesh(TriangleMesh* mesh, const Affine& t) {
         // is kept (multiplying by sign(det)) so a normal stays on the same side.
         const float(*a)[4] = t.m;
         const float cof[3][3] = {
-            {a[1][1] * a[2][2] - a[1][2] * a[2][1], a[1][2] * a[2][0] - a[1][0] * a[2][2], a[1][0] * a[2][1] - a[1][1] * a[2][0]},
-            {a[0][2] * a[2][1] - a[0][1] * a[2][2], a[0][0] * a[2][2] - a[0][2] * a[2][0], a[0][1] * a[2][0] - a[0][0] * a[2][1]},
-            {a[0][1] * a[1][2] - a[0][2] * a[1][1], a[0][2] * a[1][0] - a[0][0] * a[1][2], a[0][0] * a[1][1] - a[0][1] * a[1][0]}};
+            {a[1][1] * a[2][2] - a[1][2] * a[2][1], a[1][2] * a[2][0] - a[1][0] * a[2][2],
+             a[1][0] * a[2][1] - a[1][1] * a[2][0]},
+            {a[0][2] * a[2][1] - a[0][1] * a[2][2], a[0][0] * a[2][2] - a[0][2] * a[2][0],
+             a[0][1] * a[2][0] - a[0][0] * a[2][1]},
+            {a[0][1] * a[1][2] - a[0][2] * a[1][1], a[0][2] * a[1][0] - a[0][0] * a[1][2],
+             a[0][0] * a[1][1] - a[0][1] * a[1][0]}};
         const float sign = t.Determinant() < 0 ? -1.0f : 1.0f;
         for (Vec3& n : mesh->normals) {
             const Vec3 r(cof[0][0] * n.x + cof[0][1] * n.y + cof[0][2] * n.z,
@@ -135,7 +144,9 @@ Color ToColor(const aiColor3D& c) {
     return {clean(c.r), clean(c.g), clean(c.b)};
 }
 
-Color Lerp(const Color& a, const Color& b, float t) { return a * (1 - t) + b * t; }
+Color Lerp(const Color& a, const Color& b, float t) {
+    return a * (1 - t) + b * t;
+}
 
 // How an Assimp material becomes a Phong material of formula (1):
 //  - kd: AI_MATKEY_BASE_COLOR (glTF's baseColorFactor) if present, else
@@ -197,8 +208,8 @@ Material MaterialFromFile(const aiMaterial& am) {
         if (!std::isfinite(strength) || strength < 0) strength = 0;
         m.ks = ToColor(spec) * strength;
         if (std::isfinite(shininess) && shininess > 0) m.phong = std::min(shininess, 10000.0f);
-        if (am.Get(AI_MATKEY_REFLECTIVITY, reflectivity) == AI_SUCCESS && std::isfinite(reflectivity) &&
-            reflectivity >= 0.5f) {
+        if (am.Get(AI_MATKEY_REFLECTIVITY, reflectivity) == AI_SUCCESS &&
+            std::isfinite(reflectivity) && reflectivity >= 0.5f) {
             aiColor3D reflective(1, 1, 1);
             am.Get(AI_MATKEY_COLOR_REFLECTIVE, reflective);
             m.mirror = ToColor(reflective) * std::min(reflectivity, 1.0f);
@@ -216,7 +227,8 @@ class CollectingStream : public Assimp::LogStream {
     void write(const char* message) override {
         std::string s(message);
         // Assimp prefixes "Warn,  T0: " / "Error, T0: " and appends a newline.
-        if (size_t colon = s.find(": "); colon != std::string::npos && colon < 16) s.erase(0, colon + 2);
+        if (size_t colon = s.find(": "); colon != std::string::npos && colon < 16)
+            s.erase(0, colon + 2);
         while (!s.empty() && (s.back() == '\n' || s.back() == '\r')) s.pop_back();
         if (!s.empty()) out_->push_back(s);
     }
@@ -246,12 +258,14 @@ class ScopedAssimpLog {
 
 Affine ToAffine(const aiMatrix4x4& a) {
     Affine r;
-    const float rows[3][4] = {{a.a1, a.a2, a.a3, a.a4}, {a.b1, a.b2, a.b3, a.b4}, {a.c1, a.c2, a.c3, a.c4}};
+    const float rows[3][4] = {
+        {a.a1, a.a2, a.a3, a.a4}, {a.b1, a.b2, a.b3, a.b4}, {a.c1, a.c2, a.c3, a.c4}};
     std::memcpy(r.m, rows, sizeof(rows));
     return r;
 }
 
-bool MatchesAny(const std::vector<std::string>& patterns, std::string_view text, std::vector<bool>* matched) {
+bool MatchesAny(const std::vector<std::string>& patterns, std::string_view text,
+                std::vector<bool>* matched) {
     bool any = false;
     for (size_t i = 0; i < patterns.size(); ++i) {
         if (GlobMatch(patterns[i], text)) {
@@ -262,11 +276,14 @@ bool MatchesAny(const std::vector<std::string>& patterns, std::string_view text,
     return any;
 }
 
-std::string FormatVec(const Vec3& v) { return StringPrintf("(%g, %g, %g)", v.x, v.y, v.z); }
+std::string FormatVec(const Vec3& v) {
+    return StringPrintf("(%g, %g, %g)", v.x, v.y, v.z);
+}
 
 class SceneWalker {
   public:
-    SceneWalker(const std::string& path, const aiScene& scene, const MeshLoadOptions& options, LoadedMesh* out)
+    SceneWalker(const std::string& path, const aiScene& scene, const MeshLoadOptions& options,
+                LoadedMesh* out)
         : path_(path), scene_(scene), options_(options), out_(out) {
         out_->excludeMaterialsMatched.assign(options.excludeMaterials.size(), false);
         out_->excludeNamesMatched.assign(options.excludeNames.size(), false);
@@ -274,8 +291,9 @@ class SceneWalker {
 
     void Walk(const aiNode& node, const aiMatrix4x4& parent, bool excludedByAncestor) {
         const aiMatrix4x4 transform = parent * node.mTransformation;
-        const bool excluded = MatchesAny(options_.excludeNames, node.mName.C_Str(), &out_->excludeNamesMatched) ||
-                              excludedByAncestor;
+        const bool excluded =
+            MatchesAny(options_.excludeNames, node.mName.C_Str(), &out_->excludeNamesMatched) ||
+            excludedByAncestor;
         for (unsigned i = 0; i < node.mNumMeshes; ++i) {
             if (node.mMeshes[i] >= scene_.mNumMeshes) continue;
             PlaceMesh(*scene_.mMeshes[node.mMeshes[i]], transform, excluded);
@@ -295,13 +313,16 @@ class SceneWalker {
             return;
         }
         // Evaluate every pattern (no short-circuit), so each one's "matched" flag is right.
-        const bool byName = MatchesAny(options_.excludeNames, am.mName.C_Str(), &out_->excludeNamesMatched);
+        const bool byName =
+            MatchesAny(options_.excludeNames, am.mName.C_Str(), &out_->excludeNamesMatched);
         std::string materialName;
         if (am.mMaterialIndex < scene_.mNumMaterials) {
             aiString s;
-            if (scene_.mMaterials[am.mMaterialIndex]->Get(AI_MATKEY_NAME, s) == AI_SUCCESS) materialName = s.C_Str();
+            if (scene_.mMaterials[am.mMaterialIndex]->Get(AI_MATKEY_NAME, s) == AI_SUCCESS)
+                materialName = s.C_Str();
         }
-        const bool byMaterial = MatchesAny(options_.excludeMaterials, materialName, &out_->excludeMaterialsMatched);
+        const bool byMaterial =
+            MatchesAny(options_.excludeMaterials, materialName, &out_->excludeMaterialsMatched);
         if (excludedByNode || byName || byMaterial) {
             ++out_->meshesExcluded;
             return;
@@ -313,9 +334,11 @@ class SceneWalker {
             const aiVector3D& p = am.mVertices[v];
             mesh.positions[v] = Vec3(p.x, p.y, p.z);
             if (!IsFinite(mesh.positions[v]))
-                throw MeshFileError(path_, StringPrintf("vertex %u of mesh \"%s\" has a non-finite coordinate %s", v,
-                                                        am.mName.C_Str(), FormatVec(mesh.positions[v]).c_str()),
-                                    false);
+                throw MeshFileError(
+                    path_,
+                    StringPrintf("vertex %u of mesh \"%s\" has a non-finite coordinate %s", v,
+                                 am.mName.C_Str(), FormatVec(mesh.positions[v]).c_str()),
+                    false);
         }
         if (am.HasNormals()) {
             mesh.normals.resize(am.mNumVertices);
@@ -329,9 +352,12 @@ class SceneWalker {
             if (face.mNumIndices != 3) continue;
             for (int k = 0; k < 3; ++k) {
                 if (face.mIndices[k] >= am.mNumVertices)
-                    throw MeshFileError(path_, StringPrintf("face %u of mesh \"%s\" refers to vertex %u, but it has %u vertices",
-                                                            f, am.mName.C_Str(), face.mIndices[k], am.mNumVertices),
-                                        true);
+                    throw MeshFileError(
+                        path_,
+                        StringPrintf(
+                            "face %u of mesh \"%s\" refers to vertex %u, but it has %u vertices", f,
+                            am.mName.C_Str(), face.mIndices[k], am.mNumVertices),
+                        true);
             }
             mesh.triangles.push_back({face.mIndices[0], face.mIndices[1], face.mIndices[2]});
             mesh.materialIds.push_back(material);
@@ -339,17 +365,25 @@ class SceneWalker {
 
         const Affine affine = ToAffine(transform);
         if (!(std::abs(affine.Determinant()) > 0))
-            throw MeshFileError(path_, StringPrintf("the node transform of mesh \"%s\" is singular", am.mName.C_Str()), false);
+            throw MeshFileError(
+                path_,
+                StringPrintf("the node transform of mesh \"%s\" is singular", am.mName.C_Str()),
+                false);
         TransformMesh(&mesh, affine);
         for (const Vec3& p : mesh.positions) {
             if (!IsFinite(p))
-                throw MeshFileError(path_, StringPrintf("the node transforms make mesh \"%s\" non-finite", am.mName.C_Str()),
+                throw MeshFileError(path_,
+                                    StringPrintf("the node transforms make mesh \"%s\" non-finite",
+                                                 am.mName.C_Str()),
                                     false);
         }
         for (const Vec3& n : mesh.normals) {
             if (!IsFinite(n) || !(LengthSquared(n) > 0)) {
-                out_->warnings.push_back(path_ + StringPrintf(": mesh \"%s\" has zero or non-finite normals; shading uses face normals",
-                                                              am.mName.C_Str()));
+                out_->warnings.push_back(
+                    path_ +
+                    StringPrintf(
+                        ": mesh \"%s\" has zero or non-finite normals; shading uses face normals",
+                        am.mName.C_Str()));
                 mesh.normals.clear();
                 break;
             }
@@ -359,9 +393,11 @@ class SceneWalker {
     }
 
     uint32_t MaterialIndex(unsigned fileIndex) {
-        auto [it, inserted] = materialMap_.try_emplace(fileIndex, static_cast<uint32_t>(out_->materials.size()));
+        auto [it, inserted] =
+            materialMap_.try_emplace(fileIndex, static_cast<uint32_t>(out_->materials.size()));
         if (inserted) {
-            out_->materials.push_back(fileIndex < scene_.mNumMaterials && scene_.mMaterials[fileIndex]
+            out_->materials.push_back(fileIndex < scene_.mNumMaterials &&
+                                              scene_.mMaterials[fileIndex]
                                           ? MaterialFromFile(*scene_.mMaterials[fileIndex])
                                           : Material{});
         }
@@ -382,7 +418,8 @@ void CheckReadable(const std::string& path) {
     std::error_code ec;
     const fs::file_status status = fs::status(path, ec);
     if (!fs::exists(status)) throw MeshFileError(path, "no such file", true);
-    if (fs::is_directory(status)) throw MeshFileError(path, "is a directory, not a mesh file", true);
+    if (fs::is_directory(status))
+        throw MeshFileError(path, "is a directory, not a mesh file", true);
     if (!fs::is_regular_file(status)) throw MeshFileError(path, "is not a regular file", true);
     std::ifstream in(path, std::ios::binary);
     if (!in) throw MeshFileError(path, StringPrintf("cannot open: %s", std::strerror(errno)), true);
@@ -403,22 +440,27 @@ LoadedMesh LoadMeshFile(const std::string& path, const MeshLoadOptions& options)
         // meshes of their own, which the walk skips. No normals are generated: shading
         // uses face normals where the file has none. Instances are expanded by the walk
         // (not aiProcess_PreTransformVertices) so node names stay available to excludes.
-        const unsigned flags = aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_JoinIdenticalVertices |
-                               aiProcess_ValidateDataStructure;
+        const unsigned flags = aiProcess_Triangulate | aiProcess_SortByPType |
+                               aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure;
         const aiScene* scene = importer.ReadFile(path, flags);
         if (!scene) {
             std::string err = importer.GetErrorString();
-            if (err.rfind("No suitable reader found", 0) == 0) err = "Assimp has no reader for this file format";
-            if (err.find("mNumMeshes is 0") != std::string::npos) err = "no meshes found in it (is the file really in this format?)";
+            if (err.rfind("No suitable reader found", 0) == 0)
+                err = "Assimp has no reader for this file format";
+            if (err.find("mNumMeshes is 0") != std::string::npos)
+                err = "no meshes found in it (is the file really in this format?)";
             if (err.empty()) err = "Assimp could not import it";
             throw MeshFileError(path, err, true);
         }
-        if (!scene->mRootNode) throw MeshFileError(path, "the file has no scene graph (no meshes)", true);
+        if (!scene->mRootNode)
+            throw MeshFileError(path, "the file has no scene graph (no meshes)", true);
         SceneWalker walker(path, *scene, options, &out);
         walker.Walk(*scene->mRootNode, aiMatrix4x4(), false);
         if (out.mesh.TriangleCount() == 0 && out.meshesExcluded == 0) {
-            throw MeshFileError(path, walker.nonTriangleMeshes > 0 ? "no triangles (only points/lines)" : "no triangles",
-                                false);
+            throw MeshFileError(
+                path,
+                walker.nonTriangleMeshes > 0 ? "no triangles (only points/lines)" : "no triangles",
+                false);
         }
     } catch (const Error&) {
         throw;
@@ -429,9 +471,11 @@ LoadedMesh LoadMeshFile(const std::string& path, const MeshLoadOptions& options)
     }
     // Keep a handful of the importer's complaints; a broken file can produce thousands.
     constexpr size_t MaxLogLines = 5;
-    for (size_t i = 0; i < log.size() && i < MaxLogLines; ++i) out.warnings.push_back(path + ": " + log[i]);
+    for (size_t i = 0; i < log.size() && i < MaxLogLines; ++i)
+        out.warnings.push_back(path + ": " + log[i]);
     if (log.size() > MaxLogLines)
-        out.warnings.push_back(path + StringPrintf(": ... and %zu more importer messages", log.size() - MaxLogLines));
+        out.warnings.push_back(
+            path + StringPrintf(": ... and %zu more importer messages", log.size() - MaxLogLines));
     return out;
 }
 

@@ -30,7 +30,9 @@ std::string WriteFile(const std::string& folder, const std::string& name, const 
     return path;
 }
 
-bool Near(const Vec3& a, const Vec3& b, float eps = 1e-5f) { return Length(a - b) <= eps; }
+bool Near(const Vec3& a, const Vec3& b, float eps = 1e-5f) {
+    return Length(a - b) <= eps;
+}
 bool Near(const Color& a, const Color& b, float eps = 1e-5f) {
     return std::abs(a.r - b.r) <= eps && std::abs(a.g - b.g) <= eps && std::abs(a.b - b.b) <= eps;
 }
@@ -38,14 +40,16 @@ bool Near(const Color& a, const Color& b, float eps = 1e-5f) {
 /// The three corners of every triangle, for order-independent checks.
 std::vector<std::array<Vec3, 3>> Corners(const TriangleMesh& mesh) {
     std::vector<std::array<Vec3, 3>> out;
-    for (uint32_t t = 0; t < mesh.TriangleCount(); ++t) out.push_back({mesh.Vertex(t, 0), mesh.Vertex(t, 1), mesh.Vertex(t, 2)});
+    for (uint32_t t = 0; t < mesh.TriangleCount(); ++t)
+        out.push_back({mesh.Vertex(t, 0), mesh.Vertex(t, 1), mesh.Vertex(t, 2)});
     return out;
 }
 
 bool HasTriangle(const TriangleMesh& mesh, const std::array<Vec3, 3>& expected) {
     for (const auto& c : Corners(mesh)) {
         for (int rot = 0; rot < 3; ++rot) {  // same winding, any starting corner
-            if (Near(c[rot], expected[0]) && Near(c[(rot + 1) % 3], expected[1]) && Near(c[(rot + 2) % 3], expected[2]))
+            if (Near(c[rot], expected[0]) && Near(c[(rot + 1) % 3], expected[1]) &&
+                Near(c[(rot + 2) % 3], expected[2]))
                 return true;
         }
     }
@@ -120,7 +124,10 @@ TEST(MeshLoader, PlyQuadIsTriangulated) {
     EXPECT_EQ(m.materials[0].kd, Color(0.8f)) << "no materials in the file: the default grey";
     EXPECT_TRUE(m.materials[0].ks.IsBlack());
     for (uint32_t t = 0; t < 2; ++t) {  // the quad's winding (counter-clockwise from +z) is kept
-        EXPECT_GT(Cross(m.mesh.Vertex(t, 1) - m.mesh.Vertex(t, 0), m.mesh.Vertex(t, 2) - m.mesh.Vertex(t, 0)).z, 0);
+        EXPECT_GT(Cross(m.mesh.Vertex(t, 1) - m.mesh.Vertex(t, 0),
+                        m.mesh.Vertex(t, 2) - m.mesh.Vertex(t, 0))
+                      .z,
+                  0);
     }
 }
 
@@ -128,7 +135,8 @@ std::string Base64(const std::vector<unsigned char>& bytes) {
     static const char* table = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     std::string out;
     for (size_t i = 0; i < bytes.size(); i += 3) {
-        const uint32_t n = (uint32_t(bytes[i]) << 16) | (i + 1 < bytes.size() ? uint32_t(bytes[i + 1]) << 8 : 0) |
+        const uint32_t n = (uint32_t(bytes[i]) << 16) |
+                           (i + 1 < bytes.size() ? uint32_t(bytes[i + 1]) << 8 : 0) |
                            (i + 2 < bytes.size() ? uint32_t(bytes[i + 2]) : 0);
         out += table[(n >> 18) & 63];
         out += table[(n >> 12) & 63];
@@ -162,7 +170,8 @@ std::string TinyGltf() {
   ],
   "meshes": [{"name": "Tri", "primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}, "indices": 2, "material": 0}]}],
   "materials": [{"name": "Paint", "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.4, 0.6, 1], "metallicFactor": 0, "roughnessFactor": 0.5}}],
-  "buffers": [{"byteLength": 80, "uri": "data:application/octet-stream;base64,)" + Base64(buffer) + R"("}],
+  "buffers": [{"byteLength": 80, "uri": "data:application/octet-stream;base64,)" +
+           Base64(buffer) + R"("}],
   "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 72}, {"buffer": 0, "byteOffset": 72, "byteLength": 6}],
   "accessors": [
     {"bufferView": 0, "byteOffset": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
@@ -216,17 +225,23 @@ TEST(MeshLoader, ErrorsNameTheFile) {
     WriteFile(folder, "empty.obj", "");
     EXPECT_EQ(LoadError(folder + "/empty.obj"), folder + "/empty.obj: the file is empty");
     WriteFile(folder, "lines.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2 3\n");
-    EXPECT_EQ(LoadError(folder + "/lines.obj"), folder + "/lines.obj: no triangles (only points/lines)");
+    EXPECT_EQ(LoadError(folder + "/lines.obj"),
+              folder + "/lines.obj: no triangles (only points/lines)");
     WriteFile(folder, "nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n");
-    EXPECT_EQ(LoadError(folder + "/nan.obj"),
-              folder + "/nan.obj: vertex 2 of mesh \"defaultobject\" has a non-finite coordinate (0, nan, 0)");
-    WriteFile(folder, "garbage.gltf", "{\"asset\": {\"version\": \"2.0\"}, \"buffers\": [{\"byteLength\": 8");
+    EXPECT_EQ(
+        LoadError(folder + "/nan.obj"),
+        folder +
+            "/nan.obj: vertex 2 of mesh \"defaultobject\" has a non-finite coordinate (0, nan, 0)");
+    WriteFile(folder, "garbage.gltf",
+              "{\"asset\": {\"version\": \"2.0\"}, \"buffers\": [{\"byteLength\": 8");
     const std::string garbage = LoadError(folder + "/garbage.gltf");
     EXPECT_EQ(garbage.rfind(folder + "/garbage.gltf: ", 0), 0u) << garbage;
     // A truncated binary PLY: the header promises more than the file holds.
     WriteFile(folder, "short.ply",
-              "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-              "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\x01\x02");
+              "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty "
+              "float y\n"
+              "property float z\nelement face 1\nproperty list uchar int "
+              "vertex_indices\nend_header\n\x01\x02");
     const std::string truncated = LoadError(folder + "/short.ply");
     EXPECT_EQ(truncated.rfind(folder + "/short.ply: ", 0), 0u) << truncated;
     EXPECT_EQ(truncated.find("<no error>"), std::string::npos);
@@ -238,7 +253,8 @@ TEST(MeshLoader, TruncatedFilesThrowOnlyMeshFileErrors) {
     std::ifstream in(DataDir + "/two_boxes.obj");
     const std::string obj((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     const std::string gltf = TinyGltf();
-    for (const auto& [name, text] : {std::pair<std::string, std::string>{"cut.obj", obj}, {"cut.gltf", gltf}}) {
+    for (const auto& [name, text] :
+         {std::pair<std::string, std::string>{"cut.obj", obj}, {"cut.gltf", gltf}}) {
         for (size_t n = 0; n < text.size(); n += 7) {
             const std::string path = WriteFile(folder, name, text.substr(0, n));
             try {
@@ -268,7 +284,8 @@ TEST(MeshLoader, Glob) {
 }
 
 TEST(MeshLoader, AffineComposesScaleRotateTranslate) {
-    const Affine t = Affine::Translate(Vec3(0, 1, 0)) * Affine::Rotate(Vec3(0, 2, 0), 90) * Affine::Scale(Vec3(2, 1, 1));
+    const Affine t = Affine::Translate(Vec3(0, 1, 0)) * Affine::Rotate(Vec3(0, 2, 0), 90) *
+                     Affine::Scale(Vec3(2, 1, 1));
     EXPECT_TRUE(Near(t.ApplyPoint(Vec3(1, 1, 1)), Vec3(1, 2, -2)));
     EXPECT_TRUE(Near(t.ApplyVector(Vec3(1, 0, 0)), Vec3(0, 0, -2)));
     EXPECT_NEAR(t.Determinant(), 2.0f, 1e-6f);
@@ -285,13 +302,15 @@ TEST(MeshLoader, TransformMeshUsesInverseTransposeForNormals) {
     TransformMesh(&mesh, Affine::Scale(Vec3(2, 1, 1)));
     // The plane x/2 + y + z = 1 has normal ∝ (1/2, 1, 1).
     for (const Vec3& m : mesh.normals) EXPECT_TRUE(Near(m, Normalize(Vec3(0.5f, 1, 1))));
-    const Vec3 face = Cross(mesh.Vertex(0, 1) - mesh.Vertex(0, 0), mesh.Vertex(0, 2) - mesh.Vertex(0, 0));
+    const Vec3 face =
+        Cross(mesh.Vertex(0, 1) - mesh.Vertex(0, 0), mesh.Vertex(0, 2) - mesh.Vertex(0, 0));
     EXPECT_GT(Dot(face, mesh.normals[0]), 0);
 
     // A mirror keeps the normals outward and the winding consistent with them.
     TransformMesh(&mesh, Affine::Scale(Vec3(-1, 1, 1)));
     for (const Vec3& m : mesh.normals) EXPECT_TRUE(Near(m, Normalize(Vec3(-0.5f, 1, 1))));
-    const Vec3 mirrored = Cross(mesh.Vertex(0, 1) - mesh.Vertex(0, 0), mesh.Vertex(0, 2) - mesh.Vertex(0, 0));
+    const Vec3 mirrored =
+        Cross(mesh.Vertex(0, 1) - mesh.Vertex(0, 0), mesh.Vertex(0, 2) - mesh.Vertex(0, 0));
     EXPECT_GT(Dot(mirrored, mesh.normals[0]), 0);
 }
 

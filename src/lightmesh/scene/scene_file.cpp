@@ -20,14 +20,15 @@
 //                "material": NAME overrides the file's materials; "exclude_materials",
 //                "exclude_names": glob patterns (* and ?; a string or a list) matched against
 //                the file's material names and node / mesh names}, ...].
-//   "ground"     optional: a square of 2 triangles centred under the meshes' bounding box,
+//   "ground"     optional: a square slab (a closed box, 1 % of its side thick, top face at
+//                the ground height) centred under the meshes' bounding box,
 //                {"height": number (default: the box's lowest point along "up"), "up":
 //                "x" | "y" | "z" (default "y"), "size": side as a multiple of the box's
 //                longest horizontal extent (> 0, default 3), "material": NAME (default a
 //                light grey)}.
 //   "render"     optional, fills Scene::render: "width", "height" (1..16384, width·height ≤
-//                2^28), "aa" (1..16), "max_depth" (1..64), "shadows" ("none" | "rt" | "lmm"
-//                | "area"), "accel" ("brute" | "grid" | "embree"), "grid" (0..4096),
+//                2^28), "aa" (1..16), "max_depth" (1..64), "shadows" ("none" | "rt" | "lmm"),
+//                "accel" ("brute" | "grid" | "embree"), "grid" (0..4096),
 //                "cc" (1..4096), "ki" (in (0, 16]), "variant" (string), "ns" (0..64),
 //                "template_dir" (string).
 //
@@ -43,13 +44,13 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <map>
 #include <set>
 #include <sstream>
 #include <unordered_set>
 
 #include "lightmesh/scene/demo_scene.h"
 #include "lightmesh/scene/mesh_loader.h"
+#include "lightmesh/scene/shapes.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/log.h"
 
@@ -71,31 +72,36 @@ std::string Lower(std::string s) {
 std::string PointerToken(std::string_view key) {
     std::string out;
     for (char c : key) {
-        if (c == '~') out += "~0";
-        else if (c == '/') out += "~1";
-        else out += c;
+        if (c == '~')
+            out += "~0";
+        else if (c == '/')
+            out += "~1";
+        else
+            out += c;
     }
     return out;
 }
 
-std::string Quoted(std::string_view s) { return "\"" + std::string(s) + "\""; }
+std::string Quoted(std::string_view s) {
+    return "\"" + std::string(s) + "\"";
+}
 
 /// "a string ("abc")", "an array of 2", ... for "expected X, got Y" messages.
 std::string Describe(const Json& j) {
     switch (j.type()) {
-    case Json::value_t::null: return "null";
-    case Json::value_t::boolean: return j.get<bool>() ? "true" : "false";
-    case Json::value_t::string: {
-        std::string s = j.get<std::string>();
-        if (s.size() > 24) s = s.substr(0, 21) + "...";
-        return "a string (" + Quoted(s) + ")";
-    }
-    case Json::value_t::array: return StringPrintf("an array of %zu", j.size());
-    case Json::value_t::object: return "an object";
-    case Json::value_t::number_integer:
-    case Json::value_t::number_unsigned:
-    case Json::value_t::number_float: return StringPrintf("the number %g", j.get<double>());
-    default: return "an unsupported value";
+        case Json::value_t::null: return "null";
+        case Json::value_t::boolean: return j.get<bool>() ? "true" : "false";
+        case Json::value_t::string: {
+            std::string s = j.get<std::string>();
+            if (s.size() > 24) s = s.substr(0, 21) + "...";
+            return "a string (" + Quoted(s) + ")";
+        }
+        case Json::value_t::array: return StringPrintf("an array of %zu", j.size());
+        case Json::value_t::object: return "an object";
+        case Json::value_t::number_integer:
+        case Json::value_t::number_unsigned:
+        case Json::value_t::number_float: return StringPrintf("the number %g", j.get<double>());
+        default: return "an unsupported value";
     }
 }
 
@@ -120,12 +126,16 @@ size_t EditDistance(std::string_view a, std::string_view b) {
     return row[b.size()];
 }
 
-std::string FormatVec(const Vec3& v) { return StringPrintf("(%.4g, %.4g, %.4g)", v.x, v.y, v.z); }
+std::string FormatVec(const Vec3& v) {
+    return StringPrintf("(%.4g, %.4g, %.4g)", v.x, v.y, v.z);
+}
 
 std::string DroppedMessage(const CleanReport& c) {
     if (c.degenerate && c.duplicate)
-        return StringPrintf("dropped %zu degenerate (zero-area) and %zu duplicate triangles", c.degenerate, c.duplicate);
-    if (c.degenerate) return StringPrintf("dropped %zu degenerate (zero-area) triangles", c.degenerate);
+        return StringPrintf("dropped %zu degenerate (zero-area) and %zu duplicate triangles",
+                            c.degenerate, c.duplicate);
+    if (c.degenerate)
+        return StringPrintf("dropped %zu degenerate (zero-area) triangles", c.degenerate);
     return StringPrintf("dropped %zu duplicate triangles", c.duplicate);
 }
 
@@ -139,17 +149,22 @@ class Reader {
 
     const std::string& File() const { return file_; }
     /// "scene.json /lights/0/position" (or just the file for the root).
-    std::string Where(const std::string& path) const { return path.empty() ? file_ : file_ + " " + path; }
+    std::string Where(const std::string& path) const {
+        return path.empty() ? file_ : file_ + " " + path;
+    }
 
     [[noreturn]] void Fail(const std::string& path, const std::string& message) const {
         throw Error(Where(path) + ": " + message);
     }
     void Warn(const std::string& message) const {
-        if (warnings_) warnings_->push_back(message);
-        else LogWarning(message);
+        if (warnings_)
+            warnings_->push_back(message);
+        else
+            LogWarning(message);
     }
     /// A problem that is a warning normally and an error in strict mode.
-    void Lenient(const std::string& path, const std::string& asError, const std::string& asWarning) const {
+    void Lenient(const std::string& path, const std::string& asError,
+                 const std::string& asWarning) const {
         if (strict_) Fail(path, asError);
         Warn(Where(path) + ": " + asWarning);
     }
@@ -164,7 +179,8 @@ class Reader {
 /// for can be reported as unknown (pbrt's ReportUnused).
 class Object {
   public:
-    Object(const Reader& r, const Json& j, std::string path) : r_(r), j_(j), path_(std::move(path)) {
+    Object(const Reader& r, const Json& j, std::string path)
+        : r_(r), j_(j), path_(std::move(path)) {
         if (!j.is_object()) r.Fail(path_, "expected an object {...}, got " + Describe(j));
     }
 
@@ -179,7 +195,8 @@ class Object {
     }
     const Json& Require(const std::string& key, const char* why = nullptr) {
         if (const Json* v = Find(key)) return *v;
-        r_.Fail(Child(key), why ? StringPrintf("missing required key (%s)", why) : "missing required key");
+        r_.Fail(Child(key),
+                why ? StringPrintf("missing required key (%s)", why) : "missing required key");
     }
 
     /// Reports every key that was never asked for.
@@ -209,7 +226,9 @@ class Object {
 // ---------------------------------------------------------------------------------------
 // Values
 
-std::string Index(const std::string& path, size_t i) { return path + "/" + std::to_string(i); }
+std::string Index(const std::string& path, size_t i) {
+    return path + "/" + std::to_string(i);
+}
 
 double Number(const Reader& r, const Json& j, const std::string& path) {
     if (!j.is_number()) r.Fail(path, "expected a number, got " + Describe(j));
@@ -233,7 +252,8 @@ int Int(const Reader& r, const Json& j, const std::string& path, int lo, int hi)
     if (!j.is_number()) r.Fail(path, "expected an integer, got " + Describe(j));
     const double v = j.get<double>();
     if (v != std::floor(v)) r.Fail(path, StringPrintf("expected an integer, got %g", v));
-    if (v < lo || v > hi) r.Fail(path, StringPrintf("must be between %d and %d, got %.15g", lo, hi, v));
+    if (v < lo || v > hi)
+        r.Fail(path, StringPrintf("must be between %d and %d, got %.15g", lo, hi, v));
     return static_cast<int>(v);
 }
 
@@ -242,7 +262,8 @@ std::string String(const Reader& r, const Json& j, const std::string& path) {
     return j.get<std::string>();
 }
 
-std::string Enum(const Reader& r, const Json& j, const std::string& path, const std::vector<std::string>& choices) {
+std::string Enum(const Reader& r, const Json& j, const std::string& path,
+                 const std::vector<std::string>& choices) {
     const std::string s = String(r, j, path);
     if (std::find(choices.begin(), choices.end(), s) == choices.end())
         r.Fail(path, "must be one of " + JoinQuoted(choices) + "; got " + Quoted(s));
@@ -286,21 +307,21 @@ class PathTracker {
     bool OnEvent(Json::parse_event_t event, const Json& parsed) {
         using E = Json::parse_event_t;
         switch (event) {
-        case E::object_start: frames_.emplace_back(false); break;
-        case E::array_start: frames_.emplace_back(true); break;
-        case E::key: {
-            Frame& f = frames_.back();
-            f.key = parsed.get<std::string>();
-            f.hasKey = true;
-            if (!f.keys.insert(f.key).second) duplicates_.push_back(Path());
-            break;
-        }
-        case E::object_end:
-        case E::array_end:
-            frames_.pop_back();
-            ElementDone();
-            break;
-        case E::value: ElementDone(); break;
+            case E::object_start: frames_.emplace_back(false); break;
+            case E::array_start: frames_.emplace_back(true); break;
+            case E::key: {
+                Frame& f = frames_.back();
+                f.key = parsed.get<std::string>();
+                f.hasKey = true;
+                if (!f.keys.insert(f.key).second) duplicates_.push_back(Path());
+                break;
+            }
+            case E::object_end:
+            case E::array_end:
+                frames_.pop_back();
+                ElementDone();
+                break;
+            case E::value: ElementDone(); break;
         }
         return true;
     }
@@ -360,29 +381,37 @@ Json ParseJson(const Reader& r, const std::string& text) {
         std::string what = e.what();
         size_t line = 0, column = 0;
         std::string why = what;
-        if (size_t at = what.find(" at line "); at != std::string::npos &&
-                                               std::sscanf(what.c_str() + at, " at line %zu, column %zu", &line, &column) == 2) {
-            if (size_t colon = what.find(": ", at); colon != std::string::npos) why = what.substr(colon + 2);
+        if (size_t at = what.find(" at line ");
+            at != std::string::npos &&
+            std::sscanf(what.c_str() + at, " at line %zu, column %zu", &line, &column) == 2) {
+            if (size_t colon = what.find(": ", at); colon != std::string::npos)
+                why = what.substr(colon + 2);
         } else {
             std::tie(line, column) = LineColumn(text, e.byte > 0 ? e.byte - 1 : 0);
-            if (size_t colon = what.find(": "); colon != std::string::npos) why = what.substr(colon + 2);
+            if (size_t colon = what.find(": "); colon != std::string::npos)
+                why = what.substr(colon + 2);
         }
         if (why.size() > 160) why = why.substr(0, 157) + "...";
-        throw Error(StringPrintf("%s:%zu:%zu: parse error: %s", r.File().c_str(), line, column, why.c_str()));
+        throw Error(StringPrintf("%s:%zu:%zu: parse error: %s", r.File().c_str(), line, column,
+                                 why.c_str()));
     } catch (const Json::out_of_range& e) {
         // A number too large for a double, e.g. 1e999 (JSON has no NaN or infinity).
         std::string what = e.what(), token;
-        if (size_t q = what.find('\''); q != std::string::npos) token = what.substr(q + 1, what.rfind('\'') - q - 1);
+        if (size_t q = what.find('\''); q != std::string::npos)
+            token = what.substr(q + 1, what.rfind('\'') - q - 1);
         std::string where;
-        if (size_t pos = token.empty() ? std::string::npos : text.find(token); pos != std::string::npos) {
+        if (size_t pos = token.empty() ? std::string::npos : text.find(token);
+            pos != std::string::npos) {
             auto [line, column] = LineColumn(text, pos);
             where = StringPrintf(" (line %zu, column %zu)", line, column);
         }
-        r.Fail(tracker.Path(), StringPrintf("number %s is out of range%s", token.c_str(), where.c_str()));
+        r.Fail(tracker.Path(),
+               StringPrintf("number %s is out of range%s", token.c_str(), where.c_str()));
     } catch (const Json::exception& e) {
         r.Fail(tracker.Path(), std::string("cannot parse: ") + e.what());
     }
-    for (const std::string& path : tracker.Duplicates()) r.Lenient(path, "duplicate key", "duplicate key (the last value is used)");
+    for (const std::string& path : tracker.Duplicates())
+        r.Lenient(path, "duplicate key", "duplicate key (the last value is used)");
     return root;
 }
 
@@ -408,9 +437,11 @@ std::string ReadTextFile(const Reader& r, const std::string& path) {
 std::string CameraProblem(const Camera& c, std::string* key) {
     const Vec3 view = c.lookAt - c.position;
     *key = "look_at";
-    if (!(LengthSquared(view) > 0) || !IsFinite(view)) return "equals the position, so the camera has no view direction";
+    if (!(LengthSquared(view) > 0) || !IsFinite(view))
+        return "equals the position, so the camera has no view direction";
     *key = "fov";
-    if (!(c.fovY > 0 && c.fovY < 180)) return StringPrintf("must be between 0 and 180 degrees, got %g", c.fovY);
+    if (!(c.fovY > 0 && c.fovY < 180))
+        return StringPrintf("must be between 0 and 180 degrees, got %g", c.fovY);
     *key = "up";
     if (!(LengthSquared(c.up) > 0)) return "must not be zero";
     if (!(Length(Cross(Normalize(view), c.up)) > 1e-6f * Length(c.up)))
@@ -426,16 +457,19 @@ Camera ReadCamera(const Reader& r, const Json& j) {
     if (const Json* v = o.Find("up")) c.up = ReadVec3(r, *v, o.Child("up"));
     if (const Json* v = o.Find("fov")) {
         const double fov = Number(r, *v, o.Child("fov"));
-        if (!(fov > 0 && fov < 180)) r.Fail(o.Child("fov"), StringPrintf("must be between 0 and 180 degrees, got %g", fov));
+        if (!(fov > 0 && fov < 180))
+            r.Fail(o.Child("fov"), StringPrintf("must be between 0 and 180 degrees, got %g", fov));
         c.fovY = static_cast<float>(fov);
     }
     o.Finish();
     std::string key;
-    if (std::string problem = CameraProblem(c, &key); !problem.empty()) r.Fail(o.Child(key), problem);
+    if (std::string problem = CameraProblem(c, &key); !problem.empty())
+        r.Fail(o.Child(key), problem);
     return c;
 }
 
-Material ReadMaterial(const Reader& r, const Json& j, const std::string& path, const std::string& name) {
+Material ReadMaterial(const Reader& r, const Json& j, const std::string& path,
+                      const std::string& name) {
     Object o(r, j, path);
     Material m;
     m.name = name;
@@ -451,10 +485,12 @@ PointLight ReadLight(const Reader& r, const Json& j, const std::string& path) {
     Object o(r, j, path);
     PointLight light;
     light.position = ReadVec3(r, o.Require("position"), o.Child("position"));
-    if (const Json* v = o.Find("intensity")) light.intensity = ReadColor(r, *v, o.Child("intensity"));
+    if (const Json* v = o.Find("intensity"))
+        light.intensity = ReadColor(r, *v, o.Child("intensity"));
     if (const Json* v = o.Find("falloff")) {
-        light.falloff = Enum(r, *v, o.Child("falloff"), {"inverse_square", "none"}) == "none" ? Falloff::None
-                                                                                               : Falloff::InverseSquare;
+        light.falloff = Enum(r, *v, o.Child("falloff"), {"inverse_square", "none"}) == "none"
+                            ? Falloff::None
+                            : Falloff::InverseSquare;
     }
     if (const Json* v = o.Find("name")) String(r, *v, o.Child("name"));
     o.Finish();
@@ -470,7 +506,8 @@ Affine ReadMatrix(const Reader& r, const Json& j, const std::string& path) {
     float v[16];
     for (int i = 0; i < 16; ++i) v[i] = Float(r, j[i], Index(path, i));
     if (v[12] != 0 || v[13] != 0 || v[14] != 0 || v[15] != 1) {
-        r.Fail(path, StringPrintf("the last row must be 0 0 0 1 (only affine transforms are supported), got %g %g %g %g",
+        r.Fail(path, StringPrintf("the last row must be 0 0 0 1 (only affine transforms are "
+                                  "supported), got %g %g %g %g",
                                   v[12], v[13], v[14], v[15]));
     }
     Affine a;
@@ -500,20 +537,27 @@ Affine ReadTransform(const Reader& r, const Json& j, const std::string& path) {
     if (scale) {
         const std::string p = o.Child("scale");
         Vec3 s;
-        if (scale->is_number()) s = Vec3(Float(r, *scale, p));
-        else if (scale->is_array() && scale->size() == 3) s = ReadVec3(r, *scale, p);
-        else r.Fail(p, "expected a number or 3 numbers, got " + Describe(*scale));
-        if (s.x == 0 || s.y == 0 || s.z == 0) r.Fail(p, "must not be zero (it would flatten the mesh)");
+        if (scale->is_number())
+            s = Vec3(Float(r, *scale, p));
+        else if (scale->is_array() && scale->size() == 3)
+            s = ReadVec3(r, *scale, p);
+        else
+            r.Fail(p, "expected a number or 3 numbers, got " + Describe(*scale));
+        if (s.x == 0 || s.y == 0 || s.z == 0)
+            r.Fail(p, "must not be zero (it would flatten the mesh)");
         result = Affine::Scale(s);
     }
     if (rotate) {
         const std::string p = o.Child("rotate");
-        if (!rotate->is_array()) r.Fail(p, "expected a list of [ax, ay, az, degrees], got " + Describe(*rotate));
+        if (!rotate->is_array())
+            r.Fail(p, "expected a list of [ax, ay, az, degrees], got " + Describe(*rotate));
         // One rotation [ax, ay, az, degrees] or a list of them.
         std::vector<std::pair<const Json*, std::string>> list;
-        if (!rotate->empty() && (*rotate)[0].is_number()) list.push_back({rotate, p});
+        if (!rotate->empty() && (*rotate)[0].is_number())
+            list.push_back({rotate, p});
         else
-            for (size_t i = 0; i < rotate->size(); ++i) list.push_back({&(*rotate)[i], Index(p, i)});
+            for (size_t i = 0; i < rotate->size(); ++i)
+                list.push_back({&(*rotate)[i], Index(p, i)});
         for (const auto& [rj, rp] : list) {
             if (!rj->is_array() || rj->size() != 4)
                 r.Fail(rp, "expected [ax, ay, az, degrees], got " + Describe(*rj));
@@ -524,7 +568,8 @@ Affine ReadTransform(const Reader& r, const Json& j, const std::string& path) {
             result = Affine::Rotate(axis, degrees) * result;
         }
     }
-    if (translate) result = Affine::Translate(ReadVec3(r, *translate, o.Child("translate"))) * result;
+    if (translate)
+        result = Affine::Translate(ReadVec3(r, *translate, o.Child("translate"))) * result;
     o.Finish();
     return result;
 }
@@ -535,24 +580,31 @@ void ReadRender(const Reader& r, const Json& j, RenderOptions* ro) {
     if (const Json* v = o.Find("height")) ro->height = Int(r, *v, o.Child("height"), 1, 16384);
     constexpr int64_t MaxPixels = int64_t(1) << 28;
     if (int64_t(ro->width) * ro->height > MaxPixels) {
-        r.Fail("/render", StringPrintf("%d x %d is %lld pixels, more than the limit of %lld", ro->width, ro->height,
-                                       static_cast<long long>(int64_t(ro->width) * ro->height),
-                                       static_cast<long long>(MaxPixels)));
+        r.Fail("/render",
+               StringPrintf("%d x %d is %lld pixels, more than the limit of %lld", ro->width,
+                            ro->height, static_cast<long long>(int64_t(ro->width) * ro->height),
+                            static_cast<long long>(MaxPixels)));
     }
     if (const Json* v = o.Find("aa")) ro->aa = Int(r, *v, o.Child("aa"), 1, 16);
     if (const Json* v = o.Find("max_depth")) ro->maxDepth = Int(r, *v, o.Child("max_depth"), 1, 64);
-    if (const Json* v = o.Find("shadows")) ro->shadows = Enum(r, *v, o.Child("shadows"), {"none", "rt", "lmm", "area"});
-    if (const Json* v = o.Find("accel")) ro->accel = Enum(r, *v, o.Child("accel"), {"brute", "grid", "embree"});
-    if (const Json* v = o.Find("grid")) ro->accelOptions.gridResolution = Int(r, *v, o.Child("grid"), 0, 4096);
+    if (const Json* v = o.Find("shadows"))
+        ro->shadows = Enum(r, *v, o.Child("shadows"), {"none", "rt", "lmm"});
+    if (const Json* v = o.Find("accel"))
+        ro->accel = Enum(r, *v, o.Child("accel"), {"brute", "grid", "embree"});
+    if (const Json* v = o.Find("grid"))
+        ro->accelOptions.gridResolution = Int(r, *v, o.Child("grid"), 0, 4096);
     if (const Json* v = o.Find("cc")) ro->lightMesh.cc = Int(r, *v, o.Child("cc"), 1, 4096);
     if (const Json* v = o.Find("ki")) {
         const float ki = Float(r, *v, o.Child("ki"));
-        if (!(ki > 0 && ki <= 16)) r.Fail(o.Child("ki"), StringPrintf("must be in (0, 16], got %g", ki));
+        if (!(ki > 0 && ki <= 16))
+            r.Fail(o.Child("ki"), StringPrintf("must be in (0, 16], got %g", ki));
         ro->lightMesh.ki = ki;
     }
-    if (const Json* v = o.Find("variant")) ro->lightMesh.variant = String(r, *v, o.Child("variant"));
+    if (const Json* v = o.Find("variant"))
+        ro->lightMesh.variant = String(r, *v, o.Child("variant"));
     if (const Json* v = o.Find("ns")) ro->lightMesh.ns = Int(r, *v, o.Child("ns"), 0, 64);
-    if (const Json* v = o.Find("template_dir")) ro->lightMesh.templateDir = String(r, *v, o.Child("template_dir"));
+    if (const Json* v = o.Find("template_dir"))
+        ro->lightMesh.templateDir = String(r, *v, o.Child("template_dir"));
     o.Finish();
 }
 
@@ -565,6 +617,7 @@ struct MeshEntry {
     bool hasTransform = false;
     int material = -1;  ///< override, index into Scene::materials
     MeshLoadOptions load;
+    bool excludeMaterialsIsList = false, excludeNamesIsList = false;  // for JSON paths
 };
 
 struct GroundEntry {
@@ -585,34 +638,35 @@ int LookUpMaterial(const Reader& r, const Json& j, const std::string& path,
     std::string list;
     for (const auto& d : defined) list += (list.empty() ? "" : ", ") + d;
     r.Fail(path, "unknown material " + Quoted(name) +
-                     (defined.empty() ? " (the scene defines no materials)" : " (defined: " + list + ")"));
+                     (defined.empty() ? " (the scene defines no materials)"
+                                      : " (defined: " + list + ")"));
 }
 
-void AddGround(Scene* scene, const Bounds3& box, int axis, float height, float sizeFactor, uint32_t material) {
-    // The quad spans axes u, v with u × v = +up, so its front faces up.
+void AddGround(Scene* scene, const Bounds3& box, int axis, float height, float sizeFactor,
+               uint32_t material) {
+    // A thin closed slab whose top face is the ground, rather than a bare quad: every
+    // object stays a closed solid (the inside test, "СТ", relies on it) and nodes below
+    // the ground count as inside it. Axes u, v, up are right-handed, so faces point out.
     const int u = (axis + 1) % 3, v = (axis + 2) % 3;
     const Vec3 extent = box.Diagonal();
     float side = sizeFactor * std::max(extent[u], extent[v]);
     if (!(side > 0)) side = sizeFactor * box.MaxExtent();
-    const Vec3 center = box.Center();
-    TriangleMesh quad;
-    const float su[4] = {-1, 1, 1, -1}, sv[4] = {-1, -1, 1, 1};
-    for (int k = 0; k < 4; ++k) {
-        Vec3 p;
-        p[axis] = height;
-        p[u] = center[u] + 0.5f * side * su[k];
-        p[v] = center[v] + 0.5f * side * sv[k];
-        quad.positions.push_back(p);
-    }
-    quad.triangles = {{0, 1, 2}, {0, 2, 3}};
-    quad.materialIds = {material, material};
-    // Keep the scene's vertex normals (Append drops them all if one part has none).
+    const float thickness = 0.01f * side;
+    Vec3 centre = box.Center(), eu, ev, eup;
+    centre[axis] = height - 0.5f * thickness;
+    eu[u] = 0.5f * side;
+    ev[v] = 0.5f * side;
+    eup[axis] = 0.5f * thickness;
+    TriangleMesh slab;
+    ShapeBuilder(&slab).OrientedBox(centre, eu, ev, eup, material);
+    // Keep the scene's vertex normals (Append drops them all if one part has none); the
+    // slab's shared corners get the up normal, right for the top face that is seen.
     if (!scene->mesh.normals.empty()) {
         Vec3 n;
         n[axis] = 1;
-        quad.normals.assign(4, n);
+        slab.normals.assign(slab.positions.size(), n);
     }
-    scene->mesh.Append(quad);
+    scene->mesh.Append(slab);
 }
 
 Material GroundMaterial() {
@@ -632,20 +686,24 @@ void CheckExtent(const Reader& r, const std::string& path, const Scene& scene) {
 /// "no triangles", with the reason when one is known.
 std::string NoTrianglesMessage(const SceneReport& report) {
     if (report.degenerateRemoved > 0)
-        return StringPrintf("the scene has zero extent: all %zu triangles are degenerate (zero area)",
-                            report.degenerateRemoved);
+        return StringPrintf(
+            "the scene has zero extent: all %zu triangles are degenerate (zero area)",
+            report.degenerateRemoved);
     if (report.meshesExcluded > 0)
-        return StringPrintf("the scene has no triangles: all %zu meshes were excluded", report.meshesExcluded);
+        return StringPrintf("the scene has no triangles: all %zu meshes were excluded",
+                            report.meshesExcluded);
     return "the scene has no triangles";
 }
 
 // ---------------------------------------------------------------------------------------
 // The three kinds of scene
 
-Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options, std::vector<std::string>* warnings) {
+Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
+                    std::vector<std::string>* warnings) {
     const Reader r(spec, options, warnings);
     const Json root = ParseJson(r, ReadTextFile(r, spec));
-    if (!root.is_object()) r.Fail("", "expected a JSON object {...} at the top level, got " + Describe(root));
+    if (!root.is_object())
+        r.Fail("", "expected a JSON object {...} at the top level, got " + Describe(root));
     Object top(r, root, "");
 
     Scene scene;
@@ -668,7 +726,8 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options, st
     const Json& lj = top.Require("lights", "a scene needs at least one point light");
     if (!lj.is_array()) r.Fail("/lights", "expected a list of lights [...], got " + Describe(lj));
     if (lj.empty()) r.Fail("/lights", "a scene needs at least one light, got an empty list");
-    for (size_t i = 0; i < lj.size(); ++i) scene.lights.push_back(ReadLight(r, lj[i], Index("/lights", i)));
+    for (size_t i = 0; i < lj.size(); ++i)
+        scene.lights.push_back(ReadLight(r, lj[i], Index("/lights", i)));
 
     const Json& mj = top.Require("meshes", "a scene needs at least one mesh");
     if (!mj.is_array()) r.Fail("/meshes", "expected a list of meshes [...], got " + Describe(mj));
@@ -684,14 +743,21 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options, st
         e.resolved = fs::path(e.file).is_absolute() ? e.file : (folder / e.file).string();
         const Json* transform = o.Find("transform");
         const Json* matrix = o.Find("matrix");
-        if (transform && matrix) r.Fail(e.path, "give either \"transform\" or \"matrix\", not both");
+        if (transform && matrix)
+            r.Fail(e.path, "give either \"transform\" or \"matrix\", not both");
         if (transform) e.transform = ReadTransform(r, *transform, o.Child("transform"));
         if (matrix) e.transform = ReadMatrix(r, *matrix, o.Child("matrix"));
         e.hasTransform = transform || matrix;
-        if (const Json* v = o.Find("material")) e.material = LookUpMaterial(r, *v, o.Child("material"), materialNames);
-        if (const Json* v = o.Find("exclude_materials"))
+        if (const Json* v = o.Find("material"))
+            e.material = LookUpMaterial(r, *v, o.Child("material"), materialNames);
+        if (const Json* v = o.Find("exclude_materials")) {
             e.load.excludeMaterials = StringList(r, *v, o.Child("exclude_materials"));
-        if (const Json* v = o.Find("exclude_names")) e.load.excludeNames = StringList(r, *v, o.Child("exclude_names"));
+            e.excludeMaterialsIsList = v->is_array();
+        }
+        if (const Json* v = o.Find("exclude_names")) {
+            e.load.excludeNames = StringList(r, *v, o.Child("exclude_names"));
+            e.excludeNamesIsList = v->is_array();
+        }
         if (const Json* v = o.Find("name")) String(r, *v, o.Child("name"));
         o.Finish();
         entries.push_back(std::move(e));
@@ -701,16 +767,19 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options, st
     if (const Json* gj = top.Find("ground")) {
         Object o(r, *gj, "/ground");
         ground.present = true;
-        if (const Json* v = o.Find("up")) ground.axis = Enum(r, *v, o.Child("up"), {"x", "y", "z"})[0] - 'x';
+        if (const Json* v = o.Find("up"))
+            ground.axis = Enum(r, *v, o.Child("up"), {"x", "y", "z"})[0] - 'x';
         if (const Json* v = o.Find("height")) {
             ground.height = Float(r, *v, o.Child("height"));
             ground.hasHeight = true;
         }
         if (const Json* v = o.Find("size")) {
             ground.size = Float(r, *v, o.Child("size"));
-            if (!(ground.size > 0)) r.Fail(o.Child("size"), StringPrintf("must be positive, got %g", ground.size));
+            if (!(ground.size > 0))
+                r.Fail(o.Child("size"), StringPrintf("must be positive, got %g", ground.size));
         }
-        if (const Json* v = o.Find("material")) ground.material = LookUpMaterial(r, *v, o.Child("material"), materialNames);
+        if (const Json* v = o.Find("material"))
+            ground.material = LookUpMaterial(r, *v, o.Child("material"), materialNames);
         o.Finish();
     }
     if (const Json* v = top.Find("render")) ReadRender(r, *v, &scene.render);
@@ -723,20 +792,26 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options, st
         try {
             loaded = LoadMeshFile(e.resolved, e.load);
         } catch (const MeshFileError& err) {
-            if (err.Unreadable()) r.Fail(filePath, "cannot read " + Quoted(e.file) + ": " + err.Reason());
+            if (err.Unreadable())
+                r.Fail(filePath, "cannot read " + Quoted(e.file) + ": " + err.Reason());
             r.Fail(filePath, Quoted(e.file) + ": " + err.Reason());
         }
         for (const std::string& w : loaded.warnings) r.Warn(w);
-        for (size_t k = 0; k < e.load.excludeMaterials.size(); ++k) {
-            if (!loaded.excludeMaterialsMatched[k])
-                r.Warn(r.Where(e.path + "/exclude_materials" + (e.load.excludeMaterials.size() > 1 ? "/" + std::to_string(k) : "")) +
-                       ": pattern " + Quoted(e.load.excludeMaterials[k]) + " matched no material of " + Quoted(e.file));
-        }
-        for (size_t k = 0; k < e.load.excludeNames.size(); ++k) {
-            if (!loaded.excludeNamesMatched[k])
-                r.Warn(r.Where(e.path + "/exclude_names" + (e.load.excludeNames.size() > 1 ? "/" + std::to_string(k) : "")) +
-                       ": pattern " + Quoted(e.load.excludeNames[k]) + " matched no node or mesh of " + Quoted(e.file));
-        }
+        // Patterns that excluded nothing are probably typos.
+        auto warnUnmatched = [&](const char* key, const std::vector<std::string>& patterns,
+                                 const std::vector<bool>& matched, bool list, const char* what) {
+            for (size_t k = 0; k < patterns.size(); ++k) {
+                if (matched[k]) continue;
+                const std::string path =
+                    e.path + "/" + key + (list ? "/" + std::to_string(k) : std::string());
+                r.Warn(r.Where(path) + ": pattern " + Quoted(patterns[k]) + " matched no " + what +
+                       " of " + Quoted(e.file));
+            }
+        };
+        warnUnmatched("exclude_materials", e.load.excludeMaterials, loaded.excludeMaterialsMatched,
+                      e.excludeMaterialsIsList, "material");
+        warnUnmatched("exclude_names", e.load.excludeNames, loaded.excludeNamesMatched,
+                      e.excludeNamesIsList, "node or mesh");
         scene.report.meshesExcluded += loaded.meshesExcluded;
         scene.report.sources.push_back(e.resolved);
         if (loaded.mesh.TriangleCount() == 0) {
@@ -746,7 +821,8 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options, st
         if (e.hasTransform) {
             TransformMesh(&loaded.mesh, e.transform);
             for (const Vec3& p : loaded.mesh.positions)
-                if (!IsFinite(p)) r.Fail(e.path, "the transform makes coordinates non-finite (too large)");
+                if (!IsFinite(p))
+                    r.Fail(e.path, "the transform makes coordinates non-finite (too large)");
         }
         const CleanReport clean = CleanMesh(&loaded.mesh);
         scene.report.degenerateRemoved += clean.degenerate;
@@ -754,10 +830,12 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options, st
         if (clean.degenerate || clean.duplicate) r.Warn(e.resolved + ": " + DroppedMessage(clean));
         uint32_t offset = 0;
         if (e.material >= 0) {
-            std::fill(loaded.mesh.materialIds.begin(), loaded.mesh.materialIds.end(), static_cast<uint32_t>(e.material));
+            std::fill(loaded.mesh.materialIds.begin(), loaded.mesh.materialIds.end(),
+                      static_cast<uint32_t>(e.material));
         } else {
             offset = static_cast<uint32_t>(scene.materials.size());
-            scene.materials.insert(scene.materials.end(), loaded.materials.begin(), loaded.materials.end());
+            scene.materials.insert(scene.materials.end(), loaded.materials.begin(),
+                                   loaded.materials.end());
         }
         scene.mesh.Append(loaded.mesh, offset);
     }
@@ -766,7 +844,9 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options, st
     scene.report.degenerateRemoved += across.degenerate;
     scene.report.duplicatesRemoved += across.duplicate;
     if (across.duplicate)
-        r.Warn(spec + StringPrintf(": dropped %zu triangles that duplicate triangles of another mesh", across.duplicate));
+        r.Warn(spec +
+               StringPrintf(": dropped %zu triangles that duplicate triangles of another mesh",
+                            across.duplicate));
     if (scene.mesh.TriangleCount() == 0) r.Fail("/meshes", NoTrianglesMessage(scene.report));
     CheckExtent(r, "/meshes", scene);
 
@@ -781,15 +861,16 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options, st
         }
         const float height = ground.hasHeight ? ground.height : box.lo[ground.axis];
         if (!ground.hasHeight)
-            scene.report.notes.push_back(StringPrintf("ground plane at %c = %g, the scene's lowest point",
-                                                      'x' + ground.axis, height));
+            scene.report.notes.push_back(StringPrintf(
+                "ground plane at %c = %g, the scene's lowest point", 'x' + ground.axis, height));
         AddGround(&scene, box, ground.axis, height, ground.size, material);
     }
     return scene;
 }
 
 /// A bare mesh: frame it with a camera, a ground plane and two lights.
-Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options, std::vector<std::string>* warnings) {
+Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options,
+                   std::vector<std::string>* warnings) {
     const Reader r(spec, SceneLoadOptions{}, warnings);
     LoadedMesh loaded = LoadMeshFile(spec);  // its errors already name the file
     for (const std::string& w : loaded.warnings) r.Warn(w);
@@ -810,7 +891,8 @@ Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options, std
     const Vec3 center = box.Center();
     const float radius = 0.5f * Length(box.Diagonal());  // bounding sphere of the box
     auto& notes = scene.report.notes;
-    notes.push_back("no scene file: framing the model automatically (write a .json scene to choose)");
+    notes.push_back(
+        "no scene file: framing the model automatically (write a .json scene to choose)");
     notes.push_back("up axis: +y, as in OBJ and glTF");
 
     // Camera: a three-quarter view from the front (+z), a little right and above, looking
@@ -820,8 +902,9 @@ Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options, std
     Camera& cam = scene.camera;
     cam.fovY = 40.0f;
     const bool hinted = options.frameWidth > 0 && options.frameHeight > 0;
-    const float aspect = hinted ? static_cast<float>(options.frameWidth) / static_cast<float>(options.frameHeight)
-                                : static_cast<float>(scene.render.width) / static_cast<float>(scene.render.height);
+    const float aspect =
+        hinted ? static_cast<float>(options.frameWidth) / static_cast<float>(options.frameHeight)
+               : static_cast<float>(scene.render.width) / static_cast<float>(scene.render.height);
     const float tanY = 0.9f * std::tan(0.5f * cam.fovY * Pi / 180.0f), tanX = tanY * aspect;
     const Vec3 back = Normalize(Vec3(0.5f, 0.45f, 1.0f));  // from the centre towards the camera
     const Vec3 right = Normalize(Cross(-back, Vec3(0, 1, 0)));
@@ -829,30 +912,36 @@ Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options, std
     float distance = 0;
     for (int k = 0; k < 8; ++k) {
         const Vec3 c = Vec3((k & 1) ? box.hi.x : box.lo.x, (k & 2) ? box.hi.y : box.lo.y,
-                            (k & 4) ? box.hi.z : box.lo.z) - center;
+                            (k & 4) ? box.hi.z : box.lo.z) -
+                       center;
         const float depthOffset = Dot(c, back);
-        distance = std::max({distance, depthOffset + 0.05f * radius, depthOffset + std::abs(Dot(c, right)) / tanX,
+        distance = std::max({distance, depthOffset + 0.05f * radius,
+                             depthOffset + std::abs(Dot(c, right)) / tanX,
                              depthOffset + std::abs(Dot(c, up)) / tanY});
     }
     cam.lookAt = center;
     cam.position = center + back * distance;
     cam.up = Vec3(0, 1, 0);
-    notes.push_back(StringPrintf("camera at %s looking at the model's centre %s, %g° vertical field of view",
-                                 FormatVec(cam.position).c_str(), FormatVec(center).c_str(), cam.fovY));
+    notes.push_back(
+        StringPrintf("camera at %s looking at the model's centre %s, %g° vertical field of view",
+                     FormatVec(cam.position).c_str(), FormatVec(center).c_str(), cam.fovY));
 
     // Ground: under the model's lowest point, three times its horizontal size.
     const uint32_t groundMaterial = static_cast<uint32_t>(scene.materials.size());
     scene.materials.push_back(GroundMaterial());
     AddGround(&scene, box, 1, box.lo.y, 3.0f, groundMaterial);
-    notes.push_back(StringPrintf("ground plane at y = %g (the model's lowest point), 3x the model's width", box.lo.y));
+    notes.push_back(StringPrintf(
+        "ground plane at y = %g (the model's lowest point), 3x the model's width", box.lo.y));
 
     // Two lights above the model: a key light front-left, a weaker fill light right.
     // With inverse-square falloff, intensities scale with distance² so the model receives
     // about 0.9 and 0.3 of full irradiance whatever its size.
     const Vec3 keyPosition = center + Vec3(-1.5f, 3.5f, 2.0f) * radius;
     const Vec3 fillPosition = center + Vec3(2.5f, 2.5f, 0.5f) * radius;
-    scene.lights.push_back({keyPosition, Color(0.9f * LengthSquared(keyPosition - center)), Falloff::InverseSquare});
-    scene.lights.push_back({fillPosition, Color(0.3f * LengthSquared(fillPosition - center)), Falloff::InverseSquare});
+    scene.lights.push_back(
+        {keyPosition, Color(0.9f * LengthSquared(keyPosition - center)), Falloff::InverseSquare});
+    scene.lights.push_back(
+        {fillPosition, Color(0.3f * LengthSquared(fillPosition - center)), Falloff::InverseSquare});
     notes.push_back(StringPrintf("key light at %s and fill light at %s, inverse-square falloff",
                                  FormatVec(keyPosition).c_str(), FormatVec(fillPosition).c_str()));
     return scene;
@@ -879,9 +968,11 @@ void Validate(const Scene& scene) {
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         const PointLight& l = scene.lights[i];
         const Color& c = l.intensity;
-        if (!IsFinite(l.position) || !std::isfinite(c.r) || !std::isfinite(c.g) || !std::isfinite(c.b) || c.r < 0 ||
-            c.g < 0 || c.b < 0)
-            ThrowError("%s: light %zu has a non-finite position or a negative or non-finite intensity", name.c_str(), i);
+        if (!IsFinite(l.position) || !std::isfinite(c.r) || !std::isfinite(c.g) ||
+            !std::isfinite(c.b) || c.r < 0 || c.g < 0 || c.b < 0)
+            ThrowError(
+                "%s: light %zu has a non-finite position or a negative or non-finite intensity",
+                name.c_str(), i);
     }
     std::string key;
     if (std::string problem = CameraProblem(scene.camera, &key); !problem.empty())
@@ -889,20 +980,27 @@ void Validate(const Scene& scene) {
     if (scene.mesh.materialIds.size() != scene.mesh.triangles.size())
         ThrowError("%s: every triangle needs a material", name.c_str());
     for (uint32_t id : scene.mesh.materialIds)
-        if (id >= scene.materials.size()) ThrowError("%s: a triangle refers to material %u, which does not exist", name.c_str(), id);
+        if (id >= scene.materials.size())
+            ThrowError("%s: a triangle refers to material %u, which does not exist", name.c_str(),
+                       id);
     for (const Vec3& p : scene.mesh.positions)
         if (!IsFinite(p)) ThrowError("%s: a vertex has a non-finite coordinate", name.c_str());
 }
 
 }  // namespace
 
-Scene LoadScene(const std::string& spec, const SceneLoadOptions& options, std::vector<std::string>* warnings) {
-    if (spec.empty()) ThrowError("no scene given: expected builtin:NAME, a .json scene file or a mesh file");
+Scene LoadScene(const std::string& spec, const SceneLoadOptions& options,
+                std::vector<std::string>* warnings) {
+    if (spec.empty())
+        ThrowError("no scene given: expected builtin:NAME, a .json scene file or a mesh file");
     try {
         Scene scene;
-        if (spec.rfind("builtin:", 0) == 0) scene = LoadBuiltin(spec, warnings);
-        else if (Lower(fs::path(spec).extension().string()) == ".json") scene = LoadJsonScene(spec, options, warnings);
-        else scene = LoadBareMesh(spec, options, warnings);
+        if (spec.rfind("builtin:", 0) == 0)
+            scene = LoadBuiltin(spec, warnings);
+        else if (Lower(fs::path(spec).extension().string()) == ".json")
+            scene = LoadJsonScene(spec, options, warnings);
+        else
+            scene = LoadBareMesh(spec, options, warnings);
         Validate(scene);
         return scene;
     } catch (const Error&) {

@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "lightmesh/shadow/shadow.h"
+#include "lightmesh/shadow/sphere_templates.h"
 
 namespace lm {
 
@@ -39,32 +40,37 @@ struct LightMeshLattice {
 
 /// How the nodes within r of P are enumerated.
 enum class SphereEnumeration {
-    Cube,  ///< the paper's "Grid": loop over the cube around the sphere, test distances
+    Cube,       ///< the paper's "Grid": loop over the cube around the sphere, test distances
+    Templates,  ///< "Ш" (§3.1): snap P to a sub-position, walk its precomputed node list
 };
 
 /// Which candidate nodes are dropped as not seeing P (light leaks, paper §1.4).
 enum class LocalVisibility {
-    None,    ///< "Нет": no test
-    Object,  ///< "ОТ": a segment from every candidate node to P, at every shading point
+    None,     ///< "Нет": no test
+    Object,   ///< "ОТ": a segment from every candidate node to P, at every shading point
+    Reduced,  ///< "У" (§3.2): segments from the boundary nodes first; only if one of them
+              ///< is blocked, segments from the inner nodes too
+    Inside,   ///< "СТ" (§4): drop nodes inside solids, a flag computed once per node
 };
 
 /// A variant of the paper's tables: how spheres are enumerated and how local visibility
-/// is tested.
+/// is tested, with the names the CLI and the docs use.
 struct LightMeshVariant {
-    SphereEnumeration enumeration = SphereEnumeration::Cube;
-    LocalVisibility local = LocalVisibility::Object;
-
-    /// The paper's name ("Grid", ...) where the combination has one, else a description.
-    std::string PaperName() const;
-    /// The command-line name ("grid", ...).
-    std::string Name() const;
+    SphereEnumeration enumeration = SphereEnumeration::Templates;
+    LocalVisibility local = LocalVisibility::Reduced;
+    std::string name = "reduced";  ///< command-line name
+    std::string paperName = "У";   ///< name in the paper's tables
 };
 
-/// Parses a --variant name: "grid" (Grid: cube loop, segment test at every point) or
-/// "grid-none" (cube loop, no local-visibility test). Throws Error naming the choices.
+/// Parses a --variant name, in ASCII or as the paper writes it: grid (Grid), templates
+/// (Ш), reduced (У), none (Нет), inside (СТ), object (ОТ; the same computation as Ш), and
+/// grid-none (cube loop without local visibility, not in the paper). Empty means the
+/// default. Throws Error naming the choices.
 LightMeshVariant ParseLightMeshVariant(std::string_view name);
-/// The names ParseLightMeshVariant accepts.
+/// The ASCII names ParseLightMeshVariant accepts.
 std::vector<std::string> LightMeshVariantNames();
+/// The default variant's name (chosen by measurement; see the README).
+inline constexpr const char* kDefaultLightMeshVariant = "reduced";
 
 /// The shadow method of formula (2): V(L_i, P) is replaced by the mean of V(L_i, x_k)
 /// over the m nodes x_k within r of P, in front of the surface, and passing the local
@@ -83,6 +89,11 @@ class LightMeshShadows : public ShadowMethod {
     virtual bool IsEvaluated(uint64_t index) const = 0;
     /// The node's visibility bits (bit i: light i visible), evaluating it if need be.
     virtual uint64_t NodeVisibility(uint64_t index) const = 0;
+    /// Whether the node lies inside a solid (evaluating it if need be). Only the СТ variant
+    /// computes this flag; the others report false.
+    virtual bool NodeInside(uint64_t index) const = 0;
+    /// The sphere templates in use (empty for the cube loop) and how they were obtained.
+    virtual const TemplateLoad& Templates() const = 0;
 };
 
 /// Builds the light mesh for `scene`. Refuses, before allocating, a mesh whose node

@@ -176,18 +176,25 @@ TEST(LightMesh, SegmentTestStopsLeaksThatNoTestLetsThrough) {
     EXPECT_GT(leaksNone, samples / 2) << "the leak test must be able to fail";
 }
 
-// Laziness: only nodes near visible surfaces are ever evaluated.
-TEST(LightMesh, EvaluatesOnlyNodesNearShadedPoints) {
+// Laziness: only nodes near visible surfaces are ever evaluated. With the cube loop "near"
+// is within r of a shading point; the templates snap P to a sub-position first, which
+// moves it by up to √3/2 · h/ns.
+class LightMeshLaziness : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(LightMeshLaziness, EvaluatesOnlyNodesNearShadedPoints) {
     Scene s = MakeBuiltinScene("gazebo");
+    s.render.lightMesh.variant = GetParam();
     for (Material& m : s.materials) m.mirror = Color(0.0f);  // shading points = camera hits
     s.render.width = 80;
     s.render.height = 60;
     auto accel = CreateAccelerator("grid", s.mesh);
-    LightMeshOptions o;
-    auto lmm = CreateLightMeshShadows(s, *accel, o);
+    auto lmm = CreateLightMeshShadows(s, *accel, s.render.lightMesh);
     WhittedRenderer renderer(s, *accel, *lmm, s.render);
     renderer.Render();
     const LightMeshLattice& L = lmm->Lattice();
+    const float reach = L.r + (lmm->Variant().enumeration == SphereEnumeration::Templates
+                                   ? std::sqrt(3.0f) / 2 * L.h / kDefaultTemplateSubsteps
+                                   : 0.0f);
     const uint64_t evaluated = lmm->NodesEvaluated();
     EXPECT_GT(evaluated, 0u);
     EXPECT_LT(static_cast<double>(evaluated), 0.05 * static_cast<double>(L.NodeCount()));
@@ -199,7 +206,7 @@ TEST(LightMesh, EvaluatesOnlyNodesNearShadedPoints) {
     auto key = [&](int i, int j, int k) {
         return (static_cast<uint64_t>(i + 4096) << 42) | (static_cast<uint64_t>(j + 4096) << 21) | (k + 4096);
     };
-    auto cellOf = [&](const Vec3& p, int axis) { return static_cast<int>(std::floor(p[axis] / L.r)); };
+    auto cellOf = [&](const Vec3& p, int axis) { return static_cast<int>(std::floor(p[axis] / reach)); };
     for (int y = 0; y < s.render.height; ++y)
         for (int x = 0; x < s.render.width; ++x) {
             Hit hit;
@@ -219,7 +226,7 @@ TEST(LightMesh, EvaluatesOnlyNodesNearShadedPoints) {
                     auto it = cells.find(key(cellOf(x, 0) + di, cellOf(x, 1) + dj, cellOf(x, 2) + dk));
                     if (it == cells.end()) continue;
                     for (const Vec3& p : it->second)
-                        if (Length(x - p) <= L.r * 1.0001f) { near = true; break; }
+                        if (Length(x - p) <= reach * 1.0001f) { near = true; break; }
                 }
         EXPECT_TRUE(near) << "node " << idx << " evaluated far from every shading point";
         if (!near) break;
@@ -227,6 +234,8 @@ TEST(LightMesh, EvaluatesOnlyNodesNearShadedPoints) {
     }
     EXPECT_EQ(checked, evaluated);
 }
+
+INSTANTIATE_TEST_SUITE_P(Variants, LightMeshLaziness, ::testing::Values("grid", "reduced", "inside"));
 
 TEST(LightMesh, ImagesAreIdenticalForAnyThreadCount) {
     Scene s = MakeBuiltinScene("gazebo");
@@ -255,8 +264,16 @@ TEST(LightMesh, ImagesAreIdenticalForAnyThreadCount) {
 
 TEST(LightMesh, UnknownVariantIsAnError) {
     EXPECT_THROW(ParseLightMeshVariant("fastest"), Error);
-    EXPECT_EQ(ParseLightMeshVariant("").local, LocalVisibility::Object);
+    EXPECT_EQ(ParseLightMeshVariant("").name, kDefaultLightMeshVariant);
     EXPECT_EQ(ParseLightMeshVariant("grid-none").local, LocalVisibility::None);
+    // The paper's names and their transliterations name the same variants.
+    EXPECT_EQ(ParseLightMeshVariant("СТ").name, "inside");
+    EXPECT_EQ(ParseLightMeshVariant("st").name, "inside");
+    EXPECT_EQ(ParseLightMeshVariant("Ш").name, "templates");
+    EXPECT_EQ(ParseLightMeshVariant("У").local, LocalVisibility::Reduced);
+    EXPECT_EQ(ParseLightMeshVariant("Нет").local, LocalVisibility::None);
+    EXPECT_EQ(ParseLightMeshVariant("ОТ").enumeration, SphereEnumeration::Templates);
+    EXPECT_EQ(ParseLightMeshVariant("Grid").enumeration, SphereEnumeration::Cube);
 }
 
 }  // namespace
