@@ -99,14 +99,14 @@ struct Mailbox {
 // The three kinds of query the one traversal serves. Cell() tests a leaf cell's triangles
 // and returns true to stop the walk; tCellExit is where the ray leaves the cell.
 struct ClosestQuery {
-    ClosestQuery(const NestedGridAccel::Tri* t, const Ray& r) : tris(t), ray(r) {}
-    const NestedGridAccel::Tri* tris;
+    explicit ClosestQuery(const Ray& r) : ray(r) {}
     detail::PreparedRay ray;
     Hit best;
     bool found = false;
     Mailbox mailbox;
 
-    bool Cell(const uint32_t* p, const uint32_t* end, float tCellExit) {
+    bool Cell(const uint32_t* p, const uint32_t* end, const NestedGridAccel::Tri* tris,
+              float tCellExit) {
         for (; p != end; ++p) {
             const uint32_t id = *p;
             if (mailbox.Seen(id)) continue;
@@ -114,7 +114,7 @@ struct ClosestQuery {
 #ifdef LM_GRID_STATS
             ++gTests;
 #endif
-            if (!detail::IntersectPrepared(ray, Floats(tris[id]), &th)) continue;
+            if (!detail::IntersectPrepared(ray, Floats(tris[*p]), &th)) continue;
             // ray.tMax is just above the best t, so equal-t hits arrive here too: brute
             // force keeps the lowest primitive id among them, and so do we.
             if (found && th.t == best.t && id > best.prim) continue;
@@ -129,13 +129,12 @@ struct ClosestQuery {
 };
 
 struct AnyQuery {
-    AnyQuery(const NestedGridAccel::Tri* t, const Ray& r) : tris(t), ray(r) {}
-    const NestedGridAccel::Tri* tris;
+    explicit AnyQuery(const Ray& r) : ray(r) {}
     detail::PreparedRay ray;
     bool found = false;
     Mailbox mailbox;
 
-    bool Cell(const uint32_t* p, const uint32_t* end, float) {
+    bool Cell(const uint32_t* p, const uint32_t* end, const NestedGridAccel::Tri* tris, float) {
         for (; p != end; ++p) {
             if (mailbox.Seen(*p)) continue;
             TriangleHit th;
@@ -149,8 +148,7 @@ struct AnyQuery {
 };
 
 struct CountQuery {
-    CountQuery(const NestedGridAccel::Tri* t, const Ray& r) : tris(t), ray(r) {}
-    const NestedGridAccel::Tri* tris;
+    explicit CountQuery(const Ray& r) : ray(r) {}
     detail::PreparedRay ray;
     Mailbox mailbox;
     // The triangles hit so far: a triangle spanning cells must count once even when the
@@ -167,12 +165,12 @@ struct CountQuery {
             if (local[i] == id) return true;
         return std::find(overflow.begin(), overflow.end(), id) != overflow.end();
     }
-    bool Cell(const uint32_t* p, const uint32_t* end, float) {
+    bool Cell(const uint32_t* p, const uint32_t* end, const NestedGridAccel::Tri* tris, float) {
         for (; p != end; ++p) {
             const uint32_t id = *p;
             if (mailbox.Seen(id)) continue;
             TriangleHit th;
-            if (!detail::IntersectPrepared(ray, Floats(tris[id]), &th) || Counted(id)) continue;
+            if (!detail::IntersectPrepared(ray, Floats(tris[*p]), &th) || Counted(id)) continue;
             if (count < kLocal)
                 local[count] = id;
             else
@@ -517,32 +515,51 @@ bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD,
     }
     uint32_t idx = g.firstCell + uint32_t(cell[0] + cell[1] * stride[1] + cell[2] * stride[2]);
     float tCell = tEnter;
+    // The loop state in scalars, so it stays in registers (indexing small arrays by the
+    // axis of each step goes through memory and serialises the steps).
+    float tx = nextT[0], ty = nextT[1], tz = nextT[2];
+    int cx = cell[0], cy = cell[1], cz = cell[2];
+    const int ox = step[0] > 0, oy = step[1] > 0, oz = step[2] > 0;  // far plane of a cell
+    const uint32_t dx = uint32_t(step[0]), dy = uint32_t(step[1] * stride[1]),
+                   dz = uint32_t(step[2] * stride[2]);
+    const uint64_t* occupied = occupied_.data();
     for (;;) {
-        const int axis = nextT[0] < nextT[1] ? (nextT[0] < nextT[2] ? 0 : 2)
-                                             : (nextT[1] < nextT[2] ? 1 : 2);
-        const float tNext = nextT[axis];
+        const float tNext = std::min(tx, std::min(ty, tz));
         const float tCellExit = std::min(tNext, tExit);
 #ifdef LM_GRID_STATS
         ++gCellsVisited;
-        gNonEmpty += (occupied_[idx >> 6] >> (idx & 63)) & 1;
+        gNonEmpty += (occupied[idx >> 6] >> (idx & 63)) & 1;
 #endif
         // Most cells are empty; their bit (a small array that stays in cache) spares the
         // load from the much larger cellStart_.
-        if ((occupied_[idx >> 6] >> (idx & 63)) & 1) {
+        if ((occupied[idx >> 6] >> (idx & 63)) & 1) {
             const uint32_t b = cellStart_[idx], e = cellStart_[idx + 1];
             const uint32_t first = items_[b];
             if (first & kChild) {
                 if (Walk(first & ~kChild, ray, invD, tCell, tCellExit, query)) return true;
-            } else if (query.Cell(items_.data() + b, items_.data() + e, tCellExit)) {
+            } else if (query.Cell(items_.data() + b, items_.data() + e, tris_.data(), tCellExit)) {
                 return true;
             }
         }
         if (tNext >= tExit) return false;
-        cell[axis] += step[axis];
-        if (cell[axis] == stop[axis]) return false;
-        idx += uint32_t(step[axis] * stride[axis]);
         tCell = tNext;
-        nextT[axis] = planeT(axis, cell[axis] + (step[axis] > 0 ? 1 : 0));
+        // Step across the nearest plane (at a tie, either: the other follows at once).
+        if (tx == tNext) {
+            cx += step[0];
+            if (cx == stop[0]) return false;
+            idx += dx;
+            tx = planeT(0, cx + ox);
+        } else if (ty == tNext) {
+            cy += step[1];
+            if (cy == stop[1]) return false;
+            idx += dy;
+            ty = planeT(1, cy + oy);
+        } else {
+            cz += step[2];
+            if (cz == stop[2]) return false;
+            idx += dz;
+            tz = planeT(2, cz + oz);
+        }
     }
 }
 
@@ -573,20 +590,20 @@ void NestedGridAccel::Traverse(const Ray& ray, Query& query) const {
 }
 
 bool NestedGridAccel::Intersect(const Ray& ray, Hit* hit) const {
-    ClosestQuery q(tris_.data(), ray);
+    ClosestQuery q(ray);
     Traverse(ray, q);
     if (q.found) *hit = q.best;
     return q.found;
 }
 
 bool NestedGridAccel::Occluded(const Ray& ray) const {
-    AnyQuery q(tris_.data(), ray);
+    AnyQuery q(ray);
     Traverse(ray, q);
     return q.found;
 }
 
 int NestedGridAccel::CountCrossings(const Ray& ray) const {
-    CountQuery q(tris_.data(), ray);
+    CountQuery q(ray);
     Traverse(ray, q);
     return q.count;
 }

@@ -213,6 +213,7 @@ class LightMesh final : public LightMeshShadows {
         ++counters.candidates;
         switch (variant_.local) {
             case LocalVisibility::Object:
+            case LocalVisibility::Reduced:  // only on the cube loop's fallback path: test all
                 if (!SeesPoint(x, sp, counters)) return;
                 break;
             case LocalVisibility::Inside: {
@@ -253,15 +254,15 @@ class LightMesh final : public LightMeshShadows {
 
     // Templates (§3.1): snap P to the nearest sub-position of its cell and walk that
     // sub-position's list; no distance tests. Returns false (and does nothing) when the
-    // template would reach outside the lattice, which only happens for points outside the
-    // scene's box.
+    // template would reach outside the lattice, which only happens for points on or
+    // outside the far faces of the scene's box; the cube loop takes those.
     bool TemplateWalk(const ShadingPoint& sp, Accumulator& acc, RenderCounters& counters) const {
         const LightMeshLattice& L = lattice_;
         const Vec3 q = (sp.p - L.origin) * invH_;
         const int ci = static_cast<int>(std::floor(q.x)), cj = static_cast<int>(std::floor(q.y)),
                   ck = static_cast<int>(std::floor(q.z));
-        if (ci - reach_ < 0 || cj - reach_ < 0 || ck - reach_ < 0 || ci + reach_ >= L.nx ||
-            cj + reach_ >= L.ny || ck + reach_ >= L.nz)
+        if (ci + minOffset_ < 0 || cj + minOffset_ < 0 || ck + minOffset_ < 0 || ci + maxOffset_ >= L.nx ||
+            cj + maxOffset_ >= L.ny || ck + maxOffset_ >= L.nz)
             return false;
         const Vec3 frac = q - Vec3(static_cast<float>(ci), static_cast<float>(cj), static_cast<float>(ck));
         const int ns = templates_.templates.ns;
@@ -305,9 +306,15 @@ class LightMesh final : public LightMeshShadows {
 
     void ConvertTemplates() {
         const SphereTemplates& t = templates_.templates;
-        reach_ = static_cast<int>(std::ceil(t.ki)) + 1;
         invH_ = 1.0f / lattice_.h;
         entries_.reserve(t.offsets.size());
+        // The offsets' range: -floor(kI) … floor(kI) + 1, inside the lattice's ceil(kI)
+        // cells of padding for every P in the scene's box.
+        for (const auto& o : t.offsets)
+            for (int8_t v : o) {
+                minOffset_ = std::min<int>(minOffset_, v);
+                maxOffset_ = std::max<int>(maxOffset_, v);
+            }
         for (const auto& o : t.offsets)
             entries_.push_back({o[0], o[1], o[2], Vec3(o[0], o[1], o[2]),
                                 o[0] + static_cast<int64_t>(lattice_.nx) *
@@ -382,7 +389,7 @@ class LightMesh final : public LightMeshShadows {
     const LightMeshVariant variant_;
     const TemplateLoad templates_;
     std::vector<TemplateEntry> entries_;
-    int reach_ = 0;
+    int minOffset_ = 0, maxOffset_ = 0;
     float invH_ = 0;
     Bounds3 sceneBox_;
     std::unique_ptr<std::atomic<Word>[]> nodes_;

@@ -1,0 +1,164 @@
+#include "lightmesh/shadow/sphere_templates.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <set>
+
+#include <unistd.h>
+
+#include "lightmesh/util/error.h"
+
+namespace lm {
+namespace {
+
+namespace fs = std::filesystem;
+using Offset = std::array<int8_t, 3>;
+
+std::set<Offset> Entries(const SphereTemplates& t, int s, bool boundaryOnly = false) {
+    const uint32_t end = boundaryOnly ? t.begin[s] + t.boundaryCount[s] : t.begin[s + 1];
+    return {t.offsets.begin() + t.begin[s], t.offsets.begin() + end};
+}
+
+// For P exactly on a sub-position, the template is the set the cube loop finds with exact
+// distances. With h = 1 and ns a power of two every coordinate and squared distance below
+// is exact in float, as is kI² for these kI, so the sets must match exactly.
+TEST(SphereTemplates, MatchTheCubeLoopAtSubPositions) {
+    for (float ki : {1.5f, 2.0f, 3.0f}) {
+        for (int ns : {1, 4, 8}) {
+            const SphereTemplates t = SphereTemplates::Build(ns, ki);
+            for (int c = 0; c <= ns; ++c)
+                for (int b = 0; b <= ns; ++b)
+                    for (int a = 0; a <= ns; ++a) {
+                        const float px = static_cast<float>(a) / ns, py = static_cast<float>(b) / ns,
+                                    pz = static_cast<float>(c) / ns;
+                        std::set<Offset> cube;
+                        for (int k = -5; k <= 5; ++k)
+                            for (int j = -5; j <= 5; ++j)
+                                for (int i = -5; i <= 5; ++i) {
+                                    const float dx = i - px, dy = j - py, dz = k - pz;
+                                    if (dx * dx + dy * dy + dz * dz <= ki * ki)
+                                        cube.insert({static_cast<int8_t>(i), static_cast<int8_t>(j), static_cast<int8_t>(k)});
+                                }
+                        ASSERT_EQ(Entries(t, t.SubPosition(a, b, c)), cube)
+                            << "kI " << ki << " ns " << ns << " sub-position " << a << "," << b << "," << c;
+                    }
+        }
+    }
+}
+
+// The boundary nodes are listed first and are exactly those with a lattice neighbour
+// outside the set; no entry repeats.
+TEST(SphereTemplates, BoundaryIsTheOuterShell) {
+    const SphereTemplates t = SphereTemplates::Build(4, 2.5f);
+    for (int s = 0; s < t.SubPositionCount(); ++s) {
+        const std::set<Offset> all = Entries(t, s), boundary = Entries(t, s, true);
+        ASSERT_EQ(all.size(), t.begin[s + 1] - t.begin[s]) << "duplicates";
+        for (const Offset& o : all) {
+            int outside = 0;
+            for (int axis = 0; axis < 3; ++axis)
+                for (int step : {-1, 1}) {
+                    Offset n = o;
+                    n[axis] = static_cast<int8_t>(n[axis] + step);
+                    outside += !all.count(n);
+                }
+            EXPECT_EQ(boundary.count(o) == 1, outside > 0);
+        }
+        EXPECT_GT(boundary.size(), 0u);
+        EXPECT_LT(boundary.size(), all.size());
+    }
+}
+
+TEST(SphereTemplates, BadParametersAreErrors) {
+    EXPECT_THROW(SphereTemplates::Build(0, 2.0f), Error);
+    EXPECT_THROW(SphereTemplates::Build(65, 2.0f), Error);
+    EXPECT_THROW(SphereTemplates::Build(8, 0.0f), Error);
+    EXPECT_THROW(SphereTemplates::Build(8, 17.0f), Error);
+}
+
+class TemplateFiles : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        dir_ = fs::path(::testing::TempDir()) / ("lm_templates_" + std::to_string(getpid()));
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    std::string Path() const { return TemplateFileName(dir_.string(), 4, 2.0f); }
+    std::string Bytes() const {
+        std::ifstream in(Path(), std::ios::binary);
+        return {std::istreambuf_iterator<char>(in), {}};
+    }
+    void Overwrite(const std::string& bytes) const {
+        std::ofstream(Path(), std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    }
+    fs::path dir_;
+};
+
+TEST_F(TemplateFiles, WrittenAndReadBackIdentical) {
+    const SphereTemplates t = SphereTemplates::Build(4, 2.0f);
+    WriteSphereTemplates(Path(), t);
+    EXPECT_EQ(ReadSphereTemplates(Path(), 4, 2.0f), t);
+    // The cache: first built and written, then loaded.
+    const TemplateLoad first = LoadOrBuildSphereTemplates(4, 2.0f, (dir_ / "cache").string());
+    EXPECT_FALSE(first.loaded);
+    EXPECT_TRUE(first.written);
+    EXPECT_TRUE(first.note.empty()) << first.note;
+    const TemplateLoad second = LoadOrBuildSphereTemplates(4, 2.0f, (dir_ / "cache").string());
+    EXPECT_TRUE(second.loaded);
+    EXPECT_EQ(second.templates, t);
+}
+
+TEST_F(TemplateFiles, DamagedFilesAreDetectedRebuiltAndReplaced) {
+    const SphereTemplates fresh = SphereTemplates::Build(4, 2.0f);
+    WriteSphereTemplates(Path(), fresh);
+    const std::string good = Bytes();
+    struct Damage {
+        const char* name;
+        std::string bytes;
+        const char* reason;
+    };
+    std::string flipped = good;
+    flipped[flipped.size() / 2] ^= 0x10;
+    std::string version = good;
+    version[8] = 7;  // the format version follows the 8-byte magic
+    std::string foreign = good;
+    foreign[0] = 'X';
+    const Damage cases[] = {
+        {"truncated", good.substr(0, good.size() / 2), "expected"},
+        {"empty", "", "truncated"},
+        {"bit flip", flipped, "checksum"},
+        {"wrong version", version, "format version 7"},
+        {"foreign", foreign, "not a lightmesh template file"},
+    };
+    for (const Damage& d : cases) {
+        Overwrite(d.bytes);
+        try {
+            ReadSphereTemplates(Path(), 4, 2.0f);
+            ADD_FAILURE() << d.name << ": no error";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find(d.reason), std::string::npos) << d.name << ": " << e.what();
+        }
+        const TemplateLoad load = LoadOrBuildSphereTemplates(4, 2.0f, dir_.string());
+        EXPECT_FALSE(load.loaded) << d.name;
+        EXPECT_TRUE(load.written) << d.name;
+        EXPECT_NE(load.note.find("rebuilding"), std::string::npos) << d.name << ": " << load.note;
+        EXPECT_EQ(load.templates, fresh) << d.name;
+        EXPECT_EQ(Bytes(), good) << d.name << ": the file was not replaced";
+    }
+    // Templates for other parameters are foreign too.
+    WriteSphereTemplates(Path(), SphereTemplates::Build(4, 2.5f));
+    EXPECT_THROW(ReadSphereTemplates(Path(), 4, 2.0f), Error);
+}
+
+TEST_F(TemplateFiles, UnwritableCacheStillGivesTemplates) {
+    const TemplateLoad load = LoadOrBuildSphereTemplates(4, 2.0f, "/proc/no-such-folder/lightmesh");
+    EXPECT_FALSE(load.written);
+    EXPECT_NE(load.note.find("cannot cache templates"), std::string::npos) << load.note;
+    EXPECT_EQ(load.templates, SphereTemplates::Build(4, 2.0f));
+}
+
+}  // namespace
+}  // namespace lm
