@@ -14,6 +14,7 @@
 
 #include "lightmesh/accel/accelerator.h"
 #include "lightmesh/io/image.h"
+#include "lightmesh/render/benchmark.h"
 #include "lightmesh/render/whitted.h"
 #include "lightmesh/scene/scene_file.h"
 #include "lightmesh/shadow/light_mesh.h"
@@ -282,6 +283,56 @@ int RunTemplates(int ns, float ki, const std::string& dir, bool measure) {
     return 0;
 }
 
+/// `lightmesh bench`: the matrix, a progress line per cell, then the tables.
+struct BenchCommand {
+    lm::BenchMatrix matrix;
+    std::vector<std::string> sizes;
+    std::string csv, markdown;
+    bool quiet = false;
+    bool noNone = false;
+};
+
+int RunBench(BenchCommand& cmd) {
+    lm::SetLogLevel(cmd.quiet ? lm::LogLevel::Error : lm::LogLevel::Warning);
+    lm::InstallInterruptCleanup();
+    if (!cmd.sizes.empty()) {
+        cmd.matrix.sizes.clear();
+        for (const std::string& s : cmd.sizes) {
+            int w = 0, h = 0;
+            char x = 0;
+            if (std::sscanf(s.c_str(), "%d%c%d", &w, &x, &h) != 3 || (x != 'x' && x != 'X') || w < 1 || h < 1 ||
+                w > 16384 || h > 16384)
+                lm::ThrowError("--size %s: expected WIDTHxHEIGHT, e.g. 1024x768", s.c_str());
+            cmd.matrix.sizes.push_back({w, h});
+        }
+    }
+    cmd.matrix.noShadows = !cmd.noNone;
+    for (const std::string& path : {cmd.csv, cmd.markdown})
+        if (!path.empty()) lm::CheckWritableFolder(path);
+    const auto start = Clock::now();
+    const auto results = lm::RunBenchmark(cmd.matrix, [&](int done, int total, const lm::BenchResult& r) {
+        if (cmd.quiet) return;
+        const double elapsed = SecondsSince(start);
+        std::fprintf(stderr, "[%d/%d] %s %dx%d %s%s: %.3f s (median of %zu); %.0f s elapsed, ~%.0f s left\n", done,
+                     total, r.scene.c_str(), r.width, r.height, r.paperName.c_str(),
+                     r.method == "lmm" ? lm::StringPrintf(" CC %d kI %g", r.cc, r.ki).c_str()
+                                       : (" " + r.accel).c_str(),
+                     r.median, r.seconds.size(), elapsed, elapsed / done * (total - done));
+    });
+    const std::string md = lm::BenchMarkdown(results);
+    std::printf("%s", md.c_str());
+    auto write = [](const std::string& path, const std::string& text) {
+        lm::WriteFileAtomically(path, [&](const std::string& tmp) {
+            FILE* f = std::fopen(tmp.c_str(), "wb");
+            if (!f || std::fwrite(text.data(), 1, text.size(), f) != text.size() || std::fclose(f) != 0)
+                lm::ThrowError("%s: cannot write", path.c_str());
+        });
+    };
+    if (!cmd.csv.empty()) write(cmd.csv, lm::BenchCsv(results));
+    if (!cmd.markdown.empty()) write(cmd.markdown, md);
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -349,12 +400,49 @@ int main(int argc, char** argv) {
                            "Also print, for ns = 1 … 32, how many nodes snapping P to a sub-position gets wrong");
     templatesCmd->add_flag("-q,--quiet", [](int64_t) { lm::SetLogLevel(lm::LogLevel::Error); }, "Print errors only");
 
+    BenchCommand bench;
+    CLI::App* benchCmd = app.add_subcommand(
+        "bench", "Time shadow methods side by side: scenes x sizes x CC x kI x variants, plus RT and no shadows");
+    benchCmd->add_option("--scene", bench.matrix.scenes, "Scenes (repeat the option); default builtin:gazebo");
+    benchCmd->add_option("--size", bench.sizes, "Image sizes WIDTHxHEIGHT (repeat); default 1024x768");
+    benchCmd->add_option("--cc", bench.matrix.cc, "Light mesh CC values, comma-separated; default 100")
+        ->delimiter(',')->check(CLI::Range(1, 4096));
+    benchCmd->add_option("--ki", bench.matrix.ki, "Light mesh kI values, comma-separated; default 2")
+        ->delimiter(',')->check(CLI::Range(0.01f, 16.0f));
+    benchCmd->add_option("--variants", bench.matrix.variants,
+                         "LMM variants, comma-separated; default grid,templates,reduced,none,inside,object")
+        ->delimiter(',');
+    benchCmd->add_option("--accels", bench.matrix.accels,
+                         "Ray-query back-ends for RT (the first also serves LMM), comma-separated; default grid")
+        ->delimiter(',')->check(CLI::IsMember(lm::AcceleratorNames()));
+    benchCmd->add_option("--repeat", bench.matrix.repeat, "Timed runs per cell after a warm-up; the median is reported")
+        ->check(CLI::Range(1, 100));
+    benchCmd->add_flag("--no-none", bench.noNone, "Skip the render without shadows");
+    benchCmd->add_option("--images", bench.matrix.imageDir, "Write each cell's image (PNG) into this folder");
+    benchCmd->add_option("--csv", bench.csv, "Also write every figure of every cell as CSV");
+    benchCmd->add_option("--markdown", bench.markdown, "Also write the tables to this Markdown file");
+    benchCmd->add_option("-t,--threads", render.common.threads, "Worker threads (default: all cores)")
+        ->check(CLI::Range(1, 1024));
+    benchCmd->add_flag("-q,--quiet", bench.quiet, "No progress lines");
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
         return app.exit(e);
     }
 
+    if (benchCmd->parsed()) {
+        std::unique_ptr<tbb::global_control> limit;
+        if (render.common.threads > 0)
+            limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                          static_cast<size_t>(render.common.threads));
+        try {
+            return RunBench(bench);
+        } catch (const lm::Error& e) {
+            std::fprintf(stderr, "lightmesh: error: %s\n", e.what());
+            return 1;
+        }
+    }
     if (templatesCmd->parsed()) {
         try {
             return RunTemplates(templatesNs, templatesKi, templatesDir, templatesMeasure);

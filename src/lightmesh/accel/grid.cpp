@@ -88,16 +88,37 @@ struct Mailbox {
     static constexpr uint32_t kSize = 32;
     uint32_t ids[kSize];
     Mailbox() { std::fill(ids, ids + kSize, UINT32_MAX); }
-    bool Seen(uint32_t id) {
-        uint32_t& slot = ids[id & (kSize - 1)];
-        if (slot == id) return true;
-        slot = id;
-        return false;
-    }
+    bool Seen(uint32_t id) const { return ids[id & (kSize - 1)] == id; }
+    void Mark(uint32_t id) { ids[id & (kSize - 1)] = id; }
 };
 
+// One leaf cell as the walk hands it to a query: its triangle ids, and the box around the
+// part of the ray inside the cell, [tCell, tCellExit], padded for rounding.
+struct CellSpan {
+    const uint32_t* begin;
+    const uint32_t* end;
+    const NestedGridAccel::Tri* tris;  // by id
+    Vec3 lo, hi;
+    float tCellExit;
+};
+
+// Whether the triangle's bounding box meets the span's box. A triangle hit at some t in the
+// cell's interval contains the hit point, which lies in the span's box, so a triangle that
+// fails this is not hit there; and if it is hit elsewhere, that point is in another cell it
+// overlaps, where it is tested (it is not marked in the mailbox when skipped). Cheaper than
+// the exact test, and rejects most triangles of a cell that a short segment or a ray
+// crossing a corner of the cell passes by.
+inline bool MayHit(const float* v, const Vec3& lo, const Vec3& hi) {
+    for (int a = 0; a < 3; ++a) {
+        const float mn = std::min(v[a], std::min(v[3 + a], v[6 + a]));
+        const float mx = std::max(v[a], std::max(v[3 + a], v[6 + a]));
+        if (mn > hi[a] || mx < lo[a]) return false;
+    }
+    return true;
+}
+
 // The three kinds of query the one traversal serves. Cell() tests a leaf cell's triangles
-// and returns true to stop the walk; tCellExit is where the ray leaves the cell.
+// and returns true to stop the walk.
 struct ClosestQuery {
     explicit ClosestQuery(const Ray& r) : ray(r) {}
     detail::PreparedRay ray;
@@ -105,16 +126,17 @@ struct ClosestQuery {
     bool found = false;
     Mailbox mailbox;
 
-    bool Cell(const uint32_t* p, const uint32_t* end, const NestedGridAccel::Tri* tris,
-              float tCellExit) {
-        for (; p != end; ++p) {
+    bool Cell(const CellSpan& c) {
+        for (const uint32_t* p = c.begin; p != c.end; ++p) {
             const uint32_t id = *p;
-            if (mailbox.Seen(id)) continue;
+            const float* v = Floats(c.tris[id]);
+            if (mailbox.Seen(id) || !MayHit(v, c.lo, c.hi)) continue;
+            mailbox.Mark(id);
             TriangleHit th;
 #ifdef LM_GRID_STATS
             ++gTests;
 #endif
-            if (!detail::IntersectPrepared(ray, Floats(tris[*p]), &th)) continue;
+            if (!detail::IntersectPrepared(ray, v, &th)) continue;
             // ray.tMax is just above the best t, so equal-t hits arrive here too: brute
             // force keeps the lowest primitive id among them, and so do we.
             if (found && th.t == best.t && id > best.prim) continue;
@@ -124,7 +146,7 @@ struct ClosestQuery {
         }
         // Every triangle that could be hit before the ray leaves this cell overlaps this
         // cell (or an earlier one), so a hit within the cell is final.
-        return found && best.t <= tCellExit;
+        return found && best.t <= c.tCellExit;
     }
 };
 
@@ -134,11 +156,17 @@ struct AnyQuery {
     bool found = false;
     Mailbox mailbox;
 
-    bool Cell(const uint32_t* p, const uint32_t* end, const NestedGridAccel::Tri* tris, float) {
-        for (; p != end; ++p) {
-            if (mailbox.Seen(*p)) continue;
+    bool Cell(const CellSpan& c) {
+        for (const uint32_t* p = c.begin; p != c.end; ++p) {
+            const uint32_t id = *p;
+            const float* v = Floats(c.tris[id]);
+            if (mailbox.Seen(id) || !MayHit(v, c.lo, c.hi)) continue;
+            mailbox.Mark(id);
             TriangleHit th;
-            if (detail::IntersectPrepared(ray, Floats(tris[*p]), &th)) {
+#ifdef LM_GRID_STATS
+            ++gTests;
+#endif
+            if (detail::IntersectPrepared(ray, v, &th)) {
                 found = true;
                 return true;
             }
@@ -165,12 +193,14 @@ struct CountQuery {
             if (local[i] == id) return true;
         return std::find(overflow.begin(), overflow.end(), id) != overflow.end();
     }
-    bool Cell(const uint32_t* p, const uint32_t* end, const NestedGridAccel::Tri* tris, float) {
-        for (; p != end; ++p) {
+    bool Cell(const CellSpan& c) {
+        for (const uint32_t* p = c.begin; p != c.end; ++p) {
             const uint32_t id = *p;
-            if (mailbox.Seen(id)) continue;
+            const float* v = Floats(c.tris[id]);
+            if (mailbox.Seen(id) || !MayHit(v, c.lo, c.hi)) continue;
+            mailbox.Mark(id);
             TriangleHit th;
-            if (!detail::IntersectPrepared(ray, Floats(tris[*p]), &th) || Counted(id)) continue;
+            if (!detail::IntersectPrepared(ray, v, &th) || Counted(id)) continue;
             if (count < kLocal)
                 local[count] = id;
             else
@@ -496,9 +526,11 @@ bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD,
         return (g.lo[a] + float(k) * g.cellSize[a] - ray.o[a]) * invD[a];
     };
     for (int a = 0; a < 3; ++a) {
+        // The entry cell, clamped: rounding may put the entry point a hair outside. (A
+        // truncating conversion is floor for f >= 0; std::floor would be a libm call.)
         const float p = ray.o[a] + ray.d[a] * tEnter;
-        const float f = std::floor((p - g.lo[a]) * g.invCellSize[a]);
-        cell[a] = f < 0 ? 0 : (f >= float(g.res[a]) ? g.res[a] - 1 : int(f));
+        const float f = (p - g.lo[a]) * g.invCellSize[a];
+        cell[a] = !(f > 0) ? 0 : (f >= float(g.res[a]) ? g.res[a] - 1 : int(f));
         if (ray.d[a] > 0) {
             step[a] = 1;
             stop[a] = g.res[a];
@@ -537,8 +569,12 @@ bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD,
             const uint32_t first = items_[b];
             if (first & kChild) {
                 if (Walk(first & ~kChild, ray, invD, tCell, tCellExit, query)) return true;
-            } else if (query.Cell(items_.data() + b, items_.data() + e, tris_.data(), tCellExit)) {
-                return true;
+            } else {
+                CellSpan span{items_.data() + b, items_.data() + e, tris_.data(), {}, {}, tCellExit};
+                const Vec3 p0 = ray.o + ray.d * tCell, p1 = ray.o + ray.d * tCellExit;
+                span.lo = Min(p0, p1) - Vec3(pad);
+                span.hi = Max(p0, p1) + Vec3(pad);
+                if (query.Cell(span)) return true;
             }
         }
         if (tNext >= tExit) return false;
