@@ -36,5 +36,31 @@ with zipfile.ZipFile(archive) as z:
             z.extract(name, out)
 PY
 fi
-echo "fetch-scenes: models in $models" >&2
-find "$models" -name '*.obj' | sort
+
+# Castle Game Engine's demo castle (castle-game-engine-doc): glTF with instanced trees,
+# like the paper's "Child park" in size.
+fetch castle-game-engine-doc
+src="$pkg/castle-game-engine-doc/usr/share/doc/castle-game-engine-doc/examples/mobile/simple_3d_demo/data"
+if [ ! -f "$models/castle/castle.gltf" ]; then
+  mkdir -p "$models/castle.tmp"
+  cp -r "$src"/. "$models/castle.tmp/"
+  # Debian compresses large documentation files; glTF needs its buffers as they were.
+  find "$models/castle.tmp" -name '*.gz' -exec gunzip -f {} +
+  rm -rf "$models/castle" && mv "$models/castle.tmp" "$models/castle"
+fi
+
+# MORSE's land-1 environment (morse-simulator-data): a garden with instanced trees, like
+# the paper's "Garden" (Blender file, Z up).
+fetch morse-simulator-data
+src="$pkg/morse-simulator-data/usr/share/morse/data/environments/land-1"
+if [ ! -f "$models/land-1/buildings_2.blend" ]; then
+  mkdir -p "$models/land-1.tmp"
+  cp -r "$src"/. "$models/land-1.tmp/"
+  find "$models/land-1.tmp" -name '*.gz' -exec gunzip -f {} +
+  rm -rf "$models/land-1" && mv "$models/land-1.tmp" "$models/land-1"
+fi
+
+echo "fetch-scenes: models in $models:" >&2
+for f in scopia/barnum/barnum.obj scopia/parque/parque.obj castle/castle.gltf land-1/buildings_2.blend; do
+  if [ -f "$models/$f" ]; then echo "  $f"; else echo "  $f MISSING" >&2; exit 1; fi
+done

@@ -17,7 +17,11 @@
 //                "translate": [3]} or {"matrix": [16 numbers]}; or "matrix": [16 numbers]
 //                next to "file" -- a row-major affine 4×4 whose last row is 0 0 0 1.
 //                Applied as scale, then the rotations in order, then translate.
-//                "material": NAME overrides the file's materials; "exclude_materials",
+//                A "file" of the form "cache:PATH" names PATH in the model cache
+//                (ModelCacheDir(), filled by scripts/fetch-scenes.sh).
+//                "material": NAME overrides the file's materials (without it, a file
+//                material with the name of one of "materials" takes that definition);
+//                "exclude_materials",
 //                "exclude_names": glob patterns (* and ?; a string or a list) matched against
 //                the file's material names and node / mesh names}, ...].
 //   "ground"     optional: a square slab (a closed box, 1 % of its side thick, top face at
@@ -40,6 +44,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cstdlib>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -701,7 +706,7 @@ std::string NoTrianglesMessage(const SceneReport& report) {
 Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
                     std::vector<std::string>* warnings) {
     const Reader r(spec, options, warnings);
-    const Json root = ParseJson(r, ReadTextFile(r, spec));
+    const Json root = ParseJson(r, options.text ? *options.text : ReadTextFile(r, spec));
     if (!root.is_object())
         r.Fail("", "expected a JSON object {...} at the top level, got " + Describe(root));
     Object top(r, root, "");
@@ -711,6 +716,9 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
     scene.camera = ReadCamera(r, top.Require("camera"));
     if (const Json* v = top.Find("ambient")) scene.ambient = ReadColor(r, *v, "/ambient");
     if (const Json* v = top.Find("background")) scene.background = ReadColor(r, *v, "/background");
+    // Free text for people (what the scene is, where its model comes from); not used.
+    for (const char* key : {"name", "description", "source"})
+        if (const Json* v = top.Find(key)) String(r, *v, "/" + std::string(key));
 
     std::vector<std::string> materialNames;
     if (const Json* mj = top.Find("materials")) {
@@ -740,7 +748,17 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
         Object o(r, mj[i], e.path);
         e.file = String(r, o.Require("file"), o.Child("file"));
         if (e.file.empty()) r.Fail(o.Child("file"), "must not be empty");
-        e.resolved = fs::path(e.file).is_absolute() ? e.file : (folder / e.file).string();
+        if (e.file.rfind("cache:", 0) == 0) {
+            // Models fetched from Debian packages by scripts/fetch-scenes.sh live in the
+            // user's cache, outside the source tree.
+            e.resolved = (fs::path(ModelCacheDir()) / e.file.substr(6)).string();
+            std::error_code ec;
+            if (!fs::exists(e.resolved, ec))
+                r.Fail(o.Child("file"), "cannot read " + Quoted(e.file) + ": " + e.resolved +
+                                            " does not exist (run scripts/fetch-scenes.sh to fetch the model)");
+        } else {
+            e.resolved = fs::path(e.file).is_absolute() ? e.file : (folder / e.file).string();
+        }
         const Json* transform = o.Find("transform");
         const Json* matrix = o.Find("matrix");
         if (transform && matrix)
@@ -790,7 +808,8 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
         const std::string filePath = e.path + "/file";
         LoadedMesh loaded;
         try {
-            loaded = LoadMeshFile(e.resolved, e.load);
+            loaded = options.loadMesh ? options.loadMesh(e.resolved, e.load)
+                                      : LoadMeshFile(e.resolved, e.load);
         } catch (const MeshFileError& err) {
             if (err.Unreadable())
                 r.Fail(filePath, "cannot read " + Quoted(e.file) + ": " + err.Reason());
@@ -828,16 +847,26 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
         scene.report.degenerateRemoved += clean.degenerate;
         scene.report.duplicatesRemoved += clean.duplicate;
         if (clean.degenerate || clean.duplicate) r.Warn(e.resolved + ": " + DroppedMessage(clean));
-        uint32_t offset = 0;
         if (e.material >= 0) {
             std::fill(loaded.mesh.materialIds.begin(), loaded.mesh.materialIds.end(),
                       static_cast<uint32_t>(e.material));
         } else {
-            offset = static_cast<uint32_t>(scene.materials.size());
-            scene.materials.insert(scene.materials.end(), loaded.materials.begin(),
-                                   loaded.materials.end());
+            // A file material named like one of the scene's "materials" takes the scene's
+            // definition (how real models get their look without editing them); the
+            // others are appended as the file defines them.
+            std::vector<uint32_t> remap(loaded.materials.size());
+            for (size_t m = 0; m < loaded.materials.size(); ++m) {
+                const auto named = std::find(materialNames.begin(), materialNames.end(), loaded.materials[m].name);
+                if (named != materialNames.end()) {
+                    remap[m] = static_cast<uint32_t>(named - materialNames.begin());
+                } else {
+                    remap[m] = static_cast<uint32_t>(scene.materials.size());
+                    scene.materials.push_back(loaded.materials[m]);
+                }
+            }
+            for (uint32_t& id : loaded.mesh.materialIds) id = remap[id];
         }
-        scene.mesh.Append(loaded.mesh, offset);
+        scene.mesh.Append(loaded.mesh);
     }
     // Triangles repeated across meshes (the same file placed twice at the same spot).
     const CleanReport across = CleanMesh(&scene.mesh);
@@ -988,6 +1017,14 @@ void Validate(const Scene& scene) {
 }
 
 }  // namespace
+
+std::string ModelCacheDir() {
+    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg)
+        return (fs::path(xdg) / "lightmesh" / "models").string();
+    if (const char* home = std::getenv("HOME"); home && *home)
+        return (fs::path(home) / ".cache" / "lightmesh" / "models").string();
+    return "lightmesh-models";
+}
 
 Scene LoadScene(const std::string& spec, const SceneLoadOptions& options,
                 std::vector<std::string>* warnings) {

@@ -1,9 +1,12 @@
 // scene_file.h -- loads a scene: "builtin:NAME", a JSON scene file, or a bare mesh file.
 #pragma once
 
+#include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "lightmesh/scene/mesh_loader.h"
 #include "lightmesh/scene/scene.h"
 
 namespace lm {
@@ -15,6 +18,12 @@ struct SceneLoadOptions {
     /// --width/--height); 0 means the scene's own. Only used to frame bare meshes, so the
     /// whole model is in view whatever the aspect ratio.
     int frameWidth = 0, frameHeight = 0;
+    /// For tests and fuzzing (fuzz/fuzz_entry_points.cpp): the text of a JSON scene file,
+    /// parsed instead of reading `spec`, which still names it in messages and locates its
+    /// mesh files.
+    std::optional<std::string> text;
+    /// For tests and fuzzing: loads the mesh files of a JSON scene instead of LoadMeshFile.
+    std::function<LoadedMesh(const std::string& path, const MeshLoadOptions&)> loadMesh;
 };
 
 /// Loads "builtin:NAME", a JSON scene file (*.json; the format is described at the top of
@@ -30,6 +39,10 @@ struct SceneLoadOptions {
 /// are appended to *warnings, or logged with LogWarning when `warnings` is null. Throws
 /// Error for bad input; its message names the file and, for scene files, the JSON path:
 /// `scene.json /lights/1/position: expected 3 numbers, got 2`.
+/// The folder scene files call "cache:": $XDG_CACHE_HOME/lightmesh/models, else
+/// $HOME/.cache/lightmesh/models.
+std::string ModelCacheDir();
+
 Scene LoadScene(const std::string& spec, const SceneLoadOptions& options,
                 std::vector<std::string>* warnings);
 
