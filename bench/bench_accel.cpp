@@ -1,8 +1,9 @@
 // bench_accel.cpp -- the ray-query back-ends on the same seeded ray sets: build time,
 // camera rays (closest hit), shadow rays to a light and short light-mesh segments
-// (occlusion), on one thread and on all, with the grid/Embree ratios printed at the end.
+// (occlusion), on one thread (rays per CPU second) and on all (rays per wall-clock second),
+// with the grid/Embree ratios printed at the end.
 //
-//   bench_accel [--mesh=a.obj:b.obj] [benchmark flags]
+//   bench_accel [--mesh=a.obj:b.obj] [--scene=gazebo|garden] [benchmark flags]
 //   e.g. bench_accel --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 //
 // Scenes: "gazebo" (builtin:gazebo, a few thousand triangles) and "garden", real meshes
@@ -10,6 +11,7 @@
 // ground quad. The garden's files come from --mesh or LIGHTMESH_BENCH_MESH (':'-separated),
 // else from the fetch script's cache folder; without them the garden is skipped with a note.
 #include <benchmark/benchmark.h>
+#include <sys/stat.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -20,7 +22,6 @@
 #include <map>
 #include <memory>
 #include <string>
-#include <sys/stat.h>
 #include <vector>
 
 #include "lightmesh/accel/accelerator.h"
@@ -73,7 +74,8 @@ void MakeRays(BenchScene* s) {
     const float h = s->mesh.Bounds().MaxExtent() / 100.0f;
     for (int y = 0; y < kHeight; ++y)
         for (int x = 0; x < kWidth; ++x)
-            s->cameraRays.push_back(camera.Generate(float(x) + rng.Uniform(), float(y) + rng.Uniform()));
+            s->cameraRays.push_back(
+                camera.Generate(float(x) + rng.Uniform(), float(y) + rng.Uniform()));
     std::vector<Vec3> points;
     for (const Ray& r : s->cameraRays) {
         Hit hit;
@@ -116,12 +118,13 @@ std::unique_ptr<BenchScene> Garden(const std::vector<std::string>& paths) {
     const Vec3 c = b.Center(), e = b.Diagonal();
     const float ground = 1.5f * std::max(e.x, e.z);
     TriangleMesh quad;
-    testing_scenes::AddTriangle(&quad, {c.x - ground, 0, c.z - ground}, {c.x + ground, 0, c.z + ground},
-                                {c.x + ground, 0, c.z - ground});
-    testing_scenes::AddTriangle(&quad, {c.x - ground, 0, c.z - ground}, {c.x - ground, 0, c.z + ground},
-                                {c.x + ground, 0, c.z + ground});
+    testing_scenes::AddTriangle(&quad, {c.x - ground, 0, c.z - ground},
+                                {c.x + ground, 0, c.z + ground}, {c.x + ground, 0, c.z - ground});
+    testing_scenes::AddTriangle(&quad, {c.x - ground, 0, c.z - ground},
+                                {c.x - ground, 0, c.z + ground}, {c.x + ground, 0, c.z + ground});
     s->mesh.Append(quad);
-    s->camera = Camera{c + Vec3(0.1f * e.x, 0.3f * e.y, 1.2f * std::max(e.x, e.y)), c, {0, 1, 0}, 45.0f};
+    s->camera =
+        Camera{c + Vec3(0.1f * e.x, 0.3f * e.y, 1.2f * std::max(e.x, e.y)), c, {0, 1, 0}, 45.0f};
     s->light = c + Vec3(-0.6f * e.x, 2.0f * e.y, 0.4f * e.x);
     MakeRays(s.get());
     return s;
@@ -133,8 +136,10 @@ std::vector<std::string> GardenPaths(const std::string& flag) {
         if (const char* env = std::getenv("LIGHTMESH_BENCH_MESH")) list = env;
     if (!list.empty()) return Split(list, ':');
     std::string cache;
-    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) cache = xdg;
-    else if (const char* home = std::getenv("HOME")) cache = std::string(home) + "/.cache";
+    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg)
+        cache = xdg;
+    else if (const char* home = std::getenv("HOME"))
+        cache = std::string(home) + "/.cache";
     const std::string dir = cache + "/lightmesh/garden/scopia/";
     std::vector<std::string> paths = {dir + "japaneseMaple/japaneseMaple.obj",
                                       dir + "copperBeech/copperBeech.obj"};
@@ -151,36 +156,52 @@ const char* WorkloadName(Workload w) {
     return w == Workload::Camera ? "camera" : w == Workload::Shadow ? "shadow" : "short";
 }
 
+// "grid16" is the grid with gridMaxTrianglesPerCell = 16 instead of the paper's 63: how much a
+// finer subdivision of the crowded cells buys (a tuning data point for AccelOptions).
+std::unique_ptr<Accelerator> Create(const std::string& name, const TriangleMesh& mesh) {
+    if (name == "grid16") {
+        AccelOptions options;
+        options.gridMaxTrianglesPerCell = 16;
+        return CreateAccelerator("grid", mesh, options);
+    }
+    return CreateAccelerator(name, mesh);
+}
+
 // Accelerators are built once per scene and back-end, outside the timed loops.
 std::map<std::string, std::unique_ptr<Accelerator>> gAccels;
 const Accelerator& GetAccel(const BenchScene& s, const std::string& name) {
     auto& slot = gAccels[s.name + "/" + name];
-    if (!slot) slot = CreateAccelerator(name, s.mesh);
+    if (!slot) slot = Create(name, s.mesh);
     return *slot;
 }
 
 void RunQueries(benchmark::State& state, const BenchScene& s, const std::string& accelName,
                 Workload w, bool allThreads) {
     const Accelerator& accel = GetAccel(s, accelName);
-    const std::vector<Ray>& all =
-        w == Workload::Camera ? s.cameraRays : w == Workload::Shadow ? s.shadowRays : s.shortRays;
+    const std::vector<Ray>& all = w == Workload::Camera   ? s.cameraRays
+                                  : w == Workload::Shadow ? s.shadowRays
+                                                          : s.shortRays;
+    // Brute force gets every k-th ray (a spread-out sample, not the image's top rows).
     const size_t n = accelName == "brute" ? std::min(all.size(), kBruteRays) : all.size();
+    const size_t stride = std::max<size_t>(1, all.size() / std::max<size_t>(n, 1));
     size_t hits = 0;
     auto one = [&](size_t i) -> size_t {
+        const Ray& r = all[i * stride];
         if (w == Workload::Camera) {
             Hit h;
-            return accel.Intersect(all[i], &h) ? 1 : 0;
+            return accel.Intersect(r, &h) ? 1 : 0;
         }
-        return accel.Occluded(all[i]) ? 1 : 0;
+        return accel.Occluded(r) ? 1 : 0;
     };
     for (auto _ : state) {
         if (allThreads) {
             std::atomic<size_t> count{0};
-            tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
-                size_t c = 0;
-                for (size_t i = r.begin(); i != r.end(); ++i) c += one(i);
-                count += c;
-            });
+            tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256),
+                              [&](const tbb::blocked_range<size_t>& r) {
+                                  size_t c = 0;
+                                  for (size_t i = r.begin(); i != r.end(); ++i) c += one(i);
+                                  count += c;
+                              });
             hits = count;
         } else {
             size_t c = 0;
@@ -189,14 +210,14 @@ void RunQueries(benchmark::State& state, const BenchScene& s, const std::string&
         }
         benchmark::DoNotOptimize(hits);
     }
-    state.counters["rays/s"] = benchmark::Counter(double(n) * double(state.iterations()),
-                                                  benchmark::Counter::kIsRate);
+    state.counters["rays/s"] =
+        benchmark::Counter(double(n) * double(state.iterations()), benchmark::Counter::kIsRate);
     state.counters["hit%"] = 100.0 * double(hits) / double(std::max<size_t>(n, 1));
 }
 
 void RunBuild(benchmark::State& state, const BenchScene& s, const std::string& accelName) {
     for (auto _ : state) {
-        auto accel = CreateAccelerator(accelName, s.mesh);
+        auto accel = Create(accelName, s.mesh);
         benchmark::DoNotOptimize(accel.get());
     }
     state.counters["triangles"] = double(s.mesh.TriangleCount());
@@ -205,6 +226,7 @@ void RunBuild(benchmark::State& state, const BenchScene& s, const std::string& a
 void Register(const BenchScene& s, const std::vector<std::string>& accels) {
     for (const std::string& a : accels) {
         if (a == "brute") continue;
+        // Wall-clock: both builders use all threads.
         benchmark::RegisterBenchmark((s.name + "/build/" + a).c_str(),
                                      [&s, a](benchmark::State& st) { RunBuild(st, s, a); })
             ->Unit(benchmark::kMillisecond)
@@ -214,10 +236,15 @@ void Register(const BenchScene& s, const std::vector<std::string>& accels) {
         for (const std::string& a : accels)
             for (bool mt : {false, true}) {
                 if (a == "brute" && (mt || s.mesh.TriangleCount() > 20000)) continue;
-                const std::string name = s.name + "/" + WorkloadName(w) + "/" + a + (mt ? "/all" : "/1t");
-                benchmark::RegisterBenchmark(name.c_str(), [&s, a, w, mt](benchmark::State& st) {
-                    RunQueries(st, s, a, w, mt);
-                })->Unit(benchmark::kMillisecond)->UseRealTime();
+                const std::string name =
+                    s.name + "/" + WorkloadName(w) + "/" + a + (mt ? "/all" : "/1t");
+                auto* b = benchmark::RegisterBenchmark(
+                    name.c_str(),
+                    [&s, a, w, mt](benchmark::State& st) { RunQueries(st, s, a, w, mt); });
+                b->Unit(benchmark::kMillisecond);
+                // One thread: rays per CPU second, which holds on a machine shared with other
+                // jobs. All threads: wall-clock time, the only meaningful one there.
+                if (mt) b->UseRealTime();
             }
 }
 
@@ -233,17 +260,21 @@ class RatioReporter : public benchmark::ConsoleReporter {
             const std::string name = r.run_name.function_name;
             const auto it = r.counters.find("rays/s");
             double value;
-            if (it != r.counters.end()) value = it->second.value;
-            else value = r.GetAdjustedRealTime();  // build: ms per build
+            if (it != r.counters.end())
+                value = it->second.value;
+            else
+                value = r.GetAdjustedRealTime();  // build: wall-clock ms per build
             // Without repetitions each run reports once; with them, the median wins.
             if (aggregate || !results_.count(name)) results_[name] = value;
         }
     }
     void Finalize() override {
         ConsoleReporter::Finalize();
-        std::printf("\nSummary (median where repeated): rays/s per back-end, ratio grid / embree\n");
-        std::printf("%-28s %14s %14s %14s %10s\n", "workload", "grid", "embree", "brute", "grid/embree");
-        std::map<std::string, std::map<std::string, double>> rows;  // "scene/work[/threads]" -> accel
+        std::printf("\nSummary (median where repeated): rays/s per back-end (1t: per CPU second, "
+                    "all: per wall-clock second)\n");
+        std::printf("%-22s %10s %10s %10s %10s %12s %14s\n", "workload", "grid", "embree",
+                    "brute", "grid16", "grid/embree", "grid16/embree");
+        std::map<std::string, std::map<std::string, double>> rows;  // scene/work[/threads]
         for (const auto& [name, value] : results_) {
             const auto parts = Split(name, '/');
             if (parts.size() < 3) continue;
@@ -255,19 +286,23 @@ class RatioReporter : public benchmark::ConsoleReporter {
                 const auto it = byAccel.find(a);
                 return it == byAccel.end() ? -1.0 : it->second;
             };
-            const double g = get("grid"), e = get("embree"), b = get("brute");
+            const double g = get("grid"), e = get("embree"), b = get("brute"), g16 = get("grid16");
             const bool build = key.find("/build") != std::string::npos;
             auto cell = [&](double v) {
                 if (v < 0) return std::string("-");
-                return build ? StringPrintf("%.1f ms", v) : StringPrintf("%.3g", v);
+                return build ? StringPrintf("%.1fms", v) : StringPrintf("%.3g", v);
             };
-            // For build times the ratio is embree/grid time, so > 1 means the grid is faster
-            // in both kinds of row.
-            const double ratio = g > 0 && e > 0 ? (build ? e / g : g / e) : -1;
-            std::printf("%-28s %14s %14s %14s %10s\n", key.c_str(), cell(g).c_str(), cell(e).c_str(),
-                        cell(b).c_str(), ratio > 0 ? StringPrintf("%.2f", ratio).c_str() : "-");
+            // For build times the ratio is embree time / grid time, so > 1 means the grid is
+            // faster in both kinds of row.
+            auto ratio = [&](double x) {
+                if (!(x > 0 && e > 0)) return std::string("-");
+                return StringPrintf("%.2f", build ? e / x : x / e);
+            };
+            std::printf("%-22s %10s %10s %10s %10s %12s %14s\n", key.c_str(), cell(g).c_str(),
+                        cell(e).c_str(), cell(b).c_str(), cell(g16).c_str(), ratio(g).c_str(),
+                        ratio(g16).c_str());
         }
-        std::printf("(build rows: time per build, ratio = embree time / grid time)\n");
+        std::printf("(build rows: wall-clock time per build; ratio = embree time / grid time)\n");
     }
 
   private:
@@ -279,18 +314,22 @@ class RatioReporter : public benchmark::ConsoleReporter {
 
 int main(int argc, char** argv) {
     using namespace lm;
-    std::string meshFlag;
+    std::string meshFlag, sceneFlag;
     std::vector<char*> args;
     for (int i = 0; i < argc; ++i) {
         const std::string a = argv[i];
-        if (a.rfind("--mesh=", 0) == 0) meshFlag = a.substr(7);
-        else args.push_back(argv[i]);
+        if (a.rfind("--mesh=", 0) == 0)
+            meshFlag = a.substr(7);
+        else if (a.rfind("--scene=", 0) == 0)
+            sceneFlag = a.substr(8);
+        else
+            args.push_back(argv[i]);
     }
     int n = int(args.size());
     benchmark::Initialize(&n, args.data());
     if (benchmark::ReportUnrecognizedArguments(n, args.data())) return 1;
 
-    std::vector<std::string> accels = {"grid"};
+    std::vector<std::string> accels = {"grid", "grid16"};
 #ifdef LIGHTMESH_HAS_EMBREE
     accels.push_back("embree");
 #else
@@ -300,13 +339,17 @@ int main(int argc, char** argv) {
 
     std::vector<std::unique_ptr<BenchScene>> scenes;
     try {
-        scenes.push_back(std::make_unique<BenchScene>(Gazebo()));
-        const auto paths = GardenPaths(meshFlag);
-        if (paths.empty())
-            std::printf("note: no garden meshes (run scripts/fetch-bench-mesh.sh, or give --mesh= "
-                        "or LIGHTMESH_BENCH_MESH); the real-mesh scene is skipped\n");
-        else
-            scenes.push_back(Garden(paths));
+        if (sceneFlag.empty() || sceneFlag == "gazebo")
+            scenes.push_back(std::make_unique<BenchScene>(Gazebo()));
+        if (sceneFlag.empty() || sceneFlag == "garden") {
+            const auto paths = GardenPaths(meshFlag);
+            if (paths.empty())
+                std::printf(
+                    "note: no garden meshes (run scripts/fetch-bench-mesh.sh, or give "
+                    "--mesh= or LIGHTMESH_BENCH_MESH); the real-mesh scene is skipped\n");
+            else
+                scenes.push_back(Garden(paths));
+        }
     } catch (const Error& e) {
         std::fprintf(stderr, "bench_accel: %s\n", e.what());
         return 1;
@@ -318,7 +361,7 @@ int main(int argc, char** argv) {
         for (const std::string& a : accels) {
             if (a == "brute") continue;
             for (const auto& [k, v] : GetAccel(*s, a).Figures())
-                std::printf("  %s %s: %s\n", a.c_str(), k.c_str(), v.c_str());
+                std::printf("  [%s] %s: %s\n", a.c_str(), k.c_str(), v.c_str());
         }
         Register(*s, accels);
     }

@@ -1,7 +1,39 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds everything, and runs the whole test suite with ctest.
+# The whole test suite -- the README's test command, and what CI runs (.ci/run):
+#   1. the Release build (scripts/build.sh) and every test;
+#   2. the asan preset (CMakePresets.json): every test under AddressSanitizer +
+#      UndefinedBehaviorSanitizer, built with clang into build-asan (with the fuzz targets);
+#   3. the tsan preset: the multithreaded tests (renderer, light mesh, back-ends, CLI
+#      determinism) under ThreadSanitizer, in build-tsan;
+#   4. each fuzzer for 60 s (scripts/fuzz.sh; FUZZ_SECONDS changes it) on the asan build.
+# Usage: scripts/test.sh [--quick] [ctest options...]
+#   --quick   step 1 only, for a fast check while developing (CI always runs everything).
+# Extra options go to every ctest run, e.g. -R SceneFile.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
-"$root/scripts/build.sh"
-cd "$root/build"
-ctest --output-on-failure -j"$(nproc)" "$@"
+cd "$root"
+quick=0
+args=()
+for a in "$@"; do
+  if [ "$a" = --quick ]; then quick=1; else args+=("$a"); fi
+done
+jobs="$(nproc)"
+start=$SECONDS
+step() { echo "== test.sh: $* ($((SECONDS - start)) s)" >&2; }
+
+step "Release build and tests"
+scripts/build.sh
+(cd build && ctest --output-on-failure -j"$jobs" "${args[@]}")
+[ "$quick" = 1 ] && exit 0
+
+for preset in asan tsan; do
+  step "$preset build"
+  cmake --preset "$preset" >/dev/null
+  cmake --build --preset "$preset" -j "$jobs"
+  step "$preset tests"
+  ctest --preset "$preset" -j"$jobs" "${args[@]}"
+done
+
+step "fuzzing, ${FUZZ_SECONDS:-60} s per target"
+FUZZ_BUILD_DIR=build-asan scripts/fuzz.sh "${FUZZ_SECONDS:-60}"
+step "all passed"

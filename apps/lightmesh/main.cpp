@@ -13,10 +13,12 @@
 #include <optional>
 
 #include "lightmesh/accel/accelerator.h"
+#include "lightmesh/io/compare.h"
 #include "lightmesh/io/image.h"
 #include "lightmesh/render/benchmark.h"
 #include "lightmesh/render/whitted.h"
 #include "lightmesh/scene/scene_file.h"
+#include "lightmesh/shadow/area_light.h"
 #include "lightmesh/shadow/light_mesh.h"
 #include "lightmesh/shadow/shadow.h"
 #include "lightmesh/shadow/sphere_templates.h"
@@ -81,7 +83,8 @@ struct RenderCommand {
     CommonOptions common;
     std::string output;
     std::optional<int> width, height, aa, maxDepth, grid, cc, ns;
-    std::optional<float> ki;
+    std::optional<float> ki, lightRadius;
+    std::optional<int> samples;
     std::optional<std::string> shadows, accel, variant, templateDir;
     bool stats = false;
 };
@@ -114,8 +117,17 @@ int RunRender(const RenderCommand& cmd) {
     if (cmd.variant) options.lightMesh.variant = *cmd.variant;
     if (cmd.ns) options.lightMesh.ns = *cmd.ns;
     if (cmd.templateDir) options.lightMesh.templateDir = *cmd.templateDir;
+    if (cmd.lightRadius) options.areaLight.radius = *cmd.lightRadius;
+    if (cmd.samples) options.areaLight.samples = *cmd.samples;
 
     if (options.shadows == "lmm") lm::ParseLightMeshVariant(options.lightMesh.variant);
+    if (options.shadows == "area" || cmd.lightRadius || cmd.samples)
+        lm::ValidateAreaLightOptions(options.areaLight);
+    if (options.shadows == "area") {
+        if (options.areaLight.radius == 0)
+            lm::LogWarning("--shadows area with light radius 0: point lights, the same image as --shadows rt "
+                           "(set --light-radius)");
+    }
     // Check everything about the output before spending time on the render.
     std::string output = cmd.output;
     if (output.empty()) {
@@ -333,6 +345,36 @@ int RunBench(BenchCommand& cmd) {
     return 0;
 }
 
+/// `lightmesh compare A B`: image quality of B against A (lightmesh/io/compare.h).
+struct CompareCommand {
+    std::string a, b, mask, diff;
+    float diffScale = 0;
+    bool json = false;
+    std::optional<double> thresholdPsnr;
+};
+
+/// Exit codes: 0 compared (and PSNR >= --threshold-psnr), 1 error, 3 below the threshold.
+int RunCompare(const CompareCommand& cmd) {
+    const lm::Image a = lm::ReadImage(cmd.a), b = lm::ReadImage(cmd.b);
+    std::optional<lm::Image> mask;
+    if (!cmd.mask.empty()) mask = lm::ReadImage(cmd.mask);
+    const lm::Image* m = mask ? &*mask : nullptr;
+    const lm::ImageMetrics q = lm::CompareImages(a, b, m);
+    if (!cmd.diff.empty()) lm::WriteDiffImage(cmd.diff, a, b, cmd.diffScale, m);
+    const std::string psnr = std::isinf(q.psnr) ? "inf" : lm::StringPrintf("%.2f dB", q.psnr);
+    if (cmd.json)
+        std::printf("%s\n", lm::ImageMetricsJson(q, cmd.a, cmd.b).c_str());
+    else
+        std::printf("%s vs %s: %s pixels: PSNR %s, SSIM %.5f, RMSE %.5f (linear %.5f), max diff %.4f\n",
+                    cmd.a.c_str(), cmd.b.c_str(), Count(q.pixels).c_str(), psnr.c_str(), q.ssim, q.rmse,
+                    q.rmseLinear, q.maxDiff);
+    if (cmd.thresholdPsnr && q.psnr < *cmd.thresholdPsnr) {
+        std::fprintf(stderr, "lightmesh: PSNR %s is below the threshold %.2f dB\n", psnr.c_str(), *cmd.thresholdPsnr);
+        return 3;
+    }
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -353,7 +395,8 @@ int main(int argc, char** argv) {
     renderCmd->add_option("--max-depth", render.maxDepth, "Mirror recursion limit (1: no reflections)")
         ->check(CLI::Range(1, 64));
     renderCmd->add_option("--shadows", render.shadows,
-                          "Shadows: none, rt (hard: one shadow ray per light) or lmm (soft: the light mesh method)")
+                          "Shadows: none, rt (hard: one shadow ray per light), lmm (soft: the light mesh method) or area "
+                          "(soft reference: spherical lights, --samples shadow rays each)")
         ->check(CLI::IsMember(lm::ShadowMethodNames()));
     renderCmd->add_option("--accel", render.accel, "Ray-query back-end: brute, grid or embree")
         ->check(CLI::IsMember(lm::AcceleratorNames()));
@@ -375,6 +418,11 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(1, 64));
     renderCmd->add_option("--template-dir", render.templateDir,
                           "Folder caching the sphere templates (default: $XDG_CACHE_HOME/lightmesh/templates)");
+    renderCmd->add_option("--light-radius", render.lightRadius,
+                          "Area shadows: radius of the sphere each point light becomes (default 0: point lights)");
+    renderCmd->add_option("--samples", render.samples,
+                          "Area shadows: stratified shadow rays per light and shading point (default 16)")
+        ->check(CLI::Range(1, 4096));
     renderCmd->add_flag("--stats", render.stats, "Print rays by kind, time by phase, back-end figures, peak memory");
 
     CommonOptions info;
@@ -399,6 +447,19 @@ int main(int argc, char** argv) {
     templatesCmd->add_flag("--measure", templatesMeasure,
                            "Also print, for ns = 1 … 32, how many nodes snapping P to a sub-position gets wrong");
     templatesCmd->add_flag("-q,--quiet", [](int64_t) { lm::SetLogLevel(lm::LogLevel::Error); }, "Print errors only");
+
+    CompareCommand compare;
+    CLI::App* compareCmd = app.add_subcommand(
+        "compare", "Image quality of B against A (PNG or EXR): PSNR, SSIM, RMSE, max difference; "
+                   "exit 0 = compared, 1 = error, 3 = below --threshold-psnr");
+    compareCmd->add_option("a", compare.a, "Reference image (.png or .exr)")->required();
+    compareCmd->add_option("b", compare.b, "Image to judge, the same size")->required();
+    compareCmd->add_option("--mask", compare.mask, "Compare only where this image (same size) is not black");
+    compareCmd->add_option("--diff", compare.diff, "Write a false-colour (Turbo) image of |A - B| here");
+    compareCmd->add_option("--diff-scale", compare.diffScale,
+                           "Difference shown as the top colour (display units, 0..1; default 0: the largest)");
+    compareCmd->add_flag("--json", compare.json, "Print one JSON line (psnr is null for identical images)");
+    compareCmd->add_option("--threshold-psnr", compare.thresholdPsnr, "Exit with 3 if the PSNR (dB) is lower");
 
     BenchCommand bench;
     CLI::App* benchCmd = app.add_subcommand(
@@ -428,7 +489,9 @@ int main(int argc, char** argv) {
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
-        return app.exit(e);
+        // --help and --version exit 0; a command-line mistake exits 1 like any bad input
+        // (CLI11's own codes are 100 and up).
+        return app.exit(e) == 0 ? 0 : 1;
     }
 
     if (benchCmd->parsed()) {
@@ -439,6 +502,14 @@ int main(int argc, char** argv) {
         try {
             return RunBench(bench);
         } catch (const lm::Error& e) {
+            std::fprintf(stderr, "lightmesh: error: %s\n", e.what());
+            return 1;
+        }
+    }
+    if (compareCmd->parsed()) {
+        try {
+            return RunCompare(compare);
+        } catch (const std::exception& e) {
             std::fprintf(stderr, "lightmesh: error: %s\n", e.what());
             return 1;
         }

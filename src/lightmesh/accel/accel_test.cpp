@@ -1,8 +1,6 @@
 // accel_test.cpp -- the grid and Embree back-ends against brute force, ray by ray.
 #include <gtest/gtest.h>
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -18,6 +16,7 @@
 #include "lightmesh/accel/test_scenes.h"
 #include "lightmesh/geometry/triangle.h"
 #include "lightmesh/util/error.h"
+#include "lightmesh/util/parallel.h"
 
 namespace lm {
 namespace {
@@ -46,13 +45,20 @@ const NamedScene& GetScene(const std::string& name) {
     if (!slot) {
         slot = std::make_unique<NamedScene>();
         slot->name = name;
-        if (name == "soup") slot->mesh = ts::Soup(1500, 1);
-        else if (name == "heightfield") slot->mesh = ts::HeightField(28, 2);
-        else if (name == "longthin") slot->mesh = ts::LongThin(600, 3);
-        else if (name == "onecell") slot->mesh = ts::OneCell(1500, 4);
-        else if (name == "sphere") slot->mesh = ts::Sphere(24, 32);
-        else if (name == "box") slot->mesh = ts::TessellatedBox(8);
-        else ADD_FAILURE() << "no scene " << name;
+        if (name == "soup")
+            slot->mesh = ts::Soup(1500, 1);
+        else if (name == "heightfield")
+            slot->mesh = ts::HeightField(28, 2);
+        else if (name == "longthin")
+            slot->mesh = ts::LongThin(600, 3);
+        else if (name == "onecell")
+            slot->mesh = ts::OneCell(1500, 4);
+        else if (name == "sphere")
+            slot->mesh = ts::Sphere(24, 32);
+        else if (name == "box")
+            slot->mesh = ts::TessellatedBox(8);
+        else
+            ADD_FAILURE() << "no scene " << name;
     }
     return *slot;
 }
@@ -150,8 +156,8 @@ std::vector<TestRay> MakeRays(const TriangleMesh& mesh, int count, uint32_t seed
 }
 
 std::string RayString(const Ray& r) {
-    return StringPrintf("Ray{o=(%a, %a, %a), d=(%a, %a, %a), tMin=%a, tMax=%a}", r.o.x, r.o.y, r.o.z,
-                        r.d.x, r.d.y, r.d.z, r.tMin, r.tMax);
+    return StringPrintf("Ray{o=(%a, %a, %a), d=(%a, %a, %a), tMin=%a, tMax=%a}", r.o.x, r.o.y,
+                        r.o.z, r.d.x, r.d.y, r.d.z, r.tMin, r.tMax);
 }
 
 // What brute force says about one ray (and about the same ray stopped just before its hit).
@@ -183,7 +189,7 @@ const Reference& GetReference(const std::string& sceneName) {
         slot->rays = MakeRays(mesh, kRaysPerScene, 1234u + uint32_t(sceneName.size()));
         slot->expected.resize(slot->rays.size());
         BruteForceAccel brute(mesh);
-        tbb::parallel_for(size_t(0), slot->rays.size(), [&](size_t i) {
+        ParallelFor(size_t(0), slot->rays.size(), [&](size_t i) {
             const Ray& r = slot->rays[i].ray;
             Expected& e = slot->expected[i];
             e.hit = brute.Intersect(r, &e.h);
@@ -210,8 +216,11 @@ float PlaneT(const TriangleMesh& mesh, uint32_t prim, const Ray& r) {
 // Distance from the ray's line to the segment ab, in double.
 double LineSegmentDistance(const Ray& r, const Vec3& a, const Vec3& b) {
     const double o[3] = {r.o.x, r.o.y, r.o.z}, d[3] = {r.d.x, r.d.y, r.d.z};
-    const double pa[3] = {a.x, a.y, a.z}, u[3] = {double(b.x) - a.x, double(b.y) - a.y, double(b.z) - a.z};
-    auto dot = [](const double* x, const double* y) { return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]; };
+    const double pa[3] = {a.x, a.y, a.z},
+                 u[3] = {double(b.x) - a.x, double(b.y) - a.y, double(b.z) - a.z};
+    auto dot = [](const double* x, const double* y) {
+        return x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+    };
     double w[3] = {pa[0] - o[0], pa[1] - o[1], pa[2] - o[2]};
     const double uu = dot(u, u), uv = dot(u, d), vv = dot(d, d), uw = dot(u, w), vw = dot(d, w);
     const double den = uu * vv - uv * uv;
@@ -231,7 +240,8 @@ bool Grazes(const TriangleMesh& mesh, const Ray& r, bool hb, const Hit& b, bool 
             float tol) {
     const double near = 1e-5 * Length(mesh.Bounds().Diagonal());
     auto onBoundary = [&](const Hit& h) {
-        const Vec3 p0 = mesh.Vertex(h.prim, 0), p1 = mesh.Vertex(h.prim, 1), p2 = mesh.Vertex(h.prim, 2);
+        const Vec3 p0 = mesh.Vertex(h.prim, 0), p1 = mesh.Vertex(h.prim, 1),
+                   p2 = mesh.Vertex(h.prim, 2);
         return std::min({LineSegmentDistance(r, p0, p1), LineSegmentDistance(r, p1, p2),
                          LineSegmentDistance(r, p2, p0)}) <= near;
     };
@@ -316,15 +326,17 @@ TEST_P(AccelDifferentialTest, MatchesBruteForce) {
             const bool so = accel->Occluded(e.shortened);
             const int sn = accel->CountCrossings(e.shortened);
             if ((so != e.shortOccluded && !graze) || sn != e.shortCrossings)
-                fail(i, StringPrintf("with tMax=0.99t=%a: Occluded %d (brute %d), crossings %d (brute %d)",
-                                     e.shortened.tMax, so, e.shortOccluded, sn, e.shortCrossings));
+                fail(i, StringPrintf(
+                            "with tMax=0.99t=%a: Occluded %d (brute %d), crossings %d (brute %d)",
+                            e.shortened.tMax, so, e.shortOccluded, sn, e.shortCrossings));
         }
     }
     EXPECT_EQ(failures, 0) << c.accel << " on " << c.scene << ", " << mesh.TriangleCount()
                            << " triangles: " << failures << " of " << ref.rays.size()
                            << " rays differ; first: " << first;
-    if (grazes) std::printf("  %s on %s: %d grazing rays hit in one test only\n", c.accel.c_str(),
-                            c.scene.c_str(), grazes);
+    if (grazes)
+        std::printf("  %s on %s: %d grazing rays hit in one test only\n", c.accel.c_str(),
+                    c.scene.c_str(), grazes);
 }
 
 std::vector<AccelCase> DifferentialCases() {
@@ -362,8 +374,8 @@ struct ParityCheck {
         const int n = accel.CountCrossings(r);
         ++checked;
         if ((n % 2 == 1) != odd && failures++ == 0)
-            first = StringPrintf("%s: %d crossings, expected %s\n  %s", what, n, odd ? "odd" : "even",
-                                 RayString(r).c_str());
+            first = StringPrintf("%s: %d crossings, expected %s\n  %s", what, n,
+                                 odd ? "odd" : "even", RayString(r).c_str());
     }
 };
 
@@ -391,8 +403,8 @@ TEST_P(AccelParityTest, SphereThroughVerticesAndPoles) {
             check.Expect(to, mid, true, "outside to inside through a vertex (reversed)");
         }
     EXPECT_GT(check.checked, 1000);
-    EXPECT_EQ(check.failures, 0) << check.failures << " of " << check.checked << "; first: "
-                                 << check.first;
+    EXPECT_EQ(check.failures, 0) << check.failures << " of " << check.checked
+                                 << "; first: " << check.first;
 }
 
 TEST_P(AccelParityTest, BoxThroughEdgesAndVertices) {
@@ -437,8 +449,8 @@ TEST_P(AccelParityTest, BoxThroughEdgesAndVertices) {
             }
         }
     EXPECT_GT(check.checked, 5000);
-    EXPECT_EQ(check.failures, 0) << check.failures << " of " << check.checked << "; first: "
-                                 << check.first;
+    EXPECT_EQ(check.failures, 0) << check.failures << " of " << check.checked
+                                 << "; first: " << check.first;
 }
 
 TEST_P(AccelParityTest, RandomSegmentsThroughClosedMeshes) {
@@ -462,7 +474,9 @@ TEST_P(AccelParityTest, RandomSegmentsThroughClosedMeshes) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Accel, AccelParityTest, ::testing::Values("brute", "grid", "embree"),
-                         [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
+                         [](const ::testing::TestParamInfo<std::string>& info) {
+                             return info.param;
+                         });
 
 // ---------------------------------------------------------------------------------------
 // Scale: the same scene a million times larger and smaller, and far from the origin.
@@ -471,7 +485,8 @@ TEST(AccelScale, HugeAndTinyScenesMatchBruteForce) {
     for (const char* accelName : {"grid", "embree"}) {
         if (std::string(accelName) == "embree" && !HasEmbree()) continue;
         for (float scale : {1e6f, 1e-6f}) {
-            for (const Vec3 offset : {Vec3(0.0f), Vec3(3.0f * scale, -7.0f * scale, 11.0f * scale)}) {
+            for (const Vec3 offset :
+                 {Vec3(0.0f), Vec3(3.0f * scale, -7.0f * scale, 11.0f * scale)}) {
                 const TriangleMesh mesh = ts::Transformed(ts::Soup(300, 9), scale, offset);
                 BruteForceAccel brute(mesh);
                 const auto accel = CreateAccelerator(accelName, mesh);
@@ -488,7 +503,8 @@ TEST(AccelScale, HugeAndTinyScenesMatchBruteForce) {
                     if (exact || (kind != "at a vertex" && kind != "on box boundary")) {
                         Hit a, b;
                         const bool ha = accel->Intersect(r, &a), hb = brute.Intersect(r, &b);
-                        const float tol = exact ? 0.0f : 1e-4f * (std::abs(b.t) + radius / Length(r.d));
+                        const float tol =
+                            exact ? 0.0f : 1e-4f * (std::abs(b.t) + radius / Length(r.d));
                         ok = ok && ha == hb && accel->Occluded(r) == brute.Occluded(r);
                         if (ok && ha)
                             ok = std::abs(a.t - b.t) <= tol &&
@@ -503,13 +519,41 @@ TEST(AccelScale, HugeAndTinyScenesMatchBruteForce) {
     }
 }
 
+// Queries are const and thread-safe: the same answers from a TBB loop as from one thread,
+// including Embree's crossing-count scene, built lazily by whichever thread comes first.
+TEST(AccelThreads, ConcurrentQueriesMatchSerial) {
+    const TriangleMesh& mesh = GetScene("sphere").mesh;
+    const auto rays = MakeRays(mesh, 20000, 5);
+    for (const char* name : {"grid", "embree"}) {
+        if (std::string(name) == "embree" && !HasEmbree()) continue;
+        const auto parallel = CreateAccelerator(name, mesh);
+        std::vector<int> counts(rays.size());
+        std::vector<Hit> hits(rays.size());
+        ParallelFor(size_t(0), rays.size(), [&](size_t i) {
+            counts[i] = parallel->CountCrossings(rays[i].ray);
+            parallel->Intersect(rays[i].ray, &hits[i]);
+        });
+        const auto serial = CreateAccelerator(name, mesh);
+        int differ = 0;
+        for (size_t i = 0; i < rays.size(); ++i) {
+            Hit h;
+            serial->Intersect(rays[i].ray, &h);
+            differ += serial->CountCrossings(rays[i].ray) != counts[i] || h.prim != hits[i].prim ||
+                      h.t != hits[i].t;
+        }
+        EXPECT_EQ(differ, 0) << name;
+    }
+}
+
 TEST(AccelFactory, NamesAndErrors) {
     EXPECT_EQ(AcceleratorNames(), (std::vector<std::string>{"brute", "grid", "embree"}));
     const TriangleMesh mesh = ts::Soup(10, 1);
     EXPECT_THROW(CreateAccelerator("octree", mesh), Error);
     EXPECT_EQ(CreateAccelerator("grid", mesh)->Name(), "grid");
-    if (HasEmbree()) EXPECT_EQ(CreateAccelerator("embree", mesh)->Name(), "embree");
-    else EXPECT_THROW(CreateAccelerator("embree", mesh), Error);
+    if (HasEmbree())
+        EXPECT_EQ(CreateAccelerator("embree", mesh)->Name(), "embree");
+    else
+        EXPECT_THROW(CreateAccelerator("embree", mesh), Error);
 }
 
 TEST(AccelEmpty, EmptyMeshHasNoHits) {

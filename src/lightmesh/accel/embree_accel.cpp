@@ -2,6 +2,7 @@
 #include "lightmesh/accel/embree_accel.h"
 
 #include <embree3/rtcore.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
@@ -18,13 +19,20 @@ namespace {
 
 const char* ErrorName(RTCError code) {
     switch (code) {
-        case RTC_ERROR_NONE: return "no error";
-        case RTC_ERROR_UNKNOWN: return "unknown error";
-        case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
-        case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
-        case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
-        case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
-        case RTC_ERROR_CANCELLED: return "cancelled";
+        case RTC_ERROR_NONE:
+            return "no error";
+        case RTC_ERROR_UNKNOWN:
+            return "unknown error";
+        case RTC_ERROR_INVALID_ARGUMENT:
+            return "invalid argument";
+        case RTC_ERROR_INVALID_OPERATION:
+            return "invalid operation";
+        case RTC_ERROR_OUT_OF_MEMORY:
+            return "out of memory";
+        case RTC_ERROR_UNSUPPORTED_CPU:
+            return "unsupported CPU";
+        case RTC_ERROR_CANCELLED:
+            return "cancelled";
     }
     return "error";
 }
@@ -65,9 +73,9 @@ void SetRay(RTCRay* ray, const Vec3& o, const Vec3& d, float tnear, float tfar) 
 // RTCIntersectContext).
 struct CountContext {
     RTCIntersectContext context;
-    const Ray* ray;                  // the query, as the caller gave it
+    const Ray* ray;  // the query, as the caller gave it
     const TriangleMesh* mesh;
-    std::vector<uint32_t>* hits;     // triangles IntersectTriangle accepted
+    std::vector<uint32_t>* hits;  // triangles IntersectTriangle accepted
 };
 
 }  // namespace
@@ -100,15 +108,16 @@ struct EmbreeAccel::Impl {
 
     static void OnError(void* user, RTCError code, const char* str) {
         auto* self = static_cast<Impl*>(user);
-        std::string message = StringPrintf("Embree: %s%s%s", ErrorName(code), str ? ": " : "",
-                                           str ? str : "");
+        std::string message =
+            StringPrintf("Embree: %s%s%s", ErrorName(code), str ? ": " : "", str ? str : "");
         LogWarning(message);
         std::lock_guard<std::mutex> lock(self->errorMutex);
         if (self->error.empty()) self->error = message;
     }
     void CheckError(const char* step) {
         std::lock_guard<std::mutex> lock(errorMutex);
-        if (!error.empty()) ThrowError("cannot build the Embree back-end (%s): %s", step, error.c_str());
+        if (!error.empty())
+            ThrowError("cannot build the Embree back-end (%s): %s", step, error.c_str());
     }
 
     static void PrimBounds(const RTCBoundsFunctionArguments* args) {
@@ -197,10 +206,11 @@ EmbreeAccel::EmbreeAccel(const TriangleMesh& mesh) : impl_(std::make_unique<Impl
 
     RTCBounds b;
     rtcGetSceneBounds(m.scene, &b);
-    const float ext = std::max({b.upper_x - b.lower_x, b.upper_y - b.lower_y, b.upper_z - b.lower_z});
+    const float ext =
+        std::max({b.upper_x - b.lower_x, b.upper_y - b.lower_y, b.upper_z - b.lower_z});
     m.extent = ext > 0 && std::isfinite(ext) ? ext : 1.0f;
-    m.buildMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-                    .count();
+    m.buildMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
 EmbreeAccel::~EmbreeAccel() = default;
@@ -234,7 +244,11 @@ bool EmbreeAccel::Occluded(const Ray& ray) const {
 int EmbreeAccel::CountCrossings(const Ray& ray) const {
     Impl& m = *impl_;
     if (!(ray.tMin < ray.tMax) || LengthSquared(ray.d) == 0) return 0;
-    std::call_once(m.countOnce, [&] { m.BuildCountScene(); });
+    // Built on first use, usually from inside a TBB loop: isolated, so that while Embree's
+    // build waits for its tasks this thread cannot pick up another of the caller's tasks,
+    // call CountCrossings again and block on the once_flag it holds.
+    std::call_once(m.countOnce,
+                   [&] { tbb::this_task_arena::isolate([&] { m.BuildCountScene(); }); });
     // Embree walks a slightly longer interval than (tMin, tMax), so rounding at its ends
     // never drops a box; IntersectTriangle applies the exact range.
     const float margin = 1e-5f * m.extent / Length(ray.d);

@@ -1,9 +1,6 @@
 // grid.cpp -- the nested uniform grid of the paper's section 2: build and 3D-DDA traversal.
 #include "lightmesh/accel/grid.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -13,11 +10,9 @@
 #include "lightmesh/accel/prepared_ray.h"
 #include "lightmesh/geometry/triangle.h"
 #include "lightmesh/util/error.h"
+#include "lightmesh/util/parallel.h"
 
 namespace lm {
-#ifdef LM_GRID_STATS
-thread_local uint64_t gCellsVisited = 0, gNonEmpty = 0, gTests = 0, gWalks = 0;
-#endif
 namespace {
 
 constexpr uint32_t kChild = 0x80000000u;  // an item that names a sub-grid node, not a triangle
@@ -85,36 +80,35 @@ bool TriBoxOverlap(const double c[3], const double h[3], const NestedGridAccel::
 // query's stack, so concurrent queries share nothing. An evicted id is merely tested again;
 // correctness never depends on it (CountCrossings dedupes its hits exactly).
 struct Mailbox {
-    static constexpr uint32_t kSize = 32;
+    static constexpr uint32_t kSize = 16;
     uint32_t ids[kSize];
     Mailbox() { std::fill(ids, ids + kSize, UINT32_MAX); }
     bool Seen(uint32_t id) const { return ids[id & (kSize - 1)] == id; }
     void Mark(uint32_t id) { ids[id & (kSize - 1)] = id; }
 };
 
-// One leaf cell as the walk hands it to a query: its triangle ids, and the box around the
-// part of the ray inside the cell, [tCell, tCellExit], padded for rounding.
+// One leaf cell as the walk hands it to a query: its triangle ids, and where the part of
+// the ray inside the cell, [tCell, tCellExit], lies along the ray's dominant axis kz,
+// padded for rounding.
 struct CellSpan {
     const uint32_t* begin;
     const uint32_t* end;
     const NestedGridAccel::Tri* tris;  // by id
-    Vec3 lo, hi;
+    float lo, hi;                      // along kz
     float tCellExit;
 };
 
-// Whether the triangle's bounding box meets the span's box. A triangle hit at some t in the
-// cell's interval contains the hit point, which lies in the span's box, so a triangle that
-// fails this is not hit there; and if it is hit elsewhere, that point is in another cell it
-// overlaps, where it is tested (it is not marked in the mailbox when skipped). Cheaper than
-// the exact test, and rejects most triangles of a cell that a short segment or a ray
-// crossing a corner of the cell passes by.
-inline bool MayHit(const float* v, const Vec3& lo, const Vec3& hi) {
-    for (int a = 0; a < 3; ++a) {
-        const float mn = std::min(v[a], std::min(v[3 + a], v[6 + a]));
-        const float mx = std::max(v[a], std::max(v[3 + a], v[6 + a]));
-        if (mn > hi[a] || mx < lo[a]) return false;
-    }
-    return true;
+// Whether triangle v may be hit within the span: a cheap rejection before the exact test.
+// IntersectTriangle's t is a convex combination of the vertices' depths along the ray's
+// dominant axis kz (its weights u, v, w are >= 0), so a hit point lies within the
+// triangle's kz range, up to a few ulps the padding covers. (Sideways there is no such
+// tight bound: a ray grazing a triangle can round its hit point away from the triangle's
+// box.) A triangle that fails is not hit in this cell; if it is hit elsewhere it is tested
+// in that cell, since a skipped triangle is not marked in the mailbox. It halves the tests
+// of short segments and shadow rays, which pass by most triangles of the cells they cross.
+inline bool MayHit(const float* v, int kz, float lo, float hi) {
+    const float a = v[kz], b = v[3 + kz], c = v[6 + kz];
+    return !(std::min(a, std::min(b, c)) > hi || std::max(a, std::max(b, c)) < lo);
 }
 
 // The three kinds of query the one traversal serves. Cell() tests a leaf cell's triangles
@@ -130,12 +124,9 @@ struct ClosestQuery {
         for (const uint32_t* p = c.begin; p != c.end; ++p) {
             const uint32_t id = *p;
             const float* v = Floats(c.tris[id]);
-            if (mailbox.Seen(id) || !MayHit(v, c.lo, c.hi)) continue;
+            if (mailbox.Seen(id) || !MayHit(v, ray.kz, c.lo, c.hi)) continue;
             mailbox.Mark(id);
             TriangleHit th;
-#ifdef LM_GRID_STATS
-            ++gTests;
-#endif
             if (!detail::IntersectPrepared(ray, v, &th)) continue;
             // ray.tMax is just above the best t, so equal-t hits arrive here too: brute
             // force keeps the lowest primitive id among them, and so do we.
@@ -160,12 +151,9 @@ struct AnyQuery {
         for (const uint32_t* p = c.begin; p != c.end; ++p) {
             const uint32_t id = *p;
             const float* v = Floats(c.tris[id]);
-            if (mailbox.Seen(id) || !MayHit(v, c.lo, c.hi)) continue;
+            if (mailbox.Seen(id) || !MayHit(v, ray.kz, c.lo, c.hi)) continue;
             mailbox.Mark(id);
             TriangleHit th;
-#ifdef LM_GRID_STATS
-            ++gTests;
-#endif
             if (detail::IntersectPrepared(ray, v, &th)) {
                 found = true;
                 return true;
@@ -197,7 +185,7 @@ struct CountQuery {
         for (const uint32_t* p = c.begin; p != c.end; ++p) {
             const uint32_t id = *p;
             const float* v = Floats(c.tris[id]);
-            if (mailbox.Seen(id) || !MayHit(v, c.lo, c.hi)) continue;
+            if (mailbox.Seen(id) || !MayHit(v, ray.kz, c.lo, c.hi)) continue;
             mailbox.Mark(id);
             TriangleHit th;
             if (!detail::IntersectPrepared(ray, v, &th) || Counted(id)) continue;
@@ -228,7 +216,8 @@ std::array<int, 3> NestedGridAccel::AutoResolution(size_t triangles, const Bound
     } else {
         // s = (Π e_a over the free axes / λN)^(1/k); an axis thinner than s gets one cell
         // and leaves the product, which can only shrink s for the others (≤ 3 rounds).
-        const double target = std::max(1.0, kCellsPerTriangle * double(std::max<size_t>(triangles, 1)));
+        const double target =
+            std::max(1.0, kCellsPerTriangle * double(std::max<size_t>(triangles, 1)));
         bool free[3] = {true, true, true};
         side = longest;
         for (int round = 0; round < 3; ++round) {
@@ -243,6 +232,9 @@ std::array<int, 3> NestedGridAccel::AutoResolution(size_t triangles, const Bound
             if (!changed) break;
         }
     }
+    // Auto: at most kMaxAutoResolution cells along the longest side (coarser cells keep
+    // their shape).
+    if (resolution <= 0) side = std::max(side, double(longest) / kMaxAutoResolution);
     for (int a = 0; a < 3; ++a) {
         double n = double(e[a]) / side;
         res[a] = static_cast<int>(std::clamp(std::lround(n), 1L, long(kMaxResolution)));
@@ -278,10 +270,10 @@ struct NestedGridAccel::Builder {
             const double bmin = std::min({t.p0[a], t.p1[a], t.p2[a]}) - eps[a];
             const double bmax = std::max({t.p0[a], t.p1[a], t.p2[a]}) + eps[a];
             const double inv = node.invCellSize[a];
-            lo[a] = static_cast<int>(std::clamp(std::floor((bmin - node.lo[a]) * inv), 0.0,
-                                                double(node.res[a] - 1)));
-            hi[a] = static_cast<int>(std::clamp(std::floor((bmax - node.lo[a]) * inv), 0.0,
-                                                double(node.res[a] - 1)));
+            lo[a] = static_cast<int>(
+                std::clamp(std::floor((bmin - node.lo[a]) * inv), 0.0, double(node.res[a] - 1)));
+            hi[a] = static_cast<int>(
+                std::clamp(std::floor((bmax - node.lo[a]) * inv), 0.0, double(node.res[a] - 1)));
         }
         const int nx = node.res[0], ny = node.res[1];
         if (lo[0] == hi[0] && lo[1] == hi[1] && lo[2] == hi[2]) {
@@ -333,7 +325,7 @@ struct NestedGridAccel::Builder {
             }
         };
         if (parallel && blocks > 1)
-            tbb::parallel_for(size_t(0), blocks, gather);
+            ParallelFor(size_t(0), blocks, gather);
         else
             for (size_t b = 0; b < blocks; ++b) gather(b);
 
@@ -374,7 +366,7 @@ struct NestedGridAccel::Builder {
             level.children[k] = {c, std::move(child)};
         };
         if (parallel && crowded.size() > 1)
-            tbb::parallel_for(size_t(0), crowded.size(), sub);
+            ParallelFor(size_t(0), crowded.size(), sub);
         else
             for (size_t k = 0; k < crowded.size(); ++k) sub(k);
     }
@@ -426,7 +418,9 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
     }
     box_ = b;
 
-    Builder builder{tris_, options_, 2e-7 * double(extent) + 2.5e-7 * double(maxAbs)};
+    epsAbs_ = 2e-7f * extent + 2.5e-7f * maxAbs;
+    boxMaxAbs_ = std::max(MaxComponent(Abs(box_.lo)), MaxComponent(Abs(box_.hi)));
+    Builder builder{tris_, options_, double(epsAbs_)};
     Builder::Level top;
     const auto res = AutoResolution(ids.size(), box_, options_.gridResolution);
     top.node = Builder::MakeNode(box_.lo, box_.hi, res);
@@ -456,7 +450,8 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
                 const uint32_t n = level.start[c + 1] - level.start[c];
                 items_.insert(items_.end(), level.prims.begin() + level.start[c],
                               level.prims.begin() + level.start[c + 1]);
-                if (n == 0) ++stats_.emptyCells;
+                if (n == 0)
+                    ++stats_.emptyCells;
                 else {
                     ++stats_.leafCells;
                     stats_.references += n;
@@ -468,7 +463,8 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
         level.start = {};
         level.prims = {};
     }
-    if (items_.size() >= kChild) ThrowError("the grid is too large (%zu references)", items_.size());
+    if (items_.size() >= kChild)
+        ThrowError("the grid is too large (%zu references)", items_.size());
     stats_.totalCells = cellStart_.size() - 1;
     occupied_.assign((stats_.totalCells + 63) / 64, 0);
     for (size_t c = 0; c < stats_.totalCells; ++c)
@@ -480,8 +476,9 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
     stats_.bytes = nodes_.size() * sizeof(Node) + cellStart_.size() * sizeof(uint32_t) +
                    items_.size() * sizeof(uint32_t) + tris_.size() * sizeof(Tri) +
                    occupied_.size() * sizeof(uint64_t);
-    stats_.buildMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() -
-                                                               startTime).count();
+    stats_.buildMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - startTime)
+            .count();
 }
 
 NestedGridAccel::~NestedGridAccel() = default;
@@ -491,16 +488,17 @@ AccelFigures NestedGridAccel::Figures() const {
     const double nonEmpty = double(std::max<size_t>(s.leafCells, 1));
     const double tris = double(std::max<size_t>(tris_.size(), 1));
     return {
-        {"grid resolution", StringPrintf("%d x %d x %d", s.resolution[0], s.resolution[1],
-                                         s.resolution[2])},
+        {"grid resolution",
+         StringPrintf("%d x %d x %d", s.resolution[0], s.resolution[1], s.resolution[2])},
         {"grid cells", StringPrintf("%zu top level, %zu in all", s.topCells, s.totalCells)},
-        {"empty cells", StringPrintf("%zu (%.1f%%)", s.emptyCells,
-                                     100.0 * double(s.emptyCells) / double(std::max<size_t>(s.totalCells, 1)))},
+        {"empty cells",
+         StringPrintf("%zu (%.1f%%)", s.emptyCells,
+                      100.0 * double(s.emptyCells) / double(std::max<size_t>(s.totalCells, 1)))},
         {"triangles per non-empty cell",
          StringPrintf("mean %.2f, max %zu", double(s.references) / nonEmpty, s.maxPerCell)},
         {"references per triangle", StringPrintf("%.2f", double(s.references) / tris)},
-        {"sub-grids", StringPrintf("%zu, depth reached %d of %d", s.subGrids, s.depth,
-                                   options_.gridMaxDepth)},
+        {"sub-grids",
+         StringPrintf("%zu, depth reached %d of %d", s.subGrids, s.depth, options_.gridMaxDepth)},
         {"grid bytes", StringPrintf("%zu (%.1f per triangle)", s.bytes, double(s.bytes) / tris)},
         {"grid build ms", StringPrintf("%.1f", s.buildMs)},
     };
@@ -511,12 +509,9 @@ AccelFigures NestedGridAccel::Figures() const {
 // Tracing", 1987) for all three query kinds.
 
 template <typename Query>
-bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD, float tEnter,
-                           float tExit, Query& query) const {
+bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD, float pad,
+                           float tEnter, float tExit, Query& query) const {
     const Node& g = nodes_[nodeIndex];
-#ifdef LM_GRID_STATS
-    ++gWalks;
-#endif
     int cell[3], step[3], stop[3];
     float nextT[3];
     const int stride[3] = {1, g.res[0], g.res[0] * g.res[1]};
@@ -558,22 +553,19 @@ bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD,
     for (;;) {
         const float tNext = std::min(tx, std::min(ty, tz));
         const float tCellExit = std::min(tNext, tExit);
-#ifdef LM_GRID_STATS
-        ++gCellsVisited;
-        gNonEmpty += (occupied[idx >> 6] >> (idx & 63)) & 1;
-#endif
         // Most cells are empty; their bit (a small array that stays in cache) spares the
         // load from the much larger cellStart_.
         if ((occupied[idx >> 6] >> (idx & 63)) & 1) {
             const uint32_t b = cellStart_[idx], e = cellStart_[idx + 1];
             const uint32_t first = items_[b];
             if (first & kChild) {
-                if (Walk(first & ~kChild, ray, invD, tCell, tCellExit, query)) return true;
+                if (Walk(first & ~kChild, ray, invD, pad, tCell, tCellExit, query)) return true;
             } else {
-                CellSpan span{items_.data() + b, items_.data() + e, tris_.data(), {}, {}, tCellExit};
-                const Vec3 p0 = ray.o + ray.d * tCell, p1 = ray.o + ray.d * tCellExit;
-                span.lo = Min(p0, p1) - Vec3(pad);
-                span.hi = Max(p0, p1) + Vec3(pad);
+                const int kz = query.ray.kz;
+                const float z0 = ray.o[kz] + ray.d[kz] * tCell,
+                            z1 = ray.o[kz] + ray.d[kz] * tCellExit;
+                const CellSpan span{items_.data() + b,      items_.data() + e,      tris_.data(),
+                                    std::min(z0, z1) - pad, std::max(z0, z1) + pad, tCellExit};
                 if (query.Cell(span)) return true;
             }
         }
@@ -622,7 +614,9 @@ void NestedGridAccel::Traverse(const Ray& ray, Query& query) const {
         t1 = std::min(t1, tf);
     }
     if (!moves || !(t0 <= t1)) return;
-    Walk(0, ray, invD, t0, t1, query);
+    // Rounding allowance of the span test (see MayHit): a few ulps of the coordinates in play.
+    const float pad = 4e-6f * (MaxComponent(Abs(ray.o)) + boxMaxAbs_) + epsAbs_;
+    Walk(0, ray, invD, pad, t0, t1, query);
 }
 
 bool NestedGridAccel::Intersect(const Ray& ray, Hit* hit) const {

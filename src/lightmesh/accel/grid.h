@@ -19,8 +19,13 @@ namespace lm {
 /// over the cell, and so on down to AccelOptions::gridMaxDepth levels in all. Everything is
 /// built eagerly into flat arrays. Queries walk the cells with a 3D-DDA (Amanatides & Woo
 /// 1987) from the ray's entry into the box to min(tMax, exit), so a short segment visits few
-/// cells, and test every triangle with IntersectTriangle, the test brute force uses, so all
-/// answers (hit triangle, t, crossing counts) are those of brute force, ties included.
+/// cells; a closest-hit query stops in the cell that holds its hit. Triangles are tested with
+/// IntersectTriangle's arithmetic (set up once per ray, prepared_ray.h), so every answer
+/// (hit triangle, t to the bit, crossing count) is brute force's, ties included (the lowest
+/// id among equal t). Cells are grown by a small epsilon when triangles are assigned, which
+/// covers the DDA's rounding at the scene's own scale; for rays starting very far away
+/// (thousands of scene sizes) a hit within rounding of a cell boundary could in principle be
+/// missed by the early stop.
 class NestedGridAccel final : public Accelerator {
   public:
     /// Builds the grid over `mesh`, which must outlive it. Throws Error if the mesh has
@@ -37,15 +42,23 @@ class NestedGridAccel final : public Accelerator {
     /// Cells per axis of the top level for `triangles` triangles in `box` (the box after
     /// GridBounds' padding). `resolution` > 0 forces that many cells along the longest side.
     ///
-    /// Auto heuristic: cubic cells whose total count is about kCellsPerTriangle · N, i.e. a
-    /// cell side s = ∛(V / (λN)), giving ≈ ∛(λN) · (longest side / ∛V) cells along the longest
-    /// side — the paper's 81 cells for 27k triangles and 100 for 235k are of this order. Axes
-    /// thinner than one cell get a single cell and s is recomputed over the other axes (a
-    /// flat scene gets a 2D grid of ≈ λN cells). Each axis is clamped to [1, kMaxResolution].
+    /// Auto heuristic: cubic cells whose total count is about λN (λ = kCellsPerTriangle),
+    /// i.e. a cell side s = ∛(V / (λN)), giving ≈ ∛(λN) · (longest side / ∛V) cells along the
+    /// longest side. Axes thinner than one cell get a single cell and s is recomputed over the
+    /// other axes (a flat scene gets a 2D grid of ≈ λN cells). The longest side gets at most
+    /// kMaxAutoResolution cells (pbrt-v2's uniform grid clamps at 64): in a large, mostly
+    /// empty box (a garden on a wide ground) finer top cells cost more steps through empty
+    /// space than they save, while the sub-grids refine the crowded cells where the triangles
+    /// are. With the override each axis is clamped to [1, kMaxResolution] (the paper used 81
+    /// and 100 cells).
     static std::array<int, 3> AutoResolution(size_t triangles, const Bounds3& box,
                                              int resolution = 0);
-    /// λ of the heuristic: top-level cells per triangle (tuned with bench_accel).
+    /// λ of the heuristic: top-level cells per triangle. bench_accel, on builtin:gazebo
+    /// (2.6k triangles, res 25): 1 to 4 within noise, 0.25 and 8 slower.
     static constexpr double kCellsPerTriangle = 2.0;
+    /// Cap of the auto resolution (garden, 386k triangles: 24-48 cells best, 64 about 10%
+    /// slower, the uncapped 167 40-60% slower on camera and shadow rays).
+    static constexpr int kMaxAutoResolution = 48;
     static constexpr int kMaxResolution = 512;
 
     /// The box the top level covers: the mesh's bounds, thickened where flat and padded a
@@ -59,7 +72,7 @@ class NestedGridAccel final : public Accelerator {
         size_t totalCells = 0;            ///< cells of all levels
         size_t leafCells = 0;             ///< cells holding triangles (not sub-grids)
         size_t emptyCells = 0;            ///< cells of all levels holding nothing
-        size_t references = 0;           ///< triangle references in leaf cells
+        size_t references = 0;            ///< triangle references in leaf cells
         size_t maxPerCell = 0;            ///< most triangles in one leaf cell
         size_t subGrids = 0;              ///< grids below the top level
         int depth = 1;                    ///< levels reached, top included
@@ -85,7 +98,7 @@ class NestedGridAccel final : public Accelerator {
   private:
     struct Builder;
     template <typename Query>
-    bool Walk(uint32_t node, const Ray& ray, const Vec3& invD, float tEnter, float tExit,
+    bool Walk(uint32_t node, const Ray& ray, const Vec3& invD, float pad, float tEnter, float tExit,
               Query& query) const;
     template <typename Query>
     void Traverse(const Ray& ray, Query& query) const;
@@ -93,11 +106,13 @@ class NestedGridAccel final : public Accelerator {
     const TriangleMesh& mesh_;
     AccelOptions options_;
     Bounds3 box_;
-    std::vector<Node> nodes_;            // [0] is the top level
-    std::vector<uint32_t> cellStart_;    // CSR over all cells of all nodes, size cells + 1
-    std::vector<uint32_t> items_;        // per cell: triangle ids, or one kChild | node id
-    std::vector<uint64_t> occupied_;     // one bit per cell: not empty
-    std::vector<Tri> tris_;              // by primitive id
+    float boxMaxAbs_ = 0;      // largest |coordinate| of the box
+    float epsAbs_ = 0;         // least growth of a cell when assigning triangles (scene scale)
+    std::vector<Node> nodes_;  // [0] is the top level
+    std::vector<uint32_t> cellStart_;  // CSR over all cells of all nodes, size cells + 1
+    std::vector<uint32_t> items_;      // per cell: triangle ids, or one kChild | node id
+    std::vector<uint64_t> occupied_;   // one bit per cell: not empty
+    std::vector<Tri> tris_;            // by primitive id
     Stats stats_;
 };
 

@@ -1,4 +1,6 @@
 // grid_test.cpp -- the nested grid's own rules: resolution, nesting, figures, DDA limits.
+#include "lightmesh/accel/grid.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -6,7 +8,6 @@
 #include <string>
 
 #include "lightmesh/accel/brute_force.h"
-#include "lightmesh/accel/grid.h"
 #include "lightmesh/accel/prepared_ray.h"
 #include "lightmesh/accel/test_scenes.h"
 #include "lightmesh/geometry/triangle.h"
@@ -27,7 +28,9 @@ TEST(GridResolution, AutoHeuristicBounds) {
     // A cube gets ≈ ∛(λN) cells per side.
     for (size_t n : {size_t(1), size_t(100), size_t(10000), size_t(1000000)}) {
         const auto r = NestedGridAccel::AutoResolution(n, cube);
-        const double expected = std::cbrt(NestedGridAccel::kCellsPerTriangle * double(n));
+        const double expected =
+            std::min<double>(std::cbrt(NestedGridAccel::kCellsPerTriangle * double(n)),
+                             NestedGridAccel::kMaxAutoResolution);
         for (int a = 0; a < 3; ++a) {
             EXPECT_GE(r[a], 1);
             EXPECT_LE(r[a], NestedGridAccel::kMaxResolution);
@@ -36,20 +39,26 @@ TEST(GridResolution, AutoHeuristicBounds) {
     }
     // Cells stay cubic: an 8:2:1 box gets resolutions in about that ratio, and about λN cells.
     const Bounds3 slab(Vec3(0), Vec3(8, 2, 1));
-    const auto r = NestedGridAccel::AutoResolution(50000, slab);
+    const auto r = NestedGridAccel::AutoResolution(1000, slab);
     EXPECT_NEAR(double(r[0]) / r[1], 4.0, 0.3);
     EXPECT_NEAR(double(r[0]) / r[2], 8.0, 0.8);
     const double cells = double(r[0]) * r[1] * r[2];
-    EXPECT_GT(cells, 0.6 * NestedGridAccel::kCellsPerTriangle * 50000);
-    EXPECT_LT(cells, 1.6 * NestedGridAccel::kCellsPerTriangle * 50000);
+    EXPECT_GT(cells, 0.6 * NestedGridAccel::kCellsPerTriangle * 1000);
+    EXPECT_LT(cells, 1.6 * NestedGridAccel::kCellsPerTriangle * 1000);
     // A nearly flat box: one cell across, a 2D grid of ≈ λN cells over the rest.
     const Bounds3 flat(Vec3(0), Vec3(10, 10, 1e-3f));
-    const auto f = NestedGridAccel::AutoResolution(20000, flat);
+    const auto f = NestedGridAccel::AutoResolution(500, flat);
     EXPECT_EQ(f[2], 1);
-    EXPECT_NEAR(double(f[0]) * f[1], NestedGridAccel::kCellsPerTriangle * 20000, 0.1 * 40000);
-    // Never beyond the clamp, even for absurd counts.
+    EXPECT_NEAR(double(f[0]) * f[1], NestedGridAccel::kCellsPerTriangle * 500, 0.1 * 1000);
+    // Never beyond the caps, even for absurd counts or resolutions.
     const auto big = NestedGridAccel::AutoResolution(size_t(1) << 40, cube);
-    EXPECT_EQ(big[0], NestedGridAccel::kMaxResolution);
+    EXPECT_EQ(big[0], NestedGridAccel::kMaxAutoResolution);
+    EXPECT_EQ(NestedGridAccel::AutoResolution(10, cube, 100000)[0],
+              NestedGridAccel::kMaxResolution);
+    // The auto cap keeps the cells cubic: a 4:1:1 box with many triangles gets 48 x 12 x 12.
+    const auto capped = NestedGridAccel::AutoResolution(10000000, Bounds3(Vec3(0), Vec3(4, 1, 1)));
+    EXPECT_EQ(capped[0], NestedGridAccel::kMaxAutoResolution);
+    EXPECT_EQ(capped[1], NestedGridAccel::kMaxAutoResolution / 4);
 }
 
 TEST(GridResolution, OptionOverridesLongestSide) {
@@ -98,8 +107,9 @@ TEST(GridFigures, ReportsTheBuild) {
     const TriangleMesh mesh = ts::OneCell(2000, 8);
     const NestedGridAccel grid(mesh, AccelOptions{});
     const AccelFigures f = grid.Figures();
-    for (const char* key : {"grid resolution", "grid cells", "empty cells", "triangles per non-empty cell",
-                            "references per triangle", "sub-grids", "grid bytes", "grid build ms"})
+    for (const char* key :
+         {"grid resolution", "grid cells", "empty cells", "triangles per non-empty cell",
+          "references per triangle", "sub-grids", "grid bytes", "grid build ms"})
         EXPECT_EQ(FigureValue(f, key).find("<missing"), std::string::npos) << key;
     EXPECT_NE(FigureValue(f, "empty cells").find('%'), std::string::npos);
     EXPECT_NE(FigureValue(f, "sub-grids").find("depth reached 2 of 2"), std::string::npos)
@@ -167,8 +177,8 @@ TEST(GridTraversal, ZeroThicknessBox) {
     for (int i = 0; i < 2000; ++i) {
         const Vec3 o(rng.Uniform(-0.2f, 1.2f), rng.Uniform(-0.2f, 1.2f), rng.Uniform(-1, 1));
         Vec3 d = rng.Direction();
-        if (i % 3 == 0) d = Vec3(0, 0, o.z > 0 ? -1.0f : 1.0f);    // perpendicular
-        if (i % 3 == 1) d.z = 0;                                  // in the plane: never hits
+        if (i % 3 == 0) d = Vec3(0, 0, o.z > 0 ? -1.0f : 1.0f);  // perpendicular
+        if (i % 3 == 1) d.z = 0;                                 // in the plane: never hits
         Hit a, b;
         const bool ha = grid.Intersect(Ray{o, d}, &a), hb = brute.Intersect(Ray{o, d}, &b);
         ASSERT_EQ(ha, hb) << i;
@@ -186,7 +196,7 @@ TEST(GridTraversal, DegenerateInputs) {
     const TriangleMesh mesh = TwoPlanes();
     const NestedGridAccel grid(mesh, AccelOptions{});
     Hit h;
-    EXPECT_FALSE(grid.Intersect(Ray{{0.5f, 0.5f, 0.5f}, {0, 0, 0}}, &h));  // no direction
+    EXPECT_FALSE(grid.Intersect(Ray{{0.5f, 0.5f, 0.5f}, {0, 0, 0}}, &h));         // no direction
     EXPECT_FALSE(grid.Occluded(Ray{{0.5f, 0.5f, 0.5f}, {0, 0, 1}, 2.0f, 1.0f}));  // empty range
     EXPECT_FALSE(grid.Occluded(Ray{{5, 5, 5}, {0, 0, 1}}));  // parallel, outside the box
     // A triangle with a NaN vertex is ignored, not poisoning the box.
@@ -235,12 +245,16 @@ TEST(GridPreparedRay, MatchesIntersectTriangleBitForBit) {
         const Vec3 target = i % 3 == 0 ? a : (a + b + c) * (1.0f / 3) + rng.Direction() * 0.5f;
         Vec3 d = target - o;
         if (i % 5 == 0) d[int(rng.Index(3))] = 0;
-        check(Ray{o, d, i % 7 == 0 ? rng.Uniform() : 0.0f, i % 11 == 0 ? rng.Uniform(0, 2) : Infinity}, a, b, c);
+        check(Ray{o, d, i % 7 == 0 ? rng.Uniform() : 0.0f,
+                  i % 11 == 0 ? rng.Uniform(0, 2) : Infinity},
+              a, b, c);
     }
     // Exact hits on shared edges and vertices of a dyadic lattice.
     for (int i = 0; i < 200000; ++i) {
-        auto lattice = [&] { return Vec3(float(int(rng.Index(9)) - 4) / 4, float(int(rng.Index(9)) - 4) / 4,
-                                         float(int(rng.Index(9)) - 4) / 4); };
+        auto lattice = [&] {
+            return Vec3(float(int(rng.Index(9)) - 4) / 4, float(int(rng.Index(9)) - 4) / 4,
+                        float(int(rng.Index(9)) - 4) / 4);
+        };
         const Vec3 a = lattice(), b = lattice(), c = lattice();
         const Vec3 through = i % 2 ? a : (a + b) * 0.5f;
         const float dirs[4] = {1.0f, 0.5f, 0.25f, 0.0f};
@@ -249,8 +263,8 @@ TEST(GridPreparedRay, MatchesIntersectTriangleBitForBit) {
         if (rng.Uniform() < 0.5f) d = -d;
         check(Ray{through - d * 2.0f, d}, a, b, c);
     }
-    check(Ray{{0, 0, -1}, {0, 0, 0}}, {0, 0, 0}, {1, 0, 0}, {0, 1, 0});   // no direction
-    check(Ray{{0, 0, -1}, {0, 0, 1}}, {0, 0, 0}, {1, 0, 0}, {2, 0, 0});   // degenerate
+    check(Ray{{0, 0, -1}, {0, 0, 0}}, {0, 0, 0}, {1, 0, 0}, {0, 1, 0});  // no direction
+    check(Ray{{0, 0, -1}, {0, 0, 1}}, {0, 0, 0}, {1, 0, 0}, {2, 0, 0});  // degenerate
     EXPECT_EQ(mismatches, 0) << "of " << cases << " cases";
     EXPECT_GT(hits, 50000);
 }

@@ -58,7 +58,8 @@ inline bool EdgeTestPrepared(T ax, T ay, T bx, T by, T cx, T cy, T* u, T* v, T* 
 
 /// IntersectTriangle(ray, p0, p1, p2, hit) for the ray `r` was prepared from, with r.tMin
 /// and r.tMax as the range; p points at the 9 floats p0, p1, p2.
-inline bool IntersectPrepared(const PreparedRay& r, const float* p, TriangleHit* hit) {
+[[gnu::always_inline]] inline bool IntersectPrepared(const PreparedRay& r, const float* p,
+                                                     TriangleHit* hit) {
     if (!r.valid) return false;
     const int kx = r.kx, ky = r.ky, kz = r.kz;
     // a = p0 - o etc., only the components the test reads.

@@ -156,7 +156,8 @@ inline TriangleMesh TessellatedBox(int k, float h = 1.0f) {
     auto vertex = [&](int i, int j, int l) {
         auto [it, inserted] = index.try_emplace({i, j, l}, uint32_t(m.positions.size()));
         if (inserted)
-            m.positions.emplace_back(-h + 2 * h * float(i) / float(k), -h + 2 * h * float(j) / float(k),
+            m.positions.emplace_back(-h + 2 * h * float(i) / float(k),
+                                     -h + 2 * h * float(j) / float(k),
                                      -h + 2 * h * float(l) / float(k));
         return it->second;
     };

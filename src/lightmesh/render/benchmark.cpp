@@ -54,7 +54,10 @@ std::vector<BenchResult> RunBenchmark(const BenchMatrix& m,
         std::map<std::string, std::unique_ptr<Accelerator>> accels;
         for (const std::string& a : m.accels) accels[a] = CreateAccelerator(a, scene.mesh, scene.render.accelOptions);
         const Accelerator& lmmAccel = *accels[m.accels.front()];
-        for (auto [width, height] : m.sizes) {
+        for (const auto& size : m.sizes) {
+            // Plain variables, not structured bindings: the lambdas below capture them,
+            // which clang before 16 rejects (the sanitizer and fuzzing builds use clang 14).
+            const int width = size.first, height = size.second;
             RenderOptions base = scene.render;
             base.width = width;
             base.height = height;

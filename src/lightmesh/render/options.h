@@ -22,6 +22,15 @@ struct LightMeshOptions {
     std::string templateDir;
 };
 
+/// Settings of the area-light reference ("--shadows area", issue 7): every point light
+/// becomes a sphere of this radius (same centre and intensity), and each shading point
+/// traces `samples` stratified shadow rays per light (the paper's "naive" soft shadows,
+/// §1.2). Radius 0 is exactly "rt".
+struct AreaLightOptions {
+    float radius = 0.0f;  ///< sphere radius in scene units, finite and >= 0
+    int samples = 16;     ///< shadow rays per light and shading point, 1 .. 4096
+};
+
 struct RenderOptions {
     int width = 640;
     int height = 480;
@@ -29,12 +38,13 @@ struct RenderOptions {
     int aa = 1;
     /// Mirror recursion limit (1 = no reflected rays).
     int maxDepth = 5;
-    /// Shadow method: "none", "rt" (one shadow ray per light) or "lmm".
+    /// Shadow method: "none", "rt" (one shadow ray per light), "lmm" or "area".
     std::string shadows = "rt";
     /// Ray-query back-end: "brute", "grid" or "embree".
     std::string accel = "grid";
     AccelOptions accelOptions;
     LightMeshOptions lightMesh;
+    AreaLightOptions areaLight;
 };
 
 }  // namespace lm

@@ -1,13 +1,11 @@
 #include "lightmesh/render/whitted.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <chrono>
 
 #include "lightmesh/geometry/triangle.h"
 #include "lightmesh/util/error.h"
+#include "lightmesh/util/parallel.h"
 
 namespace lm {
 
@@ -134,7 +132,7 @@ RenderResult WhittedRenderer::Render(ProgressReporter* progress) const {
     result.image = Image(w, h);
     std::vector<RenderCounters> tileCounters(static_cast<size_t>(tilesX) * tilesY);
     const auto start = std::chrono::steady_clock::now();
-    tbb::parallel_for(tbb::blocked_range<int>(0, tilesX * tilesY, 1), [&](const tbb::blocked_range<int>& range) {
+    ParallelFor(tbb::blocked_range<int>(0, tilesX * tilesY, 1), [&](const tbb::blocked_range<int>& range) {
         for (int tile = range.begin(); tile != range.end(); ++tile) {
             const int x0 = (tile % tilesX) * kTile, y0 = (tile / tilesX) * kTile;
             RenderCounters& counters = tileCounters[tile];

@@ -449,6 +449,10 @@ LoadedMesh LoadMeshFile(const std::string& path, const MeshLoadOptions& options)
                 err = "Assimp has no reader for this file format";
             if (err.find("mNumMeshes is 0") != std::string::npos)
                 err = "no meshes found in it (is the file really in this format?)";
+            else if (err.find("contains no faces") != std::string::npos)
+                err = "a mesh in it has no faces (is the file truncated?)";
+            else if (err.rfind("Validation failed: ", 0) == 0)
+                err = "malformed or truncated (Assimp: " + err.substr(19) + ")";
             if (err.empty()) err = "Assimp could not import it";
             throw MeshFileError(path, err, true);
         }

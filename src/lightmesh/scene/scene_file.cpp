@@ -31,10 +31,11 @@
 //                longest horizontal extent (> 0, default 3), "material": NAME (default a
 //                light grey)}.
 //   "render"     optional, fills Scene::render: "width", "height" (1..16384, width·height ≤
-//                2^28), "aa" (1..16), "max_depth" (1..64), "shadows" ("none" | "rt" | "lmm"),
-//                "accel" ("brute" | "grid" | "embree"), "grid" (0..4096),
+//                2^28), "aa" (1..16), "max_depth" (1..64), "shadows" ("none" | "rt" | "lmm" |
+//                "area"), "accel" ("brute" | "grid" | "embree"), "grid" (0..4096),
 //                "cc" (1..4096), "ki" (in (0, 16]), "variant" (string), "ns" (0..64),
-//                "template_dir" (string).
+//                "template_dir" (string), "light_radius" (≥ 0: the sphere each point light
+//                becomes with "shadows": "area"), "samples" (1..4096, shadow rays per light).
 //
 // A colour is a number (grey) or [r, g, b]; all numbers must be finite and colours ≥ 0.
 // Unknown keys are warnings ("unknown key (ignored)"), errors with SceneLoadOptions::strict;
@@ -53,6 +54,7 @@
 #include <sstream>
 #include <unordered_set>
 
+#include "lightmesh/accel/accelerator.h"
 #include "lightmesh/scene/demo_scene.h"
 #include "lightmesh/scene/mesh_loader.h"
 #include "lightmesh/scene/shapes.h"
@@ -593,7 +595,7 @@ void ReadRender(const Reader& r, const Json& j, RenderOptions* ro) {
     if (const Json* v = o.Find("aa")) ro->aa = Int(r, *v, o.Child("aa"), 1, 16);
     if (const Json* v = o.Find("max_depth")) ro->maxDepth = Int(r, *v, o.Child("max_depth"), 1, 64);
     if (const Json* v = o.Find("shadows"))
-        ro->shadows = Enum(r, *v, o.Child("shadows"), {"none", "rt", "lmm"});
+        ro->shadows = Enum(r, *v, o.Child("shadows"), {"none", "rt", "lmm", "area"});
     if (const Json* v = o.Find("accel"))
         ro->accel = Enum(r, *v, o.Child("accel"), {"brute", "grid", "embree"});
     if (const Json* v = o.Find("grid"))
@@ -610,6 +612,9 @@ void ReadRender(const Reader& r, const Json& j, RenderOptions* ro) {
     if (const Json* v = o.Find("ns")) ro->lightMesh.ns = Int(r, *v, o.Child("ns"), 0, 64);
     if (const Json* v = o.Find("template_dir"))
         ro->lightMesh.templateDir = String(r, *v, o.Child("template_dir"));
+    if (const Json* v = o.Find("light_radius"))
+        ro->areaLight.radius = NonNegative(r, *v, o.Child("light_radius"));
+    if (const Json* v = o.Find("samples")) ro->areaLight.samples = Int(r, *v, o.Child("samples"), 1, 4096);
     o.Finish();
 }
 
@@ -686,6 +691,39 @@ void CheckExtent(const Reader& r, const std::string& path, const Scene& scene) {
     if (!IsFinite(b.lo) || !IsFinite(b.hi) || !IsFinite(b.Diagonal()))
         r.Fail(path, "the scene's bounding box is not finite (coordinates too large?)");
     if (!(b.MaxExtent() > 0)) r.Fail(path, "the scene has zero extent");
+}
+
+/// Whether p is inside a closed solid of the mesh: the number of surfaces crossed on the
+/// way out of the scene's box is odd along each of six spread-out directions -- the parity
+/// rule of the light mesh's inside test (СТ). Unanimity, rather than a majority, keeps an
+/// open shape (a lampshade, a room without a ceiling) from being taken for a solid.
+bool InsideASolid(const Accelerator& accel, const Bounds3& box, const Vec3& p) {
+    if (!box.Contains(p)) return false;
+    const float reach = 1.01f * Length(box.Diagonal()) + 1.0f;
+    const Vec3 directions[6] = {{1, 0.37f, 0.21f},  {-0.29f, 1, 0.43f},   {0.31f, -0.23f, 1},
+                                {-1, -0.41f, 0.17f}, {0.19f, -1, -0.33f}, {-0.27f, 0.13f, -1}};
+    for (const Vec3& d : directions) {
+        const Vec3 out = p + Normalize(d) * reach;
+        if (!IsFinite(out)) return false;  // no room to test in float; assume outside
+        if ((accel.CountCrossings(Segment(p, out)) & 1) == 0) return false;
+    }
+    return true;
+}
+
+/// Fails on the first light inside a closed solid: it would light nothing, and the light
+/// mesh method (paper §4) assumes every light is outside the objects.
+void CheckLightsOutsideSolids(const Reader& r, const Scene& scene) {
+    const Bounds3 box = scene.mesh.Bounds();
+    std::unique_ptr<Accelerator> accel;
+    for (size_t i = 0; i < scene.lights.size(); ++i) {
+        if (!box.Contains(scene.lights[i].position)) continue;
+        if (!accel) accel = CreateAccelerator("brute", scene.mesh);
+        if (InsideASolid(*accel, box, scene.lights[i].position))
+            r.Fail(Index("/lights", i) + "/position",
+                   "the light " + FormatVec(scene.lights[i].position) +
+                       " is inside a closed object, so it would light nothing (lights must be "
+                       "outside solids: move it or the object)");
+    }
 }
 
 /// "no triangles", with the reason when one is known.
@@ -894,6 +932,7 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
                 "ground plane at %c = %g, the scene's lowest point", 'x' + ground.axis, height));
         AddGround(&scene, box, ground.axis, height, ground.size, material);
     }
+    CheckLightsOutsideSolids(r, scene);
     return scene;
 }
 

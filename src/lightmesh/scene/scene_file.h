@@ -21,9 +21,9 @@ struct SceneLoadOptions {
     /// For tests and fuzzing (fuzz/fuzz_entry_points.cpp): the text of a JSON scene file,
     /// parsed instead of reading `spec`, which still names it in messages and locates its
     /// mesh files.
-    std::optional<std::string> text;
+    std::optional<std::string> text = std::nullopt;
     /// For tests and fuzzing: loads the mesh files of a JSON scene instead of LoadMeshFile.
-    std::function<LoadedMesh(const std::string& path, const MeshLoadOptions&)> loadMesh;
+    std::function<LoadedMesh(const std::string& path, const MeshLoadOptions&)> loadMesh = nullptr;
 };
 
 /// Loads "builtin:NAME", a JSON scene file (*.json; the format is described at the top of

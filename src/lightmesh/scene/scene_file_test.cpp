@@ -164,6 +164,21 @@ TEST(SceneFile, DefaultsOfAMinimalScene) {
     EXPECT_EQ(scene.render.shadows, defaults.shadows);
 }
 
+TEST(SceneFile, AreaLightSettings) {
+    const std::string folder = TempFolder();
+    const std::string path = WriteFile(folder, "area.json", R"({
+        "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0]},
+        "lights": [{"position": [0, 5, 0]}],
+        "meshes": [{"file": ")" + DataDir + R"(/quad.ply"}],
+        "render": {"shadows": "area", "light_radius": 0.25, "samples": 64}})");
+    std::vector<std::string> warnings;
+    const Scene scene = LoadScene(path, {}, &warnings);
+    EXPECT_TRUE(warnings.empty());
+    EXPECT_EQ(scene.render.shadows, "area");
+    EXPECT_EQ(scene.render.areaLight.radius, 0.25f);
+    EXPECT_EQ(scene.render.areaLight.samples, 64);
+}
+
 // One bad scene and the exact error it must produce. The scene is the base scene below
 // with some parts replaced, or `whole` verbatim; "$DATA" is the test data folder. The
 // scene is written as <folder>/<name>.json; messages are compared with that path replaced
@@ -373,9 +388,18 @@ TEST(SceneFile, BadInputsGiveExactMessages) {
          .expected = "scene.json /render/grid: must be between 0 and 4096, got -1",
          .extra = R"(, "render": {"grid": -1})"},
         {.name = "shadows",
-         .expected = "scene.json /render/shadows: must be one of \"none\", \"rt\", \"lmm\"; "
+         .expected = "scene.json /render/shadows: must be one of \"none\", \"rt\", \"lmm\", \"area\"; "
                      "got \"soft\"",
          .extra = R"(, "render": {"shadows": "soft"})"},
+        {.name = "light_radius_negative",
+         .expected = "scene.json /render/light_radius: must not be negative, got -0.5",
+         .extra = R"(, "render": {"light_radius": -0.5})"},
+        {.name = "samples_0",
+         .expected = "scene.json /render/samples: must be between 1 and 4096, got 0",
+         .extra = R"(, "render": {"samples": 0})"},
+        {.name = "samples_huge",
+         .expected = "scene.json /render/samples: must be between 1 and 4096, got 5000",
+         .extra = R"(, "render": {"samples": 5000})"},
         {.name = "accel",
          .expected = "scene.json /render/accel: must be one of \"brute\", \"grid\", \"embree\"; "
                      "got \"bvh\"",

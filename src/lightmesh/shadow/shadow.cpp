@@ -1,5 +1,6 @@
 #include "lightmesh/shadow/shadow.h"
 
+#include "lightmesh/shadow/area_light.h"
 #include "lightmesh/shadow/light_mesh.h"
 #include "lightmesh/util/error.h"
 
@@ -46,7 +47,7 @@ class HardShadows final : public ShadowMethod {
 
 }  // namespace
 
-std::vector<std::string> ShadowMethodNames() { return {"none", "rt", "lmm"}; }
+std::vector<std::string> ShadowMethodNames() { return {"none", "rt", "lmm", "area"}; }
 
 std::unique_ptr<ShadowMethod> CreateShadowMethod(std::string_view name, const Scene& scene,
                                                  const Accelerator& accel,
@@ -54,7 +55,8 @@ std::unique_ptr<ShadowMethod> CreateShadowMethod(std::string_view name, const Sc
     if (name == "none") return std::make_unique<NoShadows>(scene.lights.size());
     if (name == "rt") return std::make_unique<HardShadows>(scene, accel);
     if (name == "lmm") return CreateLightMeshShadows(scene, accel, options.lightMesh);
-    ThrowError("unknown shadow method \"%.*s\" (choose none, rt or lmm)", static_cast<int>(name.size()),
+    if (name == "area") return CreateAreaLightShadows(scene, accel, options.areaLight);
+    ThrowError("unknown shadow method \"%.*s\" (choose none, rt, lmm or area)", static_cast<int>(name.size()),
                name.data());
 }
 

@@ -108,6 +108,8 @@ void WriteSphereTemplates(const std::string& path, const SphereTemplates& t) {
 }
 
 SphereTemplates ReadSphereTemplates(const std::string& path, int ns, float ki) {
+    if (ns < 1 || ns > 64 || !(ki > 0 && ki <= 16))
+        ThrowError("%s: cannot hold templates for ns %d, kI %g (out of range)", path.c_str(), ns, ki);
     // Refuse a file larger than any template file for (ns, kI) before reading it.
     const uint64_t sideMax = static_cast<uint64_t>(std::clamp(ns, 1, 64)) + 1;
     const uint64_t reachMax = static_cast<uint64_t>(std::ceil(std::clamp(ki, 0.0f, 16.0f))) + 1;
@@ -122,6 +124,13 @@ SphereTemplates ReadSphereTemplates(const std::string& path, int ns, float ki) {
     std::ifstream in(path, std::ios::binary);
     if (!in) ThrowError("%s: cannot open: %s", path.c_str(), std::strerror(errno));
     const std::string bytes{std::istreambuf_iterator<char>(in), {}};
+    return ParseSphereTemplates(bytes, path, ns, ki);
+}
+
+SphereTemplates ParseSphereTemplates(std::string_view bytes, const std::string& path, int ns,
+                                     float ki) {
+    if (ns < 1 || ns > 64 || !(ki > 0 && ki <= 16))
+        ThrowError("%s: cannot hold templates for ns %d, kI %g (out of range)", path.c_str(), ns, ki);
     if (bytes.size() < sizeof(Header) + sizeof(uint64_t))
         ThrowError("%s: truncated (%zu bytes)", path.c_str(), bytes.size());
     Header h;

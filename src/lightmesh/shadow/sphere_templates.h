@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace lm {
@@ -46,6 +47,11 @@ void WriteSphereTemplates(const std::string& path, const SphereTemplates& t);
 /// consistent with the header and with the file's length, checksum, and every offset in
 /// range. Throws Error with a one-line reason otherwise.
 SphereTemplates ReadSphereTemplates(const std::string& path, int ns, float ki);
+
+/// The validation of ReadSphereTemplates on a file's bytes already in memory; `name` is
+/// used in messages. The entry point of the template-file fuzzer (fuzz/).
+SphereTemplates ParseSphereTemplates(std::string_view bytes, const std::string& name, int ns,
+                                     float ki);
 
 /// Where templates are cached: $XDG_CACHE_HOME/lightmesh/templates, else
 /// $HOME/.cache/lightmesh/templates; empty if neither is set.

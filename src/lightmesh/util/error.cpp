@@ -24,6 +24,21 @@ std::string StringPrintf(const char* fmt, ...) {
     return s;
 }
 
+std::string Printable(const std::string& text) {
+    auto control = [](unsigned char c) { return (c < 0x20 && c != '\n' && c != '\t') || c == 0x7f; };
+    bool any = false;
+    for (unsigned char c : text) any = any || control(c);
+    if (!any) return text;
+    std::string out;
+    for (unsigned char c : text) {
+        if (control(c))
+            out += StringPrintf("<U+%04X>", c);
+        else
+            out += static_cast<char>(c);
+    }
+    return out;
+}
+
 void ThrowError(const char* fmt, ...) {
     va_list args;
     va_start(args, fmt);

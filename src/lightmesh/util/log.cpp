@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <mutex>
 
+#include "lightmesh/util/error.h"
+
 namespace lm {
 namespace {
 std::atomic<LogLevel> gLevel{LogLevel::Info};
@@ -17,7 +19,7 @@ void Emit(LogLevel level, const char* tag, const std::string& message) {
         if (message == gLastWarning) return;
         gLastWarning = message;
     }
-    std::fprintf(stderr, "lightmesh: %s%s\n", tag, message.c_str());
+    std::fprintf(stderr, "lightmesh: %s%s\n", tag, Printable(message).c_str());
     std::fflush(stderr);
 }
 }  // namespace

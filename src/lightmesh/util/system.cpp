@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 
@@ -105,9 +106,40 @@ uint64_t PeakMemoryBytes() {
     return static_cast<uint64_t>(usage.ru_maxrss) * 1024;  // Linux reports KiB
 }
 
+uint64_t ParseByteCount(const std::string& text) {
+    char* end = nullptr;
+    errno = 0;
+    const double v = std::strtod(text.c_str(), &end);
+    if (end == text.c_str() || errno != 0 || !(v > 0) || v > 1e18) return 0;
+    double scale = 1;
+    const std::string unit(end);
+    if (unit == "K" || unit == "k") scale = 1024.0;
+    else if (unit == "M" || unit == "m") scale = 1024.0 * 1024;
+    else if (unit == "G" || unit == "g") scale = 1024.0 * 1024 * 1024;
+    else if (unit == "T" || unit == "t") scale = 1024.0 * 1024 * 1024 * 1024;
+    else if (!unit.empty()) return 0;
+    const double bytes = v * scale;
+    return bytes < 1.8e19 ? static_cast<uint64_t>(bytes) : 0;
+}
+
 uint64_t PhysicalMemoryBytes() {
     const long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
-    return pages > 0 && size > 0 ? static_cast<uint64_t>(pages) * static_cast<uint64_t>(size) : 0;
+    uint64_t limit = pages > 0 && size > 0 ? static_cast<uint64_t>(pages) * static_cast<uint64_t>(size) : 0;
+    auto lower = [&limit](uint64_t bytes) {
+        if (bytes > 0 && (limit == 0 || bytes < limit)) limit = bytes;
+    };
+    // A container's limit: cgroup v2, else v1 (which reports "no limit" as a huge number).
+    for (const char* file : {"/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"}) {
+        if (FILE* f = std::fopen(file, "r")) {
+            char buf[64] = {};
+            const bool ok = std::fgets(buf, sizeof buf, f) != nullptr;
+            std::fclose(f);
+            unsigned long long bytes = 0;
+            if (ok && std::sscanf(buf, "%llu", &bytes) == 1) lower(bytes);  // "max": no limit
+        }
+    }
+    if (const char* env = std::getenv("LIGHTMESH_MEMORY_LIMIT"); env && *env) lower(ParseByteCount(env));
+    return limit;
 }
 
 std::string FormatBytes(uint64_t bytes) {

@@ -26,8 +26,14 @@ void CheckWritableFolder(const std::string& path);
 /// Peak resident memory of this process so far, in bytes (0 if unknown).
 uint64_t PeakMemoryBytes();
 
-/// Physical memory of the machine, in bytes (0 if unknown).
+/// The memory this process may use, in bytes (0 if unknown): the machine's physical memory,
+/// lowered by a cgroup memory limit (a container's) and by the environment variable
+/// LIGHTMESH_MEMORY_LIMIT (bytes, or a number with K, M, G or T: "512M"), when set and
+/// smaller. Light meshes and images that would need more than half are refused up front.
 uint64_t PhysicalMemoryBytes();
+
+/// Parses "4096", "512K", "64M", "1.5G", "2T" (binary units); 0 for anything else.
+uint64_t ParseByteCount(const std::string& text);
 
 /// "1.5 GiB", "320 MiB", "12 KiB", "17 B".
 std::string FormatBytes(uint64_t bytes);

@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets (clang, AddressSanitizer + UndefinedBehaviorSanitizer) and runs
+# each for the given number of seconds (default 60), one after the other.
+#   scripts/fuzz.sh [SECONDS] [TARGET...]      targets: fuzz_scene_file fuzz_template_file
+# Environment: FUZZ_BUILD_DIR (default build-fuzz; CI passes build-asan, which has them
+# too), FUZZ_JOBS (parallel fuzzing processes per target, default 1), FUZZ_KEEP_CORPUS=1
+# (merge what the run found into fuzz/corpus/ instead of a scratch folder).
+# Inputs found to crash are written to fuzz/regressions/<target>/ (replayed by the test
+# suite's FuzzRegression tests once kept); the script then exits non-zero.
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+cd "$root"
+seconds="${1:-60}"
+shift || true
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=(fuzz_scene_file fuzz_template_file)
+build="${FUZZ_BUILD_DIR:-build-fuzz}"
+jobs="${FUZZ_JOBS:-1}"
+
+scripts/install-deps.sh clang libclang-rt-14-dev
+if [ ! -f "$build/CMakeCache.txt" ]; then
+  CC=clang CXX=clang++ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DLIGHTMESH_FUZZ=ON -DLIGHTMESH_SANITIZE=address,undefined \
+    -DLIGHTMESH_BUILD_TESTS=OFF -DLIGHTMESH_BUILD_BENCHMARKS=OFF >/dev/null
+fi
+ninja -C "$build" -j"$(nproc)" "${targets[@]}"
+
+# Assimp and TBB are not instrumented; leaks are checked by the ASan test run instead of
+# here, where a leak report would stop the fuzzer at the first input.
+export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=0:allocator_may_return_null=1}"
+export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
+status=0
+for t in "${targets[@]}"; do
+  seeds="fuzz/corpus/$t"
+  crashes="fuzz/regressions/$t"
+  mkdir -p "$crashes"
+  if [ "${FUZZ_KEEP_CORPUS:-0}" = 1 ]; then work="$seeds"; else work="$(mktemp -d)"; fi
+  extra=(); [ -f "fuzz/$t.dict" ] && extra+=(-dict="fuzz/$t.dict")
+  [ "$jobs" -gt 1 ] && extra+=(-jobs="$jobs" -workers="$jobs")
+  max_len=4096; [ "$t" = fuzz_template_file ] && max_len=16384
+  echo "fuzz: $t for $seconds s" >&2
+  log="$(mktemp)"
+  if ! "$build/fuzz/$t" "$work" "$seeds" "${extra[@]}" -max_total_time="$seconds" \
+      -max_len="$max_len" -timeout=10 -rss_limit_mb=2048 \
+      -artifact_prefix="$crashes/" -print_final_stats=1 >"$log" 2>&1; then
+    status=1
+    echo "fuzz: $t FAILED; the input is in $crashes/ -- last lines of its log:" >&2
+    tail -n 40 "$log" >&2
+  fi
+  grep -hE "^(#[0-9]+ +DONE|stat::number_of_executed_units|stat::peak_rss_mb)" "$log" fuzz-*.log 2>/dev/null >&2 || true
+  rm -f "$log" fuzz-*.log
+  [ "${FUZZ_KEEP_CORPUS:-0}" = 1 ] || rm -rf "$work"
+done
+exit $status

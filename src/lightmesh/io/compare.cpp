@@ -1,0 +1,196 @@
+#include "lightmesh/io/compare.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "lightmesh/util/error.h"
+
+namespace lm {
+
+float SrgbEncode(float v) {
+    if (!(v > 0)) return 0;  // also NaN
+    if (v >= 1) return 1;
+    return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
+}
+
+float SrgbDecode(float s) {
+    if (!(s > 0)) return 0;
+    if (s >= 1) return 1;
+    return s <= 0.04045f ? s / 12.92f : std::pow((s + 0.055f) / 1.055f, 2.4f);
+}
+
+Color TurboColormap(float x) {
+    // Polynomial approximation by Ruofei Du of Anton Mikhailov's Turbo map (Google, 2019,
+    // Apache-2.0): https://research.google/blog/turbo-an-improved-rainbow-colormap-for-visualization/
+    x = std::clamp(std::isnan(x) ? 0.0f : x, 0.0f, 1.0f);
+    auto poly = [x](float c0, float c1, float c2, float c3, float c4, float c5) {
+        return std::clamp(c0 + x * (c1 + x * (c2 + x * (c3 + x * (c4 + x * c5)))), 0.0f, 1.0f);
+    };
+    return {poly(0.13572138f, 4.61539260f, -42.66032258f, 132.13108234f, -152.94239396f, 59.28637943f),
+            poly(0.09140261f, 2.19418839f, 4.84296658f, -14.18503333f, 4.27729857f, 2.82956604f),
+            poly(0.10667330f, 12.64194608f, -60.58204836f, 110.36276771f, -89.90310912f, 27.34824973f)};
+}
+
+namespace {
+
+void CheckSizes(const Image& a, const Image& b, const Image* mask) {
+    if (a.width <= 0 || a.height <= 0 || b.width <= 0 || b.height <= 0)
+        ThrowError("cannot compare an empty image (%dx%d and %dx%d)", a.width, a.height, b.width, b.height);
+    if (a.width != b.width || a.height != b.height)
+        ThrowError("image sizes differ: %dx%d and %dx%d", a.width, a.height, b.width, b.height);
+    if (mask && (mask->width != a.width || mask->height != a.height))
+        ThrowError("mask size %dx%d differs from the images' %dx%d", mask->width, mask->height, a.width,
+                   a.height);
+}
+
+bool Included(const Image* mask, size_t i) { return !mask || !mask->pixels[i].IsBlack(); }
+
+struct Display {
+    double r, g, b;
+};
+Display Encode(const Color& c) { return {SrgbEncode(c.r), SrgbEncode(c.g), SrgbEncode(c.b)}; }
+double Luma(const Display& d) { return 0.2126 * d.r + 0.7152 * d.g + 0.0722 * d.b; }
+
+/// Gaussian blur with an 11-tap kernel (σ = 1.5), the kernel cut at the border and
+/// renormalised; separable, so renormalising each pass is exact for the 2-D window.
+std::vector<double> Blur(const std::vector<double>& in, int w, int h) {
+    constexpr int Radius = 5;
+    constexpr double Sigma = 1.5;
+    double k[2 * Radius + 1];
+    for (int i = -Radius; i <= Radius; ++i) k[i + Radius] = std::exp(-(i * i) / (2 * Sigma * Sigma));
+    std::vector<double> tmp(in.size()), out(in.size());
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            double sum = 0, wsum = 0;
+            for (int i = std::max(-Radius, -x); i <= std::min(Radius, w - 1 - x); ++i) {
+                sum += k[i + Radius] * in[static_cast<size_t>(y) * w + x + i];
+                wsum += k[i + Radius];
+            }
+            tmp[static_cast<size_t>(y) * w + x] = sum / wsum;
+        }
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            double sum = 0, wsum = 0;
+            for (int i = std::max(-Radius, -y); i <= std::min(Radius, h - 1 - y); ++i) {
+                sum += k[i + Radius] * tmp[static_cast<size_t>(y + i) * w + x];
+                wsum += k[i + Radius];
+            }
+            out[static_cast<size_t>(y) * w + x] = sum / wsum;
+        }
+    return out;
+}
+
+}  // namespace
+
+ImageMetrics CompareImages(const Image& a, const Image& b, const Image* mask) {
+    CheckSizes(a, b, mask);
+    const int w = a.width, h = a.height;
+    const size_t n = a.pixels.size();
+    ImageMetrics m;
+    m.width = w;
+    m.height = h;
+
+    double sq = 0, sqLinear = 0, maxDiff = 0;
+    size_t count = 0;
+    std::vector<double> ya(n), yb(n);
+    for (size_t i = 0; i < n; ++i) {
+        const Display da = Encode(a.pixels[i]), db = Encode(b.pixels[i]);
+        ya[i] = Luma(da);
+        yb[i] = Luma(db);
+        if (!Included(mask, i)) continue;
+        ++count;
+        for (const double d : {da.r - db.r, da.g - db.g, da.b - db.b}) {
+            sq += d * d;
+            maxDiff = std::max(maxDiff, std::abs(d));
+        }
+        const Color &ca = a.pixels[i], &cb = b.pixels[i];
+        for (const double d : {double(ca.r) - cb.r, double(ca.g) - cb.g, double(ca.b) - cb.b}) sqLinear += d * d;
+    }
+    if (count == 0) ThrowError("the mask selects no pixel (only non-black mask pixels are compared)");
+    const double mse = sq / (3.0 * static_cast<double>(count));
+    m.pixels = count;
+    m.rmse = std::sqrt(mse);
+    m.rmseLinear = std::sqrt(sqLinear / (3.0 * static_cast<double>(count)));
+    m.maxDiff = maxDiff;
+    m.psnr = mse > 0 ? 10.0 * std::log10(1.0 / mse) : std::numeric_limits<double>::infinity();
+
+    // SSIM (Wang, Bovik, Sheikh & Simoncelli 2004, eq. 13) with Gaussian-weighted local
+    // statistics; dynamic range L = 1.
+    constexpr double C1 = 0.01 * 0.01, C2 = 0.03 * 0.03;
+    std::vector<double> aa(n), bb(n), ab(n);
+    for (size_t i = 0; i < n; ++i) {
+        aa[i] = ya[i] * ya[i];
+        bb[i] = yb[i] * yb[i];
+        ab[i] = ya[i] * yb[i];
+    }
+    const std::vector<double> muA = Blur(ya, w, h), muB = Blur(yb, w, h);
+    aa = Blur(aa, w, h);
+    bb = Blur(bb, w, h);
+    ab = Blur(ab, w, h);
+    double ssimSum = 0;
+    for (size_t i = 0; i < n; ++i) {
+        if (!Included(mask, i)) continue;
+        const double varA = aa[i] - muA[i] * muA[i], varB = bb[i] - muB[i] * muB[i];
+        const double cov = ab[i] - muA[i] * muB[i];
+        ssimSum += ((2 * muA[i] * muB[i] + C1) * (2 * cov + C2)) /
+                   ((muA[i] * muA[i] + muB[i] * muB[i] + C1) * (varA + varB + C2));
+    }
+    m.ssim = ssimSum / static_cast<double>(count);
+    return m;
+}
+
+void WriteDiffImage(const std::string& path, const Image& a, const Image& b, float scale, const Image* mask) {
+    CheckSizes(a, b, mask);
+    const size_t n = a.pixels.size();
+    std::vector<float> diff(n, 0.0f);
+    float largest = 0;
+    for (size_t i = 0; i < n; ++i) {
+        if (!Included(mask, i)) continue;
+        const Color &ca = a.pixels[i], &cb = b.pixels[i];
+        diff[i] = std::max({std::abs(SrgbEncode(ca.r) - SrgbEncode(cb.r)), std::abs(SrgbEncode(ca.g) - SrgbEncode(cb.g)),
+                            std::abs(SrgbEncode(ca.b) - SrgbEncode(cb.b))});
+        largest = std::max(largest, diff[i]);
+    }
+    const float s = scale > 0 ? scale : largest;
+    Image out(a.width, a.height);
+    for (size_t i = 0; i < n; ++i) {
+        if (!Included(mask, i)) continue;  // stays black
+        const Color c = TurboColormap(s > 0 ? diff[i] / s : 0.0f);
+        // Store linear values so the PNG writer's sRGB encoding gives the map's colours back.
+        out.pixels[i] = Color(SrgbDecode(c.r), SrgbDecode(c.g), SrgbDecode(c.b));
+    }
+    WriteImage(path, out);
+}
+
+namespace {
+
+std::string JsonString(const std::string& s) {
+    std::string out = "\"";
+    for (const char ch : s) {
+        const auto c = static_cast<unsigned char>(ch);
+        if (c == '"' || c == '\\') {
+            out += '\\';
+            out += ch;
+        } else if (c < 0x20) {
+            out += StringPrintf("\\u%04x", c);
+        } else {
+            out += ch;
+        }
+    }
+    return out + "\"";
+}
+
+std::string JsonNumber(double v) { return std::isfinite(v) ? StringPrintf("%.8g", v) : "null"; }
+
+}  // namespace
+
+std::string ImageMetricsJson(const ImageMetrics& m, const std::string& a, const std::string& b) {
+    return "{\"a\":" + JsonString(a) + ",\"b\":" + JsonString(b) + ",\"psnr\":" + JsonNumber(m.psnr) +
+           ",\"ssim\":" + JsonNumber(m.ssim) + ",\"rmse\":" + JsonNumber(m.rmse) +
+           ",\"rmse_linear\":" + JsonNumber(m.rmseLinear) + ",\"max_diff\":" + JsonNumber(m.maxDiff) +
+           ",\"pixels\":" + std::to_string(m.pixels) + ",\"identical\":" + (m.rmse == 0 ? "true" : "false") + "}";
+}
+
+}  // namespace lm

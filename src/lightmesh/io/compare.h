@@ -1,0 +1,59 @@
+// compare.h -- image quality metrics (PSNR, SSIM, RMSE, max difference) and false-colour
+// difference images, for `lightmesh compare` and the quality report of `lightmesh bench`.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include "lightmesh/io/image.h"
+
+namespace lm {
+
+/// Differences between two images of the same size.
+///
+/// Units. Every figure but rmseLinear is computed on display values: each linear channel
+/// clamped to [0, 1] and sRGB-encoded with the exact (not 8-bit) transfer curve, so a PNG
+/// and an EXR of one render compare the same way, and the figures speak of what a viewer
+/// sees (the question when judging LMM against the reference). PSNR = 10·log10(1 / MSE)
+/// with MSE the mean over the included pixels and the three channels, so
+/// PSNR = −20·log10(rmse). It is +infinity when the images are equal on display.
+struct ImageMetrics {
+    double psnr = 0;        ///< dB; std::isinf(psnr) for equal images
+    double ssim = 0;        ///< mean SSIM of the luma (Wang et al. 2004), in [-1, 1]
+    double rmse = 0;        ///< root mean squared difference of display values
+    double rmseLinear = 0;  ///< the same on unclamped linear values
+    double maxDiff = 0;     ///< largest |difference| of one channel's display value
+    size_t pixels = 0;      ///< pixels compared (all, or the mask's)
+    int width = 0, height = 0;
+};
+
+/// Compares `a` with `b`. With a mask (same size), only the pixels where the mask is not
+/// black are compared. SSIM uses an 11×11 Gaussian window (σ = 1.5), K1 = 0.01,
+/// K2 = 0.03, on the luma Y' = 0.2126 R' + 0.7152 G' + 0.0722 B' of the display values;
+/// the window is cut at the image's border and its weights renormalised (so any size
+/// works), and the SSIM map is averaged over the compared pixels. Throws Error if the
+/// sizes differ (naming both), an image is empty, or the mask selects no pixel.
+ImageMetrics CompareImages(const Image& a, const Image& b, const Image* mask = nullptr);
+
+/// Writes a false-colour image of where `a` and `b` differ: per pixel the largest
+/// |difference| of a channel's display value, divided by `scale` (or by the largest
+/// difference when scale <= 0), through Google's Turbo colour map (dark blue = equal, dark
+/// red = the scale or more). Pixels outside the mask are black. Throws Error as
+/// CompareImages and WriteImage do.
+void WriteDiffImage(const std::string& path, const Image& a, const Image& b, float scale = 0,
+                    const Image* mask = nullptr);
+
+/// One JSON line (no newline) of the metrics, for scripts:
+/// {"a":"x.png","b":"y.png","psnr":41.2,"ssim":0.987,"rmse":0.0031,"rmse_linear":0.001,
+///  "max_diff":0.2,"pixels":480000,"identical":false}. Equal images have "psnr":null and
+/// "identical":true (JSON has no infinity).
+std::string ImageMetricsJson(const ImageMetrics& m, const std::string& a, const std::string& b);
+
+/// The display value of a linear channel: clamped to [0, 1], exact sRGB curve.
+float SrgbEncode(float linear);
+/// The inverse: the linear value of a display value in [0, 1].
+float SrgbDecode(float encoded);
+/// Turbo (Mikhailov 2019), Ruofei Du's polynomial fit: x in [0, 1] → sRGB in [0, 1].
+Color TurboColormap(float x);
+
+}  // namespace lm

@@ -1,0 +1,43 @@
+// area_light.h -- the soft-shadow reference: every point light becomes a sphere, and each
+// shading point traces N stratified shadow rays per light (the paper's "naive" soft
+// shadows, §1.2; issue 7).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "lightmesh/shadow/shadow.h"
+
+namespace lm {
+
+/// Throws Error unless the radius is finite and >= 0 and samples is in 1 .. 4096.
+void ValidateAreaLightOptions(const AreaLightOptions& options);
+
+/// The seed of the sample sequence of one (shading point, light) pair: a hash of the bits
+/// of sp.p, of sp.prim and of the light's index. So the estimate depends only on the
+/// point, never on the thread, the tile order or the pixel that found the point.
+uint64_t AreaLightSeed(const ShadingPoint& sp, uint32_t light);
+
+/// The fraction of a spherical light (centre `center`, radius `radius` > 0) visible from
+/// `origin`, estimated with `samples` shadow rays: directions stratified over the cone
+/// the sphere subtends (uniform in solid angle), randomised by `seed`, each ray ending
+/// on the near side of the sphere. Returns 1 without tracing when `origin` is inside the
+/// sphere (d <= radius): a point inside the light sees all of it. `*rays` (if given) gets
+/// the number of rays traced.
+float SphereLightVisibility(const Accelerator& accel, const Vec3& origin, const Vec3& center,
+                            float radius, int samples, uint64_t seed, int* rays = nullptr);
+
+/// Direction `index` of `samples` in the cone around the unit vector `axis` whose
+/// half-angle θmax has 1 - cos θmax = `oneMinusCosMax` (in [0, 1]): uniform in solid
+/// angle and stratified, shifted by (`shift0`, `shift1`) in [0, 1)² (Cranley–Patterson
+/// rotation). Exposed for tests.
+Vec3 SampleConeStratified(const Vec3& axis, float oneMinusCosMax, int index, int samples,
+                          float shift0, float shift1);
+
+/// "area": soft shadows from spherical lights by Monte Carlo. With radius 0 it traces
+/// exactly the shadow ray of "rt" and gives bit-identical images. Throws Error for bad
+/// options (ValidateAreaLightOptions).
+std::unique_ptr<ShadowMethod> CreateAreaLightShadows(const Scene& scene, const Accelerator& accel,
+                                                     const AreaLightOptions& options);
+
+}  // namespace lm

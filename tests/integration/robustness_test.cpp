@@ -1,0 +1,254 @@
+// Robustness of outputs, caches and threads (issue 8), through the real executable:
+// concurrent runs sharing a template cache, byte-identical images whatever the thread
+// count, atomic outputs under SIGINT/SIGTERM, and --stats' peak memory.
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "lightmesh/shadow/light_mesh.h"
+#include "lightmesh/shadow/shadow.h"
+#include "lightmesh/shadow/sphere_templates.h"
+#include "lightmesh/util/error.h"
+#include "lightmesh/util/system.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CliResult {
+    int exitCode = -1;
+    std::string output;
+};
+
+CliResult Lightmesh(const std::string& args) {
+    const std::string cmd = std::string(LIGHTMESH_EXE) + " " + args + " 2>&1";
+    CliResult run;
+    FILE* pipe = popen(cmd.c_str(), "r");
+    if (!pipe) return run;
+    std::array<char, 4096> buf;
+    size_t n;
+    while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) run.output.append(buf.data(), n);
+    const int status = pclose(pipe);
+    run.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    return run;
+}
+
+/// A fresh, empty folder for the running test.
+std::string TempFolder() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    const fs::path p = fs::path(::testing::TempDir()) / ("lm_robust_" + std::string(info->name()));
+    fs::remove_all(p);
+    fs::create_directories(p);
+    return p.string();
+}
+
+std::string Bytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), {}};
+}
+
+std::vector<std::string> FilesIn(const std::string& folder) {
+    std::vector<std::string> names;
+    for (const auto& entry : fs::directory_iterator(folder))
+        names.push_back(entry.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+}
+
+/// Starts `lightmesh args...` without waiting for it.
+pid_t Spawn(const std::vector<std::string>& args) {
+    const pid_t pid = fork();
+    if (pid == 0) {
+        std::vector<char*> argv{const_cast<char*>("lightmesh")};
+        for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+        argv.push_back(nullptr);
+        // Quiet children: their output would interleave with the test's.
+        if (FILE* null = std::freopen("/dev/null", "w", stdout)) (void)null;
+        execv(LIGHTMESH_EXE, argv.data());
+        _exit(127);
+    }
+    return pid;
+}
+
+// ---------------------------------------------------------------------------------------
+// Template cache shared by concurrent runs
+
+TEST(Robustness, ConcurrentRunsShareATemplateCacheWithoutCorruptingIt) {
+    const std::string dir = TempFolder();
+    const int ns = 12;
+    const float ki = 3.0f;
+    const lm::SphereTemplates expected = lm::SphereTemplates::Build(ns, ki);
+    // An empty cache folder that does not even exist yet; then a folder holding a corrupt
+    // file, which every run finds, rebuilds and replaces at the same time.
+    for (const char* round : {"new", "corrupt"}) {
+        SCOPED_TRACE(round);
+        const std::string folder = dir + "/" + round;
+        const std::string path = lm::TemplateFileName(folder, ns, ki);
+        if (std::string(round) == "corrupt") {
+            fs::create_directories(folder);
+            std::ofstream(path, std::ios::binary) << "LMSPHTPL, but not really";
+        }
+        std::vector<pid_t> pids;
+        for (int i = 0; i < 6; ++i)
+            pids.push_back(Spawn({"templates", "--ns", std::to_string(ns), "--ki", "3", "--template-dir",
+                                  folder, "-q"}));
+        for (pid_t pid : pids) {
+            int status = 0;
+            ASSERT_EQ(waitpid(pid, &status, 0), pid);
+            EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status;
+        }
+        EXPECT_NO_THROW(EXPECT_EQ(lm::ReadSphereTemplates(path, ns, ki), expected));
+        // Only the cache file: no temporary file left behind by any of the six.
+        EXPECT_EQ(FilesIn(folder), std::vector<std::string>{fs::path(path).filename().string()});
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Determinism
+
+TEST(Robustness, EveryShadowMethodIsByteIdenticalForAnyThreadCountAndRun) {
+    const std::string dir = TempFolder();
+    struct Method {
+        std::string shadows, variant;
+    };
+    std::vector<Method> methods;
+    for (const std::string& s : lm::ShadowMethodNames()) {
+        if (s == "lmm")
+            for (const std::string& v : lm::LightMeshVariantNames()) methods.push_back({s, v});
+        else
+            methods.push_back({s, ""});
+    }
+    ASSERT_GE(methods.size(), 9u);  // none, rt, and the light mesh's variants
+    for (const Method& m : methods) {
+        const std::string name = m.shadows + (m.variant.empty() ? "" : "-" + m.variant);
+        SCOPED_TRACE(name);
+        std::string extra = "--shadows " + m.shadows;
+        if (!m.variant.empty()) extra += " --variant " + m.variant + " --cc 40 --template-dir " + dir;
+        if (m.shadows == "area") extra += " --light-radius 0.3 --samples 4";
+        std::string reference;
+        int run = 0;
+        for (const char* threads : {"1", "2", "8", "8"}) {
+            const std::string out = dir + "/" + name + "-" + std::to_string(run++) + ".png";
+            const CliResult r = Lightmesh("render builtin:gazebo --width 64 --height 48 -q --threads " +
+                                          std::string(threads) + " " + extra + " -o " + out);
+            ASSERT_EQ(r.exitCode, 0) << r.output;
+            const std::string bytes = Bytes(out);
+            ASSERT_GT(bytes.size(), 100u);
+            if (reference.empty())
+                reference = bytes;
+            else
+                EXPECT_TRUE(bytes == reference) << out << " differs from the 1-thread image";
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Atomic outputs
+
+/// A render killed by `signal` while it runs leaves the previous image untouched and no
+/// temporary file.
+void InterruptRender(int signal) {
+    const std::string dir = TempFolder();
+    const std::string out = dir + "/keep.png";
+    ASSERT_EQ(Lightmesh("render builtin:gazebo --width 32 --height 24 -q -o " + out).exitCode, 0);
+    const std::string before = Bytes(out);
+    const pid_t pid = Spawn({"render", "builtin:gazebo", "--width", "4000", "--height", "3000", "--aa", "4",
+                             "-q", "-o", out});
+    std::this_thread::sleep_for(std::chrono::milliseconds(700));
+    kill(pid, signal);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == signal) << "status " << status;
+    EXPECT_EQ(Bytes(out), before);
+    EXPECT_EQ(FilesIn(dir), std::vector<std::string>{"keep.png"});
+}
+
+TEST(Robustness, SigintDuringARenderLeavesThePreviousImage) { InterruptRender(SIGINT); }
+TEST(Robustness, SigtermDuringARenderLeavesThePreviousImage) { InterruptRender(SIGTERM); }
+
+// A signal while the temporary file is being written (the moment that matters): the
+// handler removes it, the target keeps its old content.
+TEST(Robustness, SignalDuringTheWriteRemovesTheTemporaryFile) {
+    for (int signal : {SIGINT, SIGTERM}) {
+        SCOPED_TRACE(signal);
+        const std::string dir = TempFolder();
+        const std::string path = dir + "/image.png";
+        std::ofstream(path) << "old";
+        const pid_t pid = fork();
+        ASSERT_GE(pid, 0);
+        if (pid == 0) {
+            lm::InstallInterruptCleanup();
+            lm::WriteFileAtomically(path, [&](const std::string& tmp) {
+                std::ofstream(tmp) << "half of the new";
+                raise(signal);
+            });
+            _exit(0);  // not reached
+        }
+        int status = 0;
+        waitpid(pid, &status, 0);
+        EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == signal) << "status " << status;
+        EXPECT_EQ(Bytes(path), "old");
+        EXPECT_EQ(FilesIn(dir), std::vector<std::string>{"image.png"});
+    }
+}
+
+TEST(Robustness, FailedWriteLeavesTheOldFileAndNoTemporary) {
+    const std::string dir = TempFolder();
+    const std::string path = dir + "/out.exr";
+    std::ofstream(path) << "old";
+    EXPECT_THROW(lm::WriteFileAtomically(path,
+                                         [](const std::string& tmp) {
+                                             std::ofstream(tmp) << "partial";
+                                             lm::ThrowError("disk full (simulated)");
+                                         }),
+                 lm::Error);
+    EXPECT_EQ(Bytes(path), "old");
+    EXPECT_EQ(FilesIn(dir), std::vector<std::string>{"out.exr"});
+}
+
+// ---------------------------------------------------------------------------------------
+// Memory
+
+TEST(Robustness, StatsReportPeakMemory) {
+    const std::string dir = TempFolder();
+    const CliResult r = Lightmesh("render builtin:gazebo --width 32 --height 24 --shadows lmm --cc 60 --stats -q -o " +
+                                  dir + "/m.png");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const size_t at = r.output.find("memory    peak ");
+    ASSERT_NE(at, std::string::npos) << r.output;
+    double value = 0;
+    char unit[8] = {};
+    ASSERT_EQ(std::sscanf(r.output.c_str() + at, "memory    peak %lf %7s", &value, unit), 2);
+    EXPECT_GT(value, 0);
+    EXPECT_TRUE(std::string(unit) == "MiB" || std::string(unit) == "GiB") << unit;
+}
+
+TEST(Robustness, MemoryLimitComesFromTheEnvironment) {
+    EXPECT_EQ(lm::ParseByteCount("4096"), 4096u);
+    EXPECT_EQ(lm::ParseByteCount("64M"), 64u << 20);
+    EXPECT_EQ(lm::ParseByteCount("1.5G"), 3ull << 29);
+    EXPECT_EQ(lm::ParseByteCount("2T"), 2ull << 40);
+    for (const char* bad : {"", "-1", "0", "M", "12Q", "1e300", "nan", "inf"})
+        EXPECT_EQ(lm::ParseByteCount(bad), 0u) << bad;
+    const uint64_t machine = lm::PhysicalMemoryBytes();
+    ASSERT_GT(machine, 0u);
+    setenv("LIGHTMESH_MEMORY_LIMIT", "64M", 1);
+    EXPECT_EQ(lm::PhysicalMemoryBytes(), std::min<uint64_t>(machine, 64u << 20));
+    setenv("LIGHTMESH_MEMORY_LIMIT", "not a size", 1);
+    EXPECT_EQ(lm::PhysicalMemoryBytes(), machine);
+    unsetenv("LIGHTMESH_MEMORY_LIMIT");
+}
+
+}  // namespace
