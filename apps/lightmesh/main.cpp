@@ -299,10 +299,32 @@ int RunTemplates(int ns, float ki, const std::string& dir, bool measure) {
 struct BenchCommand {
     lm::BenchMatrix matrix;
     std::vector<std::string> sizes;
-    std::string csv, markdown;
+    std::string csv, markdown, html, matrixFile;
+    int table = 0;
+    bool quick = false;
     bool quiet = false;
     bool noNone = false;
+    CLI::Option* repeatOption = nullptr;
+    std::string argv0;
 };
+
+/// The repository (for scenes/real): the source dir compiled in, else two folders above
+/// the executable (build/apps/lightmesh).
+std::string BenchRepoDir(const std::string& argv0) {
+    namespace fs = std::filesystem;
+    std::vector<fs::path> candidates;
+#ifdef LIGHTMESH_SOURCE_DIR
+    candidates.push_back(LIGHTMESH_SOURCE_DIR);
+#endif
+    std::error_code ec;
+    const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+    if (!ec) candidates.push_back(exe.parent_path().parent_path().parent_path());
+    if (!argv0.empty()) candidates.push_back(fs::absolute(argv0, ec).parent_path().parent_path().parent_path());
+    for (const fs::path& c : candidates)
+        if (fs::exists(c / "scenes" / "real", ec)) return c.string();
+    lm::ThrowError("bench --table: cannot find the repository's scenes/real folder (looked in %s)",
+                   candidates.empty() ? "nothing" : candidates.front().string().c_str());
+}
 
 int RunBench(BenchCommand& cmd) {
     lm::SetLogLevel(cmd.quiet ? lm::LogLevel::Error : lm::LogLevel::Warning);
@@ -318,20 +340,53 @@ int RunBench(BenchCommand& cmd) {
             cmd.matrix.sizes.push_back({w, h});
         }
     }
+    // --table / --matrix replace the scenes, sizes, CC, kI and variants (CLI11 rejects them
+    // together); the other options still apply.
+    if (cmd.table || !cmd.matrixFile.empty()) {
+        lm::BenchMatrix preset = cmd.table ? lm::BenchTablePreset(cmd.table, cmd.quick, BenchRepoDir(cmd.argv0))
+                                           : lm::LoadBenchMatrix(cmd.matrixFile);
+        const lm::BenchMatrix& given = cmd.matrix;
+        if (cmd.repeatOption->count()) preset.repeat = given.repeat;
+        if (!cmd.matrixFile.empty() && given.accels != lm::BenchMatrix().accels) preset.accels = given.accels;
+        if (cmd.table) preset.accels = given.accels;
+        preset.imageDir = given.imageDir;
+        preset.quality = given.quality;
+        preset.refSamples = given.refSamples;
+        cmd.matrix = preset;
+    } else if (cmd.quick) {
+        for (auto& s : cmd.matrix.sizes) s = {std::max(1, s.first / 4), std::max(1, s.second / 4)};
+        if (!cmd.repeatOption->count()) cmd.matrix.repeat = 1;
+    }
     cmd.matrix.noShadows = !cmd.noNone;
-    for (const std::string& path : {cmd.csv, cmd.markdown})
+    for (const std::string& path : {cmd.csv, cmd.markdown, cmd.html})
         if (!path.empty()) lm::CheckWritableFolder(path);
+    if (!cmd.html.empty() && cmd.matrix.imageDir.empty()) {
+        // The report embeds the images: render them next to it.
+        const std::filesystem::path p(cmd.html);
+        cmd.matrix.imageDir = (p.parent_path() / (p.stem().string() + "-images")).string();
+        std::filesystem::create_directories(cmd.matrix.imageDir);
+    }
     const auto start = Clock::now();
-    const auto results = lm::RunBenchmark(cmd.matrix, [&](int done, int total, const lm::BenchResult& r) {
-        if (cmd.quiet) return;
-        const double elapsed = SecondsSince(start);
-        std::fprintf(stderr, "[%d/%d] %s %dx%d %s%s: %.3f s (median of %zu); %.0f s elapsed, ~%.0f s left\n", done,
-                     total, r.scene.c_str(), r.width, r.height, r.paperName.c_str(),
-                     r.method == "lmm" ? lm::StringPrintf(" CC %d kI %g", r.cc, r.ki).c_str()
-                                       : (" " + r.accel).c_str(),
-                     r.median, r.seconds.size(), elapsed, elapsed / done * (total - done));
-    });
-    const std::string md = lm::BenchMarkdown(results);
+    const auto report = lm::RunBenchmarkReport(
+        cmd.matrix,
+        [&](int done, int total, const lm::BenchResult& r) {
+            if (cmd.quiet) return;
+            const double elapsed = SecondsSince(start);
+            std::fprintf(stderr, "[%d/%d] %s %dx%d %s%s: %.3f s (median of %zu); %.0f s elapsed, ~%.0f s left\n", done,
+                         total, r.scene.c_str(), r.width, r.height, r.paperName.c_str(),
+                         r.method == "lmm" ? lm::StringPrintf(" CC %d kI %g", r.cc, r.ki).c_str()
+                                           : (" " + r.accel).c_str(),
+                         r.median, r.seconds.size(), elapsed, elapsed / done * (total - done));
+        },
+        [&](double seconds) {
+            if (cmd.quiet) return;
+            std::fprintf(stderr,
+                         "bench: rough estimate %.0f s (%.1f min) in all (one RT render per scene timed, "
+                         "extrapolated by pixels and method)%s\n",
+                         seconds, seconds / 60, cmd.matrix.quality ? ", quality references included" : "");
+        });
+    std::string md = lm::BenchMarkdown(report.results);
+    if (!report.quality.empty()) md += lm::BenchQualityMarkdown(report);
     std::printf("%s", md.c_str());
     auto write = [](const std::string& path, const std::string& text) {
         lm::WriteFileAtomically(path, [&](const std::string& tmp) {
@@ -340,8 +395,14 @@ int RunBench(BenchCommand& cmd) {
                 lm::ThrowError("%s: cannot write", path.c_str());
         });
     };
-    if (!cmd.csv.empty()) write(cmd.csv, lm::BenchCsv(results));
+    if (!cmd.csv.empty()) write(cmd.csv, lm::BenchCsv(report.results));
     if (!cmd.markdown.empty()) write(cmd.markdown, md);
+    if (!cmd.html.empty()) {
+        write(cmd.html, lm::BenchHtml(report, cmd.table ? lm::StringPrintf("lightmesh bench: the paper's table %d%s",
+                                                                           cmd.table, cmd.quick ? " (quick)" : "")
+                                                        : "lightmesh bench"));
+        if (!cmd.quiet) std::fprintf(stderr, "bench: wrote %s\n", cmd.html.c_str());
+    }
     return 0;
 }
 
@@ -411,7 +472,8 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(0.01f, 16.0f));
     renderCmd->add_option("--variant", render.variant,
                           "Light mesh variant, as in the paper's tables: grid (Grid), templates (Ш), "
-                          "reduced (У, default), none (Нет), inside (СТ), object (ОТ); also grid-none. "
+                          "reduced (У), none (Нет), inside (СТ), object (ОТ); not in the paper: consensus "
+                          "(ОТ's image, segments only where nodes disagree; default) and grid-none. "
                           "The paper's names are accepted too");
     renderCmd->add_option("--ns", render.ns,
                           "Light mesh templates: sub-steps per cell side (default 8)")
@@ -464,19 +526,42 @@ int main(int argc, char** argv) {
     BenchCommand bench;
     CLI::App* benchCmd = app.add_subcommand(
         "bench", "Time shadow methods side by side: scenes x sizes x CC x kI x variants, plus RT and no shadows");
-    benchCmd->add_option("--scene", bench.matrix.scenes, "Scenes (repeat the option); default builtin:gazebo");
-    benchCmd->add_option("--size", bench.sizes, "Image sizes WIDTHxHEIGHT (repeat); default 1024x768");
-    benchCmd->add_option("--cc", bench.matrix.cc, "Light mesh CC values, comma-separated; default 100")
+    bench.argv0 = argc > 0 ? argv[0] : "";
+    CLI::Option* benchScene =
+        benchCmd->add_option("--scene", bench.matrix.scenes, "Scenes (repeat the option); default builtin:gazebo");
+    CLI::Option* benchSize =
+        benchCmd->add_option("--size", bench.sizes, "Image sizes WIDTHxHEIGHT (repeat); default 1024x768");
+    CLI::Option* benchCc = benchCmd->add_option("--cc", bench.matrix.cc, "Light mesh CC values, comma-separated; default 100")
         ->delimiter(',')->check(CLI::Range(1, 4096));
-    benchCmd->add_option("--ki", bench.matrix.ki, "Light mesh kI values, comma-separated; default 2")
+    CLI::Option* benchKi = benchCmd->add_option("--ki", bench.matrix.ki, "Light mesh kI values, comma-separated; default 2")
         ->delimiter(',')->check(CLI::Range(0.01f, 16.0f));
-    benchCmd->add_option("--variants", bench.matrix.variants,
+    CLI::Option* benchVariants = benchCmd->add_option("--variants", bench.matrix.variants,
                          "LMM variants, comma-separated; default grid,templates,reduced,none,inside,object")
         ->delimiter(',');
+    CLI::Option* benchTable = benchCmd->add_option("--table", bench.table,
+                         "Reproduce the paper's table 1, 2, 3 or 4 on scenes/real (replaces --scene --size --cc --ki --variants)")
+        ->check(CLI::Range(1, 4));
+    CLI::Option* benchMatrixFile = benchCmd->add_option("--matrix", bench.matrixFile,
+                         "Read the matrix from JSON: {\"scenes\", \"sizes\": [[w,h]], \"cc\", \"ki\", \"variants\", \"accels\", \"repeat\"}")
+        ->check(CLI::ExistingFile);
+    for (CLI::Option* o : {benchScene, benchSize, benchCc, benchKi, benchVariants}) {
+        o->excludes(benchTable);
+        o->excludes(benchMatrixFile);
+    }
+    benchTable->excludes(benchMatrixFile);
+    benchCmd->add_flag("--quick", bench.quick, "Every size divided by 4 in each dimension, --repeat 1 (a fast check)");
+    benchCmd->add_option("--html", bench.html,
+                         "Write a self-contained HTML report (tables, SVG charts, images with zoomed crops); "
+                         "renders the images next to it unless --images is given");
+    benchCmd->add_flag("--quality", bench.matrix.quality,
+                       "Also judge every cell against a converged area-light reference: PSNR/SSIM, reference "
+                       "radius sweep, naive soft shadows (N = 4, 16, 64) vs LMM, leak count");
+    benchCmd->add_option("--ref-samples", bench.matrix.refSamples, "Samples of the --quality reference; default 256")
+        ->check(CLI::Range(1, 4096));
     benchCmd->add_option("--accels", bench.matrix.accels,
                          "Ray-query back-ends for RT (the first also serves LMM), comma-separated; default grid")
         ->delimiter(',')->check(CLI::IsMember(lm::AcceleratorNames()));
-    benchCmd->add_option("--repeat", bench.matrix.repeat, "Timed runs per cell after a warm-up; the median is reported")
+    bench.repeatOption = benchCmd->add_option("--repeat", bench.matrix.repeat, "Timed runs per cell after a warm-up; the median is reported")
         ->check(CLI::Range(1, 100));
     benchCmd->add_flag("--no-none", bench.noNone, "Skip the render without shadows");
     benchCmd->add_option("--images", bench.matrix.imageDir, "Write each cell's image (PNG) into this folder");

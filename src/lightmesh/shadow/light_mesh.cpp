@@ -58,6 +58,7 @@ const VariantName kVariants[] = {
     {"inside", "СТ", "st", SphereEnumeration::Templates, LocalVisibility::Inside},
     {"object", "ОТ", "ot", SphereEnumeration::Templates, LocalVisibility::Object},
     {"grid-none", "Grid+Нет", "grid-net", SphereEnumeration::Cube, LocalVisibility::None},
+    {"consensus", "ОТ+consensus", "ot-consensus", SphereEnumeration::Templates, LocalVisibility::Consensus},
 };
 
 }  // namespace
@@ -213,7 +214,8 @@ class LightMesh final : public LightMeshShadows {
         ++counters.candidates;
         switch (variant_.local) {
             case LocalVisibility::Object:
-            case LocalVisibility::Reduced:  // only on the cube loop's fallback path: test all
+            case LocalVisibility::Reduced:    // only on the cube loop's fallback path: test all
+            case LocalVisibility::Consensus:
                 if (!SeesPoint(x, sp, counters)) return;
                 break;
             case LocalVisibility::Inside: {
@@ -275,6 +277,10 @@ class LightMesh final : public LightMeshShadows {
         auto front = [&](const TemplateEntry& e) { return Dot(sp.n, e.offset - frac) > 0; };
         auto node = [&](const TemplateEntry& e) { return L.Node(ci + e.di, cj + e.dj, ck + e.dk); };
 
+        if (variant_.local == LocalVisibility::Consensus) {
+            ConsensusWalk(sp, begin, end, base, ci, cj, ck, frac, acc, counters);
+            return true;
+        }
         if (variant_.local != LocalVisibility::Reduced) {
             for (uint32_t t = begin; t < end; ++t) {
                 const TemplateEntry& e = entries_[t];
@@ -302,6 +308,44 @@ class LightMesh final : public LightMeshShadows {
             if (allSee || SeesPoint(x, sp, counters)) Use(acc, Evaluate(static_cast<uint64_t>(base + e.linear), x));
         }
         return true;
+    }
+
+    // Consensus (ours, exact): ОТ keeps the candidates that see P and averages their bits.
+    // If every candidate carries the same bits, the average over any non-empty subset is
+    // those bits, so it is enough to find one candidate that sees P; only if none does
+    // (m = 0) does the result change to the fallback, exactly as with ОТ. Where the
+    // candidates disagree (penumbrae, edges of objects) every segment is traced as in ОТ.
+    // The image is identical to ОТ's; only the mean m in --stats differs.
+    void ConsensusWalk(const ShadingPoint& sp, uint32_t begin, uint32_t end, int64_t base, int ci, int cj,
+                       int ck, const Vec3& frac, Accumulator& acc, RenderCounters& counters) const {
+        struct Candidate {
+            uint32_t entry;
+            Word word;
+        };
+        Candidate buffer[512];
+        std::vector<Candidate> heap;
+        Candidate* list = buffer;
+        if (end - begin > 512) {
+            heap.resize(end - begin);
+            list = heap.data();
+        }
+        uint32_t n = 0;
+        bool agree = true;
+        const LightMeshLattice& L = lattice_;
+        for (uint32_t t = begin; t < end; ++t) {
+            const TemplateEntry& e = entries_[t];
+            if (!(Dot(sp.n, e.offset - frac) > 0)) continue;
+            ++counters.candidates;
+            const Word w = Evaluate(static_cast<uint64_t>(base + e.linear), L.Node(ci + e.di, cj + e.dj, ck + e.dk));
+            if (n > 0 && ((w ^ list[0].word) & kVisMask)) agree = false;
+            list[n++] = {t, w};
+        }
+        for (uint32_t c = 0; c < n; ++c) {
+            const TemplateEntry& e = entries_[list[c].entry];
+            if (!SeesPoint(L.Node(ci + e.di, cj + e.dj, ck + e.dk), sp, counters)) continue;
+            Use(acc, list[c].word);
+            if (agree) return;
+        }
     }
 
     void ConvertTemplates() {

@@ -51,6 +51,9 @@ enum class LocalVisibility {
     Reduced,  ///< "У" (§3.2): segments from the boundary nodes first; only if one of them
               ///< is blocked, segments from the inner nodes too
     Inside,   ///< "СТ" (§4): drop nodes inside solids, a flag computed once per node
+    Consensus,  ///< not in the paper: ОТ's result exactly, but when every candidate node has
+                ///< the same visibility bits only one segment (to a node that sees P) is
+                ///< needed, because any non-empty subset then averages to those bits
 };
 
 /// A variant of the paper's tables: how spheres are enumerated and how local visibility
@@ -63,14 +66,15 @@ struct LightMeshVariant {
 };
 
 /// Parses a --variant name, in ASCII or as the paper writes it: grid (Grid), templates
-/// (Ш), reduced (У), none (Нет), inside (СТ), object (ОТ; the same computation as Ш), and
-/// grid-none (cube loop without local visibility, not in the paper). Empty means the
+/// (Ш), reduced (У), none (Нет), inside (СТ), object (ОТ; the same computation as Ш), and,
+/// not in the paper, grid-none (cube loop without local visibility) and consensus (ОТ's
+/// image with segments only where the sphere's nodes disagree). Empty means the
 /// default. Throws Error naming the choices.
 LightMeshVariant ParseLightMeshVariant(std::string_view name);
 /// The ASCII names ParseLightMeshVariant accepts.
 std::vector<std::string> LightMeshVariantNames();
 /// The default variant's name (chosen by measurement; see the README).
-inline constexpr const char* kDefaultLightMeshVariant = "reduced";
+inline constexpr const char* kDefaultLightMeshVariant = "consensus";
 
 /// The shadow method of formula (2): V(L_i, P) is replaced by the mean of V(L_i, x_k)
 /// over the m nodes x_k within r of P, in front of the surface, and passing the local

@@ -158,11 +158,13 @@ TEST(LightMesh, SegmentTestStopsLeaksThatNoTestLetsThrough) {
     AddBox(&s, {-half, y0, -half}, {half, y0 + thickness, half});
     s.lights = {{{0.1f, 8, 0.2f}, Color(1.0f), Falloff::None}};
     Lmm ot(s, 100, 2.0f, "grid"), none(s, 100, 2.0f, "grid-none"), reduced(s, 100, 2.0f, "reduced"),
-        templates(s, 100, 2.0f, "templates"), inside(s, 100, 2.0f, "inside");
+        templates(s, 100, 2.0f, "templates"), inside(s, 100, 2.0f, "inside"),
+        consensus(s, 100, 2.0f, "consensus");
     ASSERT_FLOAT_EQ(ot.lmm->Lattice().r, r);
     // The RT shadow of the slab on the floor is about the slab's footprint (the light is
     // high above); sample points deeper inside it than r.
-    int leaksOt = 0, leaksNone = 0, leaksReduced = 0, leaksTemplates = 0, leaksInside = 0, samples = 0;
+    int leaksOt = 0, leaksNone = 0, leaksReduced = 0, leaksTemplates = 0, leaksInside = 0, leaksConsensus = 0,
+        samples = 0;
     const float inner = half * (8.0f - y0) / 8.0f - r - h;
     for (float x = -inner; x <= inner; x += h / 3) {
         for (float z = -inner; z <= inner; z += h / 3) {
@@ -174,12 +176,14 @@ TEST(LightMesh, SegmentTestStopsLeaksThatNoTestLetsThrough) {
             leaksReduced += reduced.Vis(sp) > 0;
             leaksTemplates += templates.Vis(sp) > 0;
             leaksInside += inside.Vis(sp) > 0;
+            leaksConsensus += consensus.Vis(sp) > 0;
         }
     }
     EXPECT_GT(samples, 100);
     EXPECT_EQ(leaksOt, 0);
     EXPECT_EQ(leaksTemplates, 0);
     EXPECT_EQ(leaksReduced, 0);
+    EXPECT_EQ(leaksConsensus, 0);
     EXPECT_GT(leaksNone, samples / 2) << "the leak test must be able to fail";
     // СТ drops nodes inside solids; the slab is thinner than h and holds none, and the
     // leaking nodes lie outside it, so СТ cannot stop this leak (by design: paper §4
@@ -247,6 +251,35 @@ TEST_P(LightMeshLaziness, EvaluatesOnlyNodesNearShadedPoints) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Variants, LightMeshLaziness, ::testing::Values("grid", "reduced", "inside"));
+
+// Consensus traces a segment only where the candidates' bits disagree (or to find one node
+// that sees P), and must give ОТ's image bit for bit, with far fewer segments.
+TEST(LightMesh, ConsensusGivesTheObjectTestsImageExactly) {
+    for (int sceneIndex = 0; sceneIndex < 2; ++sceneIndex) {
+        Scene s = MakeBuiltinScene("gazebo");
+        if (sceneIndex == 1) {  // the thin-slab leak scene
+            s = FloorScene();
+            AddBox(&s, {-3, 0.1f, -3}, {3, 0.12f, 3});
+            s.lights = {{{0.1f, 8, 0.2f}, Color(1.0f), Falloff::None}};
+        }
+        s.render.width = 96;
+        s.render.height = 72;
+        auto accel = CreateAccelerator("grid", s.mesh);
+        for (float ki : {2.0f, 3.0f}) {
+            RenderResult results[2];
+            for (int v = 0; v < 2; ++v) {
+                s.render.lightMesh.ki = ki;
+                s.render.lightMesh.variant = v == 0 ? "object" : "consensus";
+                auto lmm = CreateShadowMethod("lmm", s, *accel, s.render);
+                results[v] = WhittedRenderer(s, *accel, *lmm, s.render).Render();
+            }
+            EXPECT_EQ(results[0].image.pixels, results[1].image.pixels) << "scene " << sceneIndex << " kI " << ki;
+            EXPECT_EQ(results[0].counters.fallbacks, results[1].counters.fallbacks);
+            EXPECT_LT(results[1].counters.localSegments, results[0].counters.localSegments / 2)
+                << "scene " << sceneIndex << " kI " << ki;
+        }
+    }
+}
 
 // У (§3.2) skips the inner nodes' segments only when every boundary node sees P; when no
 // occluder lies inside any sphere that is always the case, so У gives Ш's image exactly.

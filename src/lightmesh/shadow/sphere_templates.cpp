@@ -164,7 +164,9 @@ SphereTemplates ParseSphereTemplates(std::string_view bytes, const std::string& 
     std::memcpy(t.boundaryCount.data(), p, t.boundaryCount.size() * 4);
     p += t.boundaryCount.size() * 4;
     t.offsets.resize(h.entries);
-    std::memcpy(t.offsets.data(), p, t.offsets.size() * 3);
+    // A forged file may list no entries at all: memcpy from or to null is undefined even
+    // for 0 bytes (found by fuzz_template_file).
+    if (!t.offsets.empty()) std::memcpy(t.offsets.data(), p, t.offsets.size() * 3);
     // The checksum catches accidents; these checks make a forged file harmless too.
     if (t.begin.front() != 0 || t.begin.back() != h.entries)
         ThrowError("%s: inconsistent index (corrupt)", path.c_str());

@@ -1,0 +1,115 @@
+#include "lightmesh/render/benchmark.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "lightmesh/util/error.h"
+
+namespace lm {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path WriteTemp(const std::string& name, const std::string& text) {
+    const fs::path p = fs::path(::testing::TempDir()) / ("lm_bench_" + std::to_string(getpid()) + "_" + name);
+    std::ofstream(p) << text;
+    return p;
+}
+
+std::string ErrorOf(const std::string& json) {
+    const fs::path p = WriteTemp("m.json", json);
+    try {
+        LoadBenchMatrix(p.string());
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "";
+}
+
+TEST(LoadBenchMatrix, ReadsEveryKey) {
+    const fs::path p = WriteTemp("ok.json", R"({"scenes": ["builtin:gazebo", "x/s.json"], "sizes": [[64, 48], [32, 16]],
+        "cc": [50, 100], "ki": [1.5, 3], "variants": ["grid", "inside"], "accels": ["brute"], "repeat": 2})");
+    const BenchMatrix m = LoadBenchMatrix(p.string());
+    ASSERT_EQ(m.scenes.size(), 2u);
+    EXPECT_EQ(m.scenes[0], "builtin:gazebo");
+    EXPECT_EQ(fs::path(m.scenes[1]), p.parent_path() / "x/s.json");  // relative to the file
+    EXPECT_EQ(m.sizes, (std::vector<std::pair<int, int>>{{64, 48}, {32, 16}}));
+    EXPECT_EQ(m.cc, (std::vector<int>{50, 100}));
+    EXPECT_EQ(m.ki, (std::vector<float>{1.5f, 3.0f}));
+    EXPECT_EQ(m.variants, (std::vector<std::string>{"grid", "inside"}));
+    EXPECT_EQ(m.accels, (std::vector<std::string>{"brute"}));
+    EXPECT_EQ(m.repeat, 2);
+    EXPECT_EQ(LoadBenchMatrix(WriteTemp("empty.json", "{}").string()).repeat, BenchMatrix().repeat);
+}
+
+TEST(LoadBenchMatrix, ErrorsNameTheJsonPath) {
+    EXPECT_NE(ErrorOf(R"({"sizes": [[64, 48], [32]]})").find("/sizes/1: expected [width, height]"), std::string::npos);
+    EXPECT_NE(ErrorOf(R"({"sizes": [[64, "a"]]})").find("/sizes/0/1: expected an integer"), std::string::npos);
+    EXPECT_NE(ErrorOf(R"({"cc": [100, 0]})").find("/cc/1: expected 1 .. 4096"), std::string::npos);
+    EXPECT_NE(ErrorOf(R"({"ki": [2, "3"]})").find("/ki/1: expected a number, got a string"), std::string::npos);
+    EXPECT_NE(ErrorOf(R"({"variants": ["grid", "bogus"]})").find("/variants/1"), std::string::npos);
+    EXPECT_NE(ErrorOf(R"({"scenes": "builtin:gazebo"})").find("/scenes: expected a list"), std::string::npos);
+    EXPECT_NE(ErrorOf(R"({"scenes": []})").find("/scenes: must not be empty"), std::string::npos);
+    EXPECT_NE(ErrorOf(R"({"repeat": 0})").find("/repeat: expected 1 .. 100"), std::string::npos);
+    EXPECT_NE(ErrorOf(R"({"sizez": []})").find("/sizez: unknown key"), std::string::npos);
+    EXPECT_NE(ErrorOf(R"([1, 2])").find("expected an object"), std::string::npos);
+    EXPECT_NE(ErrorOf(R"({"cc": [1,)").find("not valid JSON"), std::string::npos);
+    EXPECT_THROW(LoadBenchMatrix("/nonexistent/m.json"), Error);
+}
+
+TEST(BenchTablePreset, QuickDividesSizes) {
+    EXPECT_THROW(BenchTablePreset(5, false, "/"), Error);
+    EXPECT_THROW(BenchTablePreset(3, false, "/nonexistent"), Error);  // names the missing scene
+#ifdef LIGHTMESH_TEST_DATA
+    const std::string repo = fs::path(LIGHTMESH_TEST_DATA).parent_path().parent_path().string();
+    const BenchMatrix full = BenchTablePreset(3, false, repo), quick = BenchTablePreset(3, true, repo);
+    EXPECT_EQ(full.sizes, (std::vector<std::pair<int, int>>{{1024, 1024}}));
+    EXPECT_EQ(quick.sizes, (std::vector<std::pair<int, int>>{{256, 256}}));
+    EXPECT_EQ(quick.repeat, 1);
+    EXPECT_EQ(quick.variants, (std::vector<std::string>{"none", "inside", "object"}));
+    EXPECT_EQ(BenchTablePreset(1, true, repo).sizes, (std::vector<std::pair<int, int>>{{256, 192}}));
+#endif
+}
+
+// A tiny end-to-end run: the quick sizes of the presets, on the builtin gazebo, with
+// images, the quality report and the HTML.
+TEST(RunBenchmark, QuickHtmlReport) {
+    BenchMatrix m;
+    m.scenes = {"builtin:gazebo"};
+    m.sizes = {{48, 32}};
+    m.ki = {2.0f, 3.0f};
+    m.variants = {"none", "inside"};
+    m.repeat = 1;
+    m.quality = true;
+    m.refSamples = 8;
+    m.areaSamples = {1, 4};
+    const fs::path dir = fs::path(::testing::TempDir()) / ("lm_bench_img_" + std::to_string(getpid()));
+    fs::create_directories(dir);
+    m.imageDir = dir.string();
+    int calls = 0;
+    double estimate = -1;
+    const BenchReport report = RunBenchmarkReport(
+        m, [&](int done, int total, const BenchResult&) { EXPECT_EQ(done, ++calls); EXPECT_EQ(total, 6); },
+        [&](double s) { estimate = s; });
+    EXPECT_EQ(calls, 6);
+    EXPECT_GE(estimate, 0);
+    ASSERT_EQ(report.results.size(), 6u);
+    ASSERT_EQ(report.quality.size(), 1u);
+    EXPECT_EQ(report.quality[0].radii.size(), 3u);
+    EXPECT_EQ(report.quality[0].rows.size(), 1u + 4u + 2u);  // RT, the LMM cells, area N = 1, 4
+    const std::string html = BenchHtml(report);
+    EXPECT_NE(html.find("<table>"), std::string::npos);
+    EXPECT_NE(html.find("<svg"), std::string::npos);
+    EXPECT_NE(html.find("data:image/png;base64,"), std::string::npos);
+    EXPECT_NE(html.find("СТ/RT"), std::string::npos);  // the ratio table
+    EXPECT_NE(html.find("PSNR"), std::string::npos);   // the quality table
+    EXPECT_EQ(html.find("http://"), html.find("http://www.w3.org/2000/svg"));  // no network
+    EXPECT_NE(BenchQualityMarkdown(report).find("Naive soft shadows"), std::string::npos);
+    fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace lm
