@@ -451,28 +451,28 @@ BenchMatrix BenchTablePreset(int table, bool quick, const std::string& repoDir) 
             m.sizes = {{1024, 768}};
             m.cc = {100, 200};
             m.ki = {1.2f, 2.0f, 3.0f};
-            m.variants = {"grid", "templates", "reduced"};
+            m.variants = {"grid", "templates", "reduced", "consensus"};
             break;
         case 2:  // "Garden"
             m.scenes = {scene("garden.json")};
             m.sizes = {{1024, 600}};
             m.cc = {100};
             m.ki = {1.2f, 2.0f, 3.0f};
-            m.variants = {"grid", "templates", "reduced"};
+            m.variants = {"grid", "templates", "reduced", "consensus"};
             break;
         case 3:  // "Gazebo"
             m.scenes = {scene("barnum.json")};
             m.sizes = {{1024, 1024}};
             m.cc = {100};
             m.ki = {2.0f, 3.0f};
-            m.variants = {"none", "inside", "object"};
+            m.variants = {"none", "inside", "object", "consensus"};
             break;
         case 4:  // "Child park"
             m.scenes = {scene("parque.json"), scene("castle.json")};
             m.sizes = {{1024, 1024}};
             m.cc = {100};
             m.ki = {3.0f};
-            m.variants = {"none", "inside", "object"};
+            m.variants = {"none", "inside", "object", "consensus"};
             break;
         default: ThrowError("bench --table %d: expected 1, 2, 3 or 4 (the paper's tables)", table);
     }

@@ -69,7 +69,7 @@ TEST(BenchTablePreset, QuickDividesSizes) {
     EXPECT_EQ(full.sizes, (std::vector<std::pair<int, int>>{{1024, 1024}}));
     EXPECT_EQ(quick.sizes, (std::vector<std::pair<int, int>>{{256, 256}}));
     EXPECT_EQ(quick.repeat, 1);
-    EXPECT_EQ(quick.variants, (std::vector<std::string>{"none", "inside", "object"}));
+    EXPECT_EQ(quick.variants, (std::vector<std::string>{"none", "inside", "object", "consensus"}));
     EXPECT_EQ(BenchTablePreset(1, true, repo).sizes, (std::vector<std::pair<int, int>>{{256, 192}}));
 #endif
 }
