@@ -7,7 +7,7 @@
 #include <memory>
 #include <utility>
 
-#include "lightmesh/accel/prepared_ray.h"
+#include "lightmesh/geometry/triangle.h"
 #include "lightmesh/geometry/triangle.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/parallel.h"

@@ -20,7 +20,7 @@ namespace lm {
 /// built eagerly into flat arrays. Queries walk the cells with a 3D-DDA (Amanatides & Woo
 /// 1987) from the ray's entry into the box to min(tMax, exit), so a short segment visits few
 /// cells; a closest-hit query stops in the cell that holds its hit. Triangles are tested with
-/// IntersectTriangle's arithmetic (set up once per ray, prepared_ray.h), so every answer
+/// IntersectTriangle's arithmetic (set up once per ray, geometry/triangle.h), so every answer
 /// (hit triangle, t to the bit, crossing count) is brute force's, ties included (the lowest
 /// id among equal t). Cells are grown by a small epsilon when triangles are assigned, which
 /// covers the DDA's rounding at the scene's own scale; for rays starting very far away

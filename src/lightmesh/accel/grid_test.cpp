@@ -8,7 +8,7 @@
 #include <string>
 
 #include "lightmesh/accel/brute_force.h"
-#include "lightmesh/accel/prepared_ray.h"
+#include "lightmesh/geometry/triangle.h"
 #include "lightmesh/accel/test_scenes.h"
 #include "lightmesh/geometry/triangle.h"
 
@@ -220,53 +220,6 @@ TEST(GridTraversal, ShortSegmentsMatchBruteForce) {
         EXPECT_EQ(grid.Occluded(Segment(a, b)), brute.Occluded(Segment(a, b)));
         EXPECT_EQ(grid.CountCrossings(Segment(a, b)), brute.CountCrossings(Segment(a, b)));
     }
-}
-
-// The grid's per-ray set-up of the watertight test must give IntersectTriangle's answers
-// bit for bit (it is a copy, split in two): random triangles and rays, plus rays exactly
-// through vertices and edges (axis-parallel and dyadic directions on dyadic coordinates),
-// degenerate triangles and zero directions.
-TEST(GridPreparedRay, MatchesIntersectTriangleBitForBit) {
-    ts::Rng rng(42);
-    int mismatches = 0, hits = 0, cases = 0;
-    auto check = [&](const Ray& r, const Vec3& a, const Vec3& b, const Vec3& c) {
-        ++cases;
-        TriangleHit h1{}, h2{};
-        const bool x = IntersectTriangle(r, a, b, c, &h1);
-        const float p[9] = {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z};
-        const bool y = detail::IntersectPrepared(detail::PreparedRay(r), p, &h2);
-        hits += x;
-        if (x != y || (x && std::memcmp(&h1, &h2, sizeof h1) != 0)) ++mismatches;
-    };
-    for (int i = 0; i < 300000; ++i) {
-        const Vec3 a = rng.InBox(Vec3(-1), Vec3(1)), b = rng.InBox(Vec3(-1), Vec3(1)),
-                   c = rng.InBox(Vec3(-1), Vec3(1));
-        const Vec3 o = rng.InBox(Vec3(-3), Vec3(3));
-        const Vec3 target = i % 3 == 0 ? a : (a + b + c) * (1.0f / 3) + rng.Direction() * 0.5f;
-        Vec3 d = target - o;
-        if (i % 5 == 0) d[int(rng.Index(3))] = 0;
-        check(Ray{o, d, i % 7 == 0 ? rng.Uniform() : 0.0f,
-                  i % 11 == 0 ? rng.Uniform(0, 2) : Infinity},
-              a, b, c);
-    }
-    // Exact hits on shared edges and vertices of a dyadic lattice.
-    for (int i = 0; i < 200000; ++i) {
-        auto lattice = [&] {
-            return Vec3(float(int(rng.Index(9)) - 4) / 4, float(int(rng.Index(9)) - 4) / 4,
-                        float(int(rng.Index(9)) - 4) / 4);
-        };
-        const Vec3 a = lattice(), b = lattice(), c = lattice();
-        const Vec3 through = i % 2 ? a : (a + b) * 0.5f;
-        const float dirs[4] = {1.0f, 0.5f, 0.25f, 0.0f};
-        Vec3 d(dirs[rng.Index(4)], dirs[rng.Index(4)], dirs[rng.Index(4)]);
-        if (i % 3 == 0) d = Vec3(0.0f), d[int(rng.Index(3))] = rng.Uniform() < 0.5f ? -1.0f : 1.0f;
-        if (rng.Uniform() < 0.5f) d = -d;
-        check(Ray{through - d * 2.0f, d}, a, b, c);
-    }
-    check(Ray{{0, 0, -1}, {0, 0, 0}}, {0, 0, 0}, {1, 0, 0}, {0, 1, 0});  // no direction
-    check(Ray{{0, 0, -1}, {0, 0, 1}}, {0, 0, 0}, {1, 0, 0}, {2, 0, 0});  // degenerate
-    EXPECT_EQ(mismatches, 0) << "of " << cases << " cases";
-    EXPECT_GT(hits, 50000);
 }
 
 }  // namespace

@@ -1,6 +1,8 @@
 // triangle.h -- the watertight ray/triangle test every back-end of ours shares.
 #pragma once
 
+#include <utility>
+
 #include "lightmesh/math/ray.h"
 
 namespace lm {
@@ -11,6 +13,109 @@ struct TriangleHit {
     float t;
     float b0, b1, b2;
 };
+
+namespace detail {
+/// The ray in the watertight test's frame (Woop, Benthin & Wald 2013, §3): the axis
+/// permutation and shear, computed once per ray, so that back-ends testing many triangles
+/// against one ray (the nested grid) pay the three divisions once.
+struct PreparedRay {
+    int kx, ky, kz;
+    float sx, sy, sz;
+    Vec3 o;
+    float tMin, tMax;
+    bool valid;  // false for a zero direction: nothing is ever hit
+
+    explicit PreparedRay(const Ray& ray) : o(ray.o), tMin(ray.tMin), tMax(ray.tMax) {
+        const Vec3& d = ray.d;
+        kz = MaxDimension(Abs(d));
+        valid = d[kz] != 0;
+        kx = kz + 1 == 3 ? 0 : kz + 1;
+        ky = kx + 1 == 3 ? 0 : kx + 1;
+        if (d[kz] < 0) std::swap(kx, ky);
+        sx = valid ? d[kx] / d[kz] : 0.0f;
+        sy = valid ? d[ky] / d[kz] : 0.0f;
+        sz = valid ? 1.0f / d[kz] : 0.0f;
+    }
+};
+
+template <typename T>
+inline bool OwnsEdge(T ex, T ey) {
+    return ey > 0 || (ey == 0 && ex > 0);
+}
+
+template <typename T>
+inline bool EdgeTest(T ax, T ay, T bx, T by, T cx, T cy, T* u, T* v, T* w, T* sign) {
+    *u = cx * by - cy * bx;
+    *v = ax * cy - ay * cx;
+    *w = bx * ay - by * ax;
+    if ((*u < 0 || *v < 0 || *w < 0) && (*u > 0 || *v > 0 || *w > 0)) return false;
+    T det = *u + *v + *w;
+    if (det == 0) return false;
+    *sign = det > 0 ? T(1) : T(-1);
+    if (*u == 0 && !OwnsEdge(*sign * (bx - cx), *sign * (by - cy))) return false;
+    if (*v == 0 && !OwnsEdge(*sign * (cx - ax), *sign * (cy - ay))) return false;
+    if (*w == 0 && !OwnsEdge(*sign * (ax - bx), *sign * (ay - by))) return false;
+    return true;
+}
+
+/// IntersectTriangle(ray, p0, p1, p2, hit) for the ray `r` was prepared from, with r.tMin
+/// and r.tMax as the range; p points at the 9 floats p0, p1, p2. IntersectTriangle is this
+/// function, so every back-end of ours answers bit for bit alike.
+[[gnu::always_inline]] inline bool IntersectPrepared(const PreparedRay& r, const float* p,
+                                                     TriangleHit* hit) {
+    if (!r.valid) return false;
+    const int kx = r.kx, ky = r.ky, kz = r.kz;
+    // a = p0 - o etc., only the components the test reads.
+    const float o[3] = {r.o.x, r.o.y, r.o.z};
+    const float aX = p[kx] - o[kx], aY = p[ky] - o[ky], aZ = p[kz] - o[kz];
+    const float bX = p[3 + kx] - o[kx], bY = p[3 + ky] - o[ky], bZ = p[3 + kz] - o[kz];
+    const float cX = p[6 + kx] - o[kx], cY = p[6 + ky] - o[ky], cZ = p[6 + kz] - o[kz];
+    const float ax = aX - r.sx * aZ, ay = aY - r.sy * aZ;
+    const float bx = bX - r.sx * bZ, by = bY - r.sy * bZ;
+    const float cx = cX - r.sx * cZ, cy = cY - r.sy * cZ;
+
+    float u, v, w, sign;
+    float cu = cx * by - cy * bx, cv = ax * cy - ay * cx, cw = bx * ay - by * ax;
+    // Most tested triangles are missed: reject them with one branch (bitwise |, &: the same
+    // truth values as EdgeTest's short-circuit ||, &&, NaN included, without its branches).
+    const bool anyNeg = (cu < 0) | (cv < 0) | (cw < 0);
+    const bool anyPos = (cu > 0) | (cv > 0) | (cw > 0);
+    const bool anyZero = (cu == 0) | (cv == 0) | (cw == 0);
+    if (anyNeg & anyPos & !anyZero) return false;
+    if (anyZero) {
+        double du, dv, dw, dsign;
+        if (!EdgeTest<double>(ax, ay, bx, by, cx, cy, &du, &dv, &dw, &dsign)) return false;
+        u = static_cast<float>(du * dsign);
+        v = static_cast<float>(dv * dsign);
+        w = static_cast<float>(dw * dsign);
+        sign = static_cast<float>(dsign);
+    } else {
+        // Inlined EdgeTest<float> on the products already computed (same values).
+        u = cu;
+        v = cv;
+        w = cw;
+        const float d0 = u + v + w;
+        if (d0 == 0) return false;
+        sign = d0 > 0 ? 1.0f : -1.0f;
+        u *= sign;
+        v *= sign;
+        w *= sign;
+    }
+    (void)sign;
+    const float det = u + v + w;
+    if (!(det > 0)) return false;
+
+    const float az = r.sz * aZ, bz = r.sz * bZ, cz = r.sz * cZ;
+    const float t = (u * az + v * bz + w * cz) / det;
+    if (!(t > r.tMin && t < r.tMax)) return false;
+    hit->t = t;
+    const float inv = 1.0f / det;
+    hit->b0 = u * inv;
+    hit->b1 = v * inv;
+    hit->b2 = w * inv;
+    return true;
+}
+}  // namespace detail
 
 /// Watertight ray/triangle intersection (Woop, Benthin & Wald, "Watertight Ray/Triangle
 /// Intersection", JCGT 2013), with a tie-breaking rule on edges and vertices.
