@@ -526,7 +526,9 @@ std::vector<Case> Corpus() {
 /// Sets up the case's folder: box.obj, the case's files ("name/" makes a folder, "chmod
 /// MODE" -> "file" changes a mode) and the output folder.
 std::string Prepare(const Case& c) {
-    const fs::path dir = fs::path(::testing::TempDir()) / "lm_bad_input" / c.name;
+    // Per process: several test runs may share /tmp.
+    const fs::path dir = fs::path(::testing::TempDir()) /
+                         ("lm_bad_input-" + std::to_string(getpid())) / c.name;
     std::error_code ec;
     fs::permissions(dir / "ro", fs::perms::owner_all, fs::perm_options::add, ec);
     fs::remove_all(dir, ec);
@@ -599,7 +601,11 @@ TEST(BadInput, EveryCaseIsAClearErrorAndLeavesTheOutputAlone) {
         }
         std::error_code ec;
         fs::permissions(fs::path(dir) / "ro", fs::perms::owner_all, fs::perm_options::add, ec);
+        if (!HasFailure()) fs::remove_all(dir, ec);
     }
+    std::error_code ec;
+    if (!HasFailure())
+        fs::remove_all(fs::path(::testing::TempDir()) / ("lm_bad_input-" + std::to_string(getpid())), ec);
 }
 
 }  // namespace

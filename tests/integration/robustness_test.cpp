@@ -45,14 +45,23 @@ CliResult Lightmesh(const std::string& args) {
     return run;
 }
 
-/// A fresh, empty folder for the running test.
-std::string TempFolder() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    const fs::path p = fs::path(::testing::TempDir()) / ("lm_robust_" + std::string(info->name()));
-    fs::remove_all(p);
-    fs::create_directories(p);
-    return p.string();
-}
+/// A fresh, empty folder for the running test, removed afterwards unless the test failed.
+struct ScratchFolder {
+    std::string path;
+    ScratchFolder() {
+        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        // Per process: several test runs may share /tmp.
+        path = (fs::path(::testing::TempDir()) /
+                ("lm_robust-" + std::to_string(getpid()) + "-" + info->name()))
+                   .string();
+        fs::remove_all(path);
+        fs::create_directories(path);
+    }
+    ~ScratchFolder() {
+        std::error_code ec;
+        if (!::testing::Test::HasFailure()) fs::remove_all(path, ec);
+    }
+};
 
 std::string Bytes(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
@@ -86,7 +95,8 @@ pid_t Spawn(const std::vector<std::string>& args) {
 // Template cache shared by concurrent runs
 
 TEST(Robustness, ConcurrentRunsShareATemplateCacheWithoutCorruptingIt) {
-    const std::string dir = TempFolder();
+    const ScratchFolder scratch;
+    const std::string& dir = scratch.path;
     const int ns = 12;
     const float ki = 3.0f;
     const lm::SphereTemplates expected = lm::SphereTemplates::Build(ns, ki);
@@ -119,7 +129,8 @@ TEST(Robustness, ConcurrentRunsShareATemplateCacheWithoutCorruptingIt) {
 // Determinism
 
 TEST(Robustness, EveryShadowMethodIsByteIdenticalForAnyThreadCountAndRun) {
-    const std::string dir = TempFolder();
+    const ScratchFolder scratch;
+    const std::string& dir = scratch.path;
     struct Method {
         std::string shadows, variant;
     };
@@ -160,7 +171,8 @@ TEST(Robustness, EveryShadowMethodIsByteIdenticalForAnyThreadCountAndRun) {
 /// A render killed by `signal` while it runs leaves the previous image untouched and no
 /// temporary file.
 void InterruptRender(int signal) {
-    const std::string dir = TempFolder();
+    const ScratchFolder scratch;
+    const std::string& dir = scratch.path;
     const std::string out = dir + "/keep.png";
     ASSERT_EQ(Lightmesh("render builtin:gazebo --width 32 --height 24 -q -o " + out).exitCode, 0);
     const std::string before = Bytes(out);
@@ -183,7 +195,8 @@ TEST(Robustness, SigtermDuringARenderLeavesThePreviousImage) { InterruptRender(S
 TEST(Robustness, SignalDuringTheWriteRemovesTheTemporaryFile) {
     for (int signal : {SIGINT, SIGTERM}) {
         SCOPED_TRACE(signal);
-        const std::string dir = TempFolder();
+        const ScratchFolder scratch;
+        const std::string& dir = scratch.path;
         const std::string path = dir + "/image.png";
         std::ofstream(path) << "old";
         const pid_t pid = fork();
@@ -205,7 +218,8 @@ TEST(Robustness, SignalDuringTheWriteRemovesTheTemporaryFile) {
 }
 
 TEST(Robustness, FailedWriteLeavesTheOldFileAndNoTemporary) {
-    const std::string dir = TempFolder();
+    const ScratchFolder scratch;
+    const std::string& dir = scratch.path;
     const std::string path = dir + "/out.exr";
     std::ofstream(path) << "old";
     EXPECT_THROW(lm::WriteFileAtomically(path,
@@ -222,7 +236,8 @@ TEST(Robustness, FailedWriteLeavesTheOldFileAndNoTemporary) {
 // Memory
 
 TEST(Robustness, StatsReportPeakMemory) {
-    const std::string dir = TempFolder();
+    const ScratchFolder scratch;
+    const std::string& dir = scratch.path;
     const CliResult r = Lightmesh("render builtin:gazebo --width 32 --height 24 --shadows lmm --cc 60 --stats -q -o " +
                                   dir + "/m.png");
     ASSERT_EQ(r.exitCode, 0) << r.output;
