@@ -19,9 +19,13 @@
 #include <string>
 #include <vector>
 
+#include "run_lightmesh.h"
+
 namespace {
 
 namespace fs = std::filesystem;
+using lm::testing::CliResult;
+using lm::testing::FileBytes;
 
 std::string Replace(std::string s, const std::string& from, const std::string& to) {
     for (size_t pos = s.find(from); pos != std::string::npos; pos = s.find(from, pos + to.size()))
@@ -29,33 +33,8 @@ std::string Replace(std::string s, const std::string& from, const std::string& t
     return s;
 }
 
-std::string Bytes(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), {}};
-}
-
 void Write(const std::string& path, const std::string& bytes) {
     std::ofstream(path, std::ios::binary) << bytes;
-}
-
-struct CliResult {
-    int exitCode = -1;   ///< 128 + signal if it died by a signal
-    std::string output;  ///< stdout and stderr together
-};
-
-/// Runs the executable through the shell: `prefix` goes before it (environment variables,
-/// setpriv), `args` after it.
-CliResult Lightmesh(const std::string& prefix, const std::string& args) {
-    const std::string cmd = prefix + " " + LIGHTMESH_EXE + " " + args + " 2>&1";
-    CliResult run;
-    FILE* pipe = popen(cmd.c_str(), "r");
-    if (!pipe) return run;
-    std::array<char, 4096> buf;
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) run.output.append(buf.data(), n);
-    const int status = pclose(pipe);
-    run.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    return run;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -576,7 +555,7 @@ TEST(BadInput, EveryCaseIsAClearErrorAndLeavesTheOutputAlone) {
 
         // 1. No output file before: none after (unless the case is accepted).
         fs::remove(out);
-        const CliResult run = Lightmesh(prefix, args);
+        const CliResult run = lm::testing::RunLightmesh(args, prefix);
         if (getenv("LM_PRINT")) printf("%-36s %d %s", c.name.c_str(), run.exitCode, run.output.c_str());
         EXPECT_EQ(run.exitCode, c.exitCode) << run.output;
         EXPECT_LT(run.exitCode, 128) << "died by a signal:\n" << run.output;
@@ -591,13 +570,13 @@ TEST(BadInput, EveryCaseIsAClearErrorAndLeavesTheOutputAlone) {
             if (fs::is_directory(outFolder, ec) && !fs::is_directory(out, ec)) {
                 const std::string previous = "a previous image, to be kept\n";
                 Write(out, previous);
-                const CliResult again = Lightmesh(prefix, args);
+                const CliResult again = lm::testing::RunLightmesh(args, prefix);
                 EXPECT_EQ(again.exitCode, c.exitCode) << again.output;
-                EXPECT_EQ(Bytes(out), previous) << out;
+                EXPECT_EQ(FileBytes(out), previous) << out;
                 EXPECT_FALSE(TemporaryFilesIn(outFolder));
             }
         } else {
-            EXPECT_GT(Bytes(out).size(), 50u) << "no image written to " << out;
+            EXPECT_GT(FileBytes(out).size(), 50u) << "no image written to " << out;
         }
         std::error_code ec;
         fs::permissions(fs::path(dir) / "ro", fs::perms::owner_all, fs::perm_options::add, ec);

@@ -14,28 +14,15 @@
 #include <thread>
 
 #include "lightmesh/io/image.h"
+#include "run_lightmesh.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-struct CliRun {
-    int exitCode;
-    std::string output;  // stdout and stderr together
-};
+using CliRun = lm::testing::CliResult;
 
-CliRun Lightmesh(const std::string& args) {
-    const std::string cmd = std::string(LIGHTMESH_EXE) + " " + args + " 2>&1";
-    CliRun run{-1, {}};
-    FILE* pipe = popen(cmd.c_str(), "r");
-    if (!pipe) return run;
-    std::array<char, 4096> buf;
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) run.output.append(buf.data(), n);
-    const int status = pclose(pipe);
-    run.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    return run;
-}
+CliRun Lightmesh(const std::string& args) { return lm::testing::RunLightmesh(args); }
 
 std::string Temp(const std::string& name) {
     const fs::path dir = fs::path(::testing::TempDir()) / "lm_cli";
@@ -43,10 +30,7 @@ std::string Temp(const std::string& name) {
     return (dir / name).string();
 }
 
-std::string Bytes(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), {}};
-}
+std::string Bytes(const std::string& path) { return lm::testing::FileBytes(path); }
 
 TEST(Cli, HelpForEveryCommand) {
     for (const char* cmd : {"--help", "render --help", "info --help"}) {

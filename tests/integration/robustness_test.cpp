@@ -22,80 +22,25 @@
 #include "lightmesh/shadow/sphere_templates.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/system.h"
+#include "run_lightmesh.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-struct CliResult {
-    int exitCode = -1;
-    std::string output;
-};
+using lm::testing::CliResult;
+using lm::testing::FilesIn;
+using Scratch = lm::testing::ScratchFolder;
 
-CliResult Lightmesh(const std::string& args) {
-    const std::string cmd = std::string(LIGHTMESH_EXE) + " " + args + " 2>&1";
-    CliResult run;
-    FILE* pipe = popen(cmd.c_str(), "r");
-    if (!pipe) return run;
-    std::array<char, 4096> buf;
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) run.output.append(buf.data(), n);
-    const int status = pclose(pipe);
-    run.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    return run;
-}
-
-/// A fresh, empty folder for the running test, removed afterwards unless the test failed.
-struct ScratchFolder {
-    std::string path;
-    ScratchFolder() {
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        // Per process: several test runs may share /tmp.
-        path = (fs::path(::testing::TempDir()) /
-                ("lm_robust-" + std::to_string(getpid()) + "-" + info->name()))
-                   .string();
-        fs::remove_all(path);
-        fs::create_directories(path);
-    }
-    ~ScratchFolder() {
-        std::error_code ec;
-        if (!::testing::Test::HasFailure()) fs::remove_all(path, ec);
-    }
-};
-
-std::string Bytes(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), {}};
-}
-
-std::vector<std::string> FilesIn(const std::string& folder) {
-    std::vector<std::string> names;
-    for (const auto& entry : fs::directory_iterator(folder))
-        names.push_back(entry.path().filename().string());
-    std::sort(names.begin(), names.end());
-    return names;
-}
-
-/// Starts `lightmesh args...` without waiting for it.
-pid_t Spawn(const std::vector<std::string>& args) {
-    const pid_t pid = fork();
-    if (pid == 0) {
-        std::vector<char*> argv{const_cast<char*>("lightmesh")};
-        for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-        argv.push_back(nullptr);
-        // Quiet children: their output would interleave with the test's.
-        if (FILE* null = std::freopen("/dev/null", "w", stdout)) (void)null;
-        execv(LIGHTMESH_EXE, argv.data());
-        _exit(127);
-    }
-    return pid;
-}
+CliResult Lightmesh(const std::string& args) { return lm::testing::RunLightmesh(args); }
+pid_t Spawn(const std::vector<std::string>& args) { return lm::testing::SpawnLightmesh(args); }
+std::string Bytes(const std::string& path) { return lm::testing::FileBytes(path); }
 
 // ---------------------------------------------------------------------------------------
 // Template cache shared by concurrent runs
 
 TEST(Robustness, ConcurrentRunsShareATemplateCacheWithoutCorruptingIt) {
-    const ScratchFolder scratch;
+    const Scratch scratch("lm_robust");
     const std::string& dir = scratch.path;
     const int ns = 12;
     const float ki = 3.0f;
@@ -129,7 +74,7 @@ TEST(Robustness, ConcurrentRunsShareATemplateCacheWithoutCorruptingIt) {
 // Determinism
 
 TEST(Robustness, EveryShadowMethodIsByteIdenticalForAnyThreadCountAndRun) {
-    const ScratchFolder scratch;
+    const Scratch scratch("lm_robust");
     const std::string& dir = scratch.path;
     struct Method {
         std::string shadows, variant;
@@ -171,7 +116,7 @@ TEST(Robustness, EveryShadowMethodIsByteIdenticalForAnyThreadCountAndRun) {
 /// A render killed by `signal` while it runs leaves the previous image untouched and no
 /// temporary file.
 void InterruptRender(int signal) {
-    const ScratchFolder scratch;
+    const Scratch scratch("lm_robust");
     const std::string& dir = scratch.path;
     const std::string out = dir + "/keep.png";
     ASSERT_EQ(Lightmesh("render builtin:gazebo --width 32 --height 24 -q -o " + out).exitCode, 0);
@@ -195,7 +140,7 @@ TEST(Robustness, SigtermDuringARenderLeavesThePreviousImage) { InterruptRender(S
 TEST(Robustness, SignalDuringTheWriteRemovesTheTemporaryFile) {
     for (int signal : {SIGINT, SIGTERM}) {
         SCOPED_TRACE(signal);
-        const ScratchFolder scratch;
+        const Scratch scratch("lm_robust");
         const std::string& dir = scratch.path;
         const std::string path = dir + "/image.png";
         std::ofstream(path) << "old";
@@ -218,7 +163,7 @@ TEST(Robustness, SignalDuringTheWriteRemovesTheTemporaryFile) {
 }
 
 TEST(Robustness, FailedWriteLeavesTheOldFileAndNoTemporary) {
-    const ScratchFolder scratch;
+    const Scratch scratch("lm_robust");
     const std::string& dir = scratch.path;
     const std::string path = dir + "/out.exr";
     std::ofstream(path) << "old";
@@ -236,7 +181,7 @@ TEST(Robustness, FailedWriteLeavesTheOldFileAndNoTemporary) {
 // Memory
 
 TEST(Robustness, StatsReportPeakMemory) {
-    const ScratchFolder scratch;
+    const Scratch scratch("lm_robust");
     const std::string& dir = scratch.path;
     const CliResult r = Lightmesh("render builtin:gazebo --width 32 --height 24 --shadows lmm --cc 60 --stats -q -o " +
                                   dir + "/m.png");

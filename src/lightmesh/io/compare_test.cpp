@@ -1,7 +1,6 @@
 #include "lightmesh/io/compare.h"
 
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <array>
 #include <cmath>
@@ -10,6 +9,7 @@
 #include <random>
 
 #include "lightmesh/util/error.h"
+#include "run_lightmesh.h"
 
 namespace lm {
 namespace {
@@ -185,23 +185,9 @@ TEST(Compare, DiffImageIsWrittenAndReadable) {
 }
 
 // The executable: exit codes, the --json line, --diff, --threshold-psnr.
-struct CliRun {
-    int exitCode;
-    std::string output;
-};
+using CliRun = lm::testing::CliResult;
 
-CliRun Lightmesh(const std::string& args) {
-    const std::string cmd = std::string(LIGHTMESH_EXE) + " " + args + " 2>&1";
-    CliRun run{-1, {}};
-    FILE* pipe = popen(cmd.c_str(), "r");
-    if (!pipe) return run;
-    std::array<char, 4096> buf;
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) run.output.append(buf.data(), n);
-    const int status = pclose(pipe);
-    run.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    return run;
-}
+CliRun Lightmesh(const std::string& args) { return lm::testing::RunLightmesh(args); }
 
 TEST(CompareCli, ExitCodesJsonAndDiff) {
     const Image a = Gradient(60, 40);

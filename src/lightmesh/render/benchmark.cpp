@@ -341,17 +341,23 @@ std::string Ratio(const BenchResult* a, const BenchResult* b) {
     return StringPrintf("%.2f", a->median / b->median);
 }
 
-}  // namespace
-
-std::string BenchMarkdown(const std::vector<BenchResult>& rs) {
-    std::string out;
-    // Groups of (scene, size) in the order they were run.
+/// The first result of each (scene, image size), in the order they were run: the tables and
+/// report sections.
+std::vector<const BenchResult*> SceneSizeGroups(const std::vector<BenchResult>& rs) {
     std::vector<const BenchResult*> groups;
     for (const BenchResult& r : rs) {
         bool seen = false;
         for (const BenchResult* g : groups) seen |= g->scene == r.scene && g->width == r.width && g->height == r.height;
         if (!seen) groups.push_back(&r);
     }
+    return groups;
+}
+
+}  // namespace
+
+std::string BenchMarkdown(const std::vector<BenchResult>& rs) {
+    std::string out;
+    const std::vector<const BenchResult*> groups = SceneSizeGroups(rs);
     for (const BenchResult* g : groups) {
         std::vector<std::string> variants;
         std::vector<std::pair<int, float>> rows;
@@ -842,12 +848,7 @@ std::string BenchHtml(const BenchReport& report, const std::string& title) {
     o += StringPrintf("<p>Seconds are the median of %d timed run(s) after a warm-up. Charts: render time and the LMM/RT "
                       "ratio against kI per variant (dashed: RT). Images: every cell, with a zoomed crop (magenta "
                       "window) where the LMM images differ most from RT.</p>\n", report.repeat);
-    std::vector<const BenchResult*> groups;
-    for (const BenchResult& r : rs) {
-        bool seen = false;
-        for (const BenchResult* g : groups) seen |= g->scene == r.scene && g->width == r.width && g->height == r.height;
-        if (!seen) groups.push_back(&r);
-    }
+    const std::vector<const BenchResult*> groups = SceneSizeGroups(rs);
     for (const BenchResult* g : groups) {
         std::vector<BenchResult> group;
         for (const BenchResult& r : rs)

@@ -3,6 +3,7 @@
 
 #include "lightmesh/scene/scene.h"
 #include "lightmesh/scene/shapes.h"
+#include "lightmesh/shadow/shadow.h"
 
 namespace lm::testing {
 
@@ -28,6 +29,15 @@ inline Scene FloorScene(float half = 10.0f) {
 inline void AddBox(Scene* s, const Vec3& lo, const Vec3& hi) {
     if (s->materials.size() < 2) s->materials.push_back({"box", Color(0.7f), Color(0.0f), 1.0f, Color(0.0f)});
     ShapeBuilder(&s->mesh).Box(lo, hi, 1);
+}
+
+/// A shading point on the floor y = 0 of FloorScene, seen from above.
+inline ShadingPoint FloorPoint(float x, float z) {
+    ShadingPoint sp;
+    sp.p = Vec3(x, 0, z);
+    sp.n = Vec3(0, 1, 0);
+    sp.origin = Vec3(x, 1e-5f, z);
+    return sp;
 }
 
 }  // namespace lm::testing

@@ -14,15 +14,9 @@ namespace lm {
 namespace {
 
 using testing::AddBox;
+using testing::FloorPoint;
 using testing::FloorScene;
 
-ShadingPoint FloorPoint(float x, float z) {
-    ShadingPoint sp;
-    sp.p = Vec3(x, 0, z);
-    sp.n = Vec3(0, 1, 0);
-    sp.origin = Vec3(x, 1e-5f, z);
-    return sp;
-}
 
 float Vis(const ShadowMethod& method, const ShadingPoint& sp, int light = 0) {
     bool needed[kMaxLights];

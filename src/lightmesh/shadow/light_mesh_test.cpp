@@ -16,16 +16,9 @@ namespace lm {
 namespace {
 
 using testing::AddBox;
+using testing::FloorPoint;
 using testing::FloorScene;
 
-// A shading point on the floor y = 0 seen from above.
-ShadingPoint FloorPoint(float x, float z) {
-    ShadingPoint sp;
-    sp.p = Vec3(x, 0, z);
-    sp.n = Vec3(0, 1, 0);
-    sp.origin = Vec3(x, 1e-5f, z);
-    return sp;
-}
 
 struct Lmm {
     std::unique_ptr<Accelerator> accel;

@@ -1,0 +1,25 @@
+// fuzz_entry_points.h -- what the fuzzers run on one input. Shared by the libFuzzer targets
+// (fuzz_scene_file.cpp, fuzz_template_file.cpp) and by fuzz_regression_test.cpp, which
+// replays the kept corpus and every crash found through the same code in the normal tests.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace lm::fuzz {
+
+/// Loads the bytes as the text of a JSON scene file (its mesh files are small in-memory
+/// meshes named box.obj, sphere.obj, quad.obj, dirty.obj, flat.obj; empty.obj and nan.obj
+/// fail as such files do; any other name is missing), then, if it loads, renders it at a
+/// few pixels with the scene's own shadow method and back-end (CC, kI and ns clamped so
+/// that one input stays fast). Bad input must surface as lm::Error only: any other
+/// exception escapes, and a broken invariant of a loaded scene aborts.
+int FuzzSceneFile(const uint8_t* data, size_t size);
+
+/// The bytes after the first are a sphere-template cache file, read for the (ns, kI) its
+/// header names when in range (else ns 2, kI 1.5). If the first byte is odd, the file's
+/// checksum is recomputed first, so the fuzzer also reaches the checks behind it. The
+/// file must be rejected with lm::Error or give templates whose every index is in range.
+int FuzzTemplateFile(const uint8_t* data, size_t size);
+
+}  // namespace lm::fuzz

@@ -1,0 +1,50 @@
+// Replays the fuzzers' kept corpus (fuzz/corpus/<target>/) and every crash they found
+// (fuzz/regressions/<target>/) through the fuzzers' own entry points, so the normal test
+// suite -- and its sanitizer builds -- keep covering them.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include "fuzz_entry_points.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::vector<fs::path> Inputs(const std::string& kind, const std::string& target) {
+    std::vector<fs::path> files;
+    const fs::path dir = fs::path(LIGHTMESH_FUZZ_DIR) / kind / target;
+    if (fs::is_directory(dir))
+        for (const auto& entry : fs::directory_iterator(dir))
+            if (entry.is_regular_file()) files.push_back(entry.path());
+    std::sort(files.begin(), files.end());
+    return files;
+}
+
+size_t Replay(const std::string& kind, const std::string& target,
+              int (*entry)(const uint8_t*, size_t)) {
+    const std::vector<fs::path> files = Inputs(kind, target);
+    for (const fs::path& file : files) {
+        SCOPED_TRACE(file.string());
+        std::ifstream in(file, std::ios::binary);
+        const std::string bytes{std::istreambuf_iterator<char>(in), {}};
+        EXPECT_NO_THROW(entry(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size()));
+    }
+    return files.size();
+}
+
+TEST(FuzzRegression, SceneFileCorpusAndCrashes) {
+    EXPECT_GT(Replay("corpus", "fuzz_scene_file", lm::fuzz::FuzzSceneFile), 0u);
+    Replay("regressions", "fuzz_scene_file", lm::fuzz::FuzzSceneFile);
+}
+
+TEST(FuzzRegression, TemplateFileCorpusAndCrashes) {
+    EXPECT_GT(Replay("corpus", "fuzz_template_file", lm::fuzz::FuzzTemplateFile), 0u);
+    Replay("regressions", "fuzz_template_file", lm::fuzz::FuzzTemplateFile);
+}
+
+}  // namespace
