@@ -47,7 +47,7 @@ for t in "${targets[@]}"; do
     echo "fuzz: $t FAILED; the input is in $crashes/ -- last lines of its log:" >&2
     tail -n 40 "$log" >&2
   fi
-  grep -hE "^(#[0-9]+[[:space:]]+DONE|Done [0-9]+ runs|stat::number_of_executed_units|stat::peak_rss_mb)" "$log" fuzz-*.log 2>/dev/null >&2 || true
+  grep -hE "^(#[0-9]+[[:space:]]+DONE|Done [0-9]+ runs|stat::number_of_executed_units|stat::peak_rss_mb)" "$log" fuzz-*.log >&2 2>/dev/null || true
   rm -f "$log" fuzz-*.log
   [ "${FUZZ_KEEP_CORPUS:-0}" = 1 ] || rm -rf "$work"
 done

@@ -1,4 +1,5 @@
-// test_scenes.h -- seeded scene generators shared by the accelerator tests and bench_accel.
+// test_scenes.h -- seeded scene and ray generators shared by the accelerator tests, the
+// real-scene tests and bench_accel.
 //
 // Header-only and deterministic: the generators use their own integer-to-float mapping on
 // std::mt19937 (whose sequence the standard fixes), so a seed gives the same triangles on
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "lightmesh/geometry/mesh.h"
+#include "lightmesh/math/ray.h"
 
 namespace lm::testing_scenes {
 
@@ -190,6 +192,96 @@ inline TriangleMesh TessellatedBox(int k, float h = 1.0f) {
 inline TriangleMesh Transformed(TriangleMesh m, float scale, const Vec3& offset) {
     for (Vec3& p : m.positions) p = p * scale + offset;
     return m;
+}
+
+/// A ray and what kind it is, for messages.
+struct TestRay {
+    Ray ray;
+    const char* kind;
+};
+
+// Every kind of ray the renderer makes, and the awkward ones: from outside and inside the
+// box, axis-parallel, with a zero component, short segments, starting exactly on the box's
+// boundary, aimed exactly at vertices, with tMin > 0.
+inline std::vector<TestRay> MakeRays(const TriangleMesh& mesh, int count, uint32_t seed) {
+    Rng rng(seed);
+    const Bounds3 b = mesh.Bounds();
+    const Vec3 c = b.Center();
+    const float radius = 0.5f * Length(b.Diagonal());
+    std::vector<TestRay> rays;
+    rays.reserve(size_t(count));
+    for (int i = 0; i < count; ++i) {
+        const int kind = i % 9;
+        const Vec3 inside = rng.InBox(b.lo, b.hi);
+        const Vec3 outside = c + rng.Direction() * (radius * rng.Uniform(1.5f, 4.0f));
+        const float scale = rng.Uniform(0.1f, 10.0f);  // |d| need not be 1
+        Ray r;
+        const char* name = "";
+        switch (kind) {
+            case 0:
+                r = Ray{outside, (inside - outside) * scale};
+                name = "outside->box";
+                break;
+            case 1:
+                r = Ray{inside, rng.Direction() * scale};
+                name = "inside";
+                break;
+            case 2: {
+                const int a = int(rng.Index(3));
+                Vec3 d(0.0f);
+                d[a] = rng.Uniform() < 0.5f ? -scale : scale;
+                Vec3 o = inside;
+                if (rng.Uniform() < 0.5f) o[a] = c[a] - d[a] / scale * 2 * radius;  // from outside
+                r = Ray{o, d};
+                name = "axis-parallel";
+                break;
+            }
+            case 3: {
+                Vec3 d = rng.Direction() * scale;
+                d[int(rng.Index(3))] = 0.0f;
+                r = Ray{rng.Uniform() < 0.5f ? inside : outside, d};
+                name = "zero component";
+                break;
+            }
+            case 4: {
+                const Vec3 end = inside + rng.Direction() * (radius * rng.Uniform(0.0f, 0.3f));
+                r = Segment(inside, end);
+                name = "short segment";
+                break;
+            }
+            case 5: {
+                Vec3 o = inside;
+                const int a = int(rng.Index(3));
+                const bool hi = rng.Uniform() < 0.5f;
+                o[a] = hi ? b.hi[a] : b.lo[a];
+                Vec3 d = rng.Direction();
+                if ((d[a] > 0) == hi) d[a] = -d[a];  // into the box
+                r = Ray{o, d * scale};
+                name = "on box boundary";
+                break;
+            }
+            case 6: {
+                const Vec3& v = mesh.positions[rng.Index(uint32_t(mesh.positions.size()))];
+                r = Ray{outside, v - outside};
+                name = "at a vertex";
+                break;
+            }
+            case 7: {
+                r = Ray{outside, (inside - outside)};
+                r.tMin = rng.Uniform(0.0f, 1.0f);
+                r.tMax = r.tMin + rng.Uniform(0.05f, 2.0f);
+                name = "tMin > 0";
+                break;
+            }
+            default: {
+                r = Segment(outside, inside);
+                name = "outside segment";
+                break;
+            }
+        }
+        rays.push_back({r, name});
+    }
+    return rays;
 }
 
 }  // namespace lm::testing_scenes

@@ -1,0 +1,240 @@
+// The real scenes' checks (issue 6): the four scene files of scenes/real/ with the models
+// scripts/fetch-scenes.sh takes from Debian packages. Not part of the unit tests, which need
+// no downloads: this binary carries the ctest label "real" and runs by
+// scripts/test-real-scenes.sh (which fetches the models first). A missing model fails here,
+// naming the script to run, rather than skipping.
+//
+// What it checks, per scene: the documented triangle, light, duplicate and exclusion
+// figures (scenes/real/SOURCES.md); every back-end against brute force on the real
+// geometry; that the default LMM variant is leak-free (ОТ's image bit for bit) and close to
+// hard shadows; that the reduced test (У) costs almost nothing in PSNR against Ш; and that
+// the CLI's images do not depend on the thread count.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "lightmesh/accel/accelerator.h"
+#include "lightmesh/accel/test_scenes.h"
+#include "lightmesh/io/compare.h"
+#include "lightmesh/render/whitted.h"
+#include "lightmesh/scene/scene_file.h"
+#include "lightmesh/shadow/shadow.h"
+#include "lightmesh/util/error.h"
+#include "lightmesh/util/log.h"
+#include "run_lightmesh.h"
+
+namespace lm {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// The template cache of this run (a private folder: the user's cache is left alone).
+std::string g_templateDir;
+
+struct RealScene {
+    std::string file;      ///< in scenes/real/
+    size_t triangles;      ///< after cleaning, ground slab included (SOURCES.md)
+    size_t lights;
+    size_t duplicates;     ///< exact duplicate triangles dropped at load
+    size_t excluded;       ///< meshes left out by exclude_materials / exclude_names
+    /// Lower bound of PSNR(default LMM, RT) at 192×144, CC 100, kI 2: soft shadows stay
+    /// close to hard ones (measured: barnum 37.9, parque 33.8, castle 31.9, garden 31.4 dB).
+    double minPsnrVsRt;
+};
+
+void PrintTo(const RealScene& s, std::ostream* os) { *os << s.file; }
+
+const std::vector<RealScene>& Scenes() {
+    static const std::vector<RealScene> scenes = {
+        {"barnum.json", 938, 2, 0, 0, 34.0},
+        {"parque.json", 16008, 4, 0, 0, 30.0},
+        {"castle.json", 24614, 4, 0, 0, 29.0},
+        {"garden.json", 451102, 6, 6510, 29, 28.0},
+    };
+    return scenes;
+}
+
+std::string ScenePath(const std::string& file) {
+    return (fs::path(LIGHTMESH_SOURCE_DIR) / "scenes" / "real" / file).string();
+}
+
+/// Each scene is loaded once (the garden takes over a second).
+const Scene& Loaded(const std::string& file) {
+    static std::mutex mutex;
+    static std::map<std::string, std::unique_ptr<Scene>> cache;
+    std::lock_guard<std::mutex> lock(mutex);
+    auto& slot = cache[file];
+    if (!slot) {
+        std::vector<std::string> warnings;
+        try {
+            slot = std::make_unique<Scene>(LoadScene(ScenePath(file), SceneLoadOptions{}, &warnings));
+        } catch (const Error& e) {
+            ADD_FAILURE() << e.what() << "\n(run scripts/fetch-scenes.sh first)";
+            slot = std::make_unique<Scene>();
+        }
+    }
+    return *slot;
+}
+
+/// A small render of a real scene with the given shadow method and light-mesh variant.
+Image Render(const Scene& scene, const std::string& shadows, const std::string& variant = "",
+             const std::string& accel = "grid") {
+    RenderOptions ro = scene.render;
+    ro.width = 192;
+    ro.height = 144;
+    ro.aa = 1;
+    ro.shadows = shadows;
+    ro.accel = accel;
+    ro.lightMesh.cc = 100;
+    ro.lightMesh.ki = 2.0f;
+    ro.lightMesh.variant = variant;
+    ro.lightMesh.templateDir = g_templateDir;
+    const auto acc = CreateAccelerator(ro.accel, scene.mesh, ro.accelOptions);
+    const auto method = CreateShadowMethod(ro.shadows, scene, *acc, ro);
+    return WhittedRenderer(scene, *acc, *method, ro).Render().image;
+}
+
+class RealSceneTest : public ::testing::TestWithParam<RealScene> {
+  protected:
+    void SetUp() override {
+        if (Loaded(GetParam().file).mesh.TriangleCount() == 0) GTEST_FAIL() << "scene not loaded";
+    }
+    const Scene& scene() const { return Loaded(GetParam().file); }
+};
+
+TEST_P(RealSceneTest, LoadsWithTheDocumentedFigures) {
+    const RealScene& want = GetParam();
+    const Scene& s = scene();
+    EXPECT_EQ(s.mesh.TriangleCount(), want.triangles);
+    EXPECT_EQ(s.lights.size(), want.lights);
+    EXPECT_EQ(s.report.duplicatesRemoved, want.duplicates);
+    EXPECT_EQ(s.report.meshesExcluded, want.excluded);
+    for (const Vec3& p : s.mesh.positions) ASSERT_TRUE(IsFinite(p));
+    // Every light is outside the scene's geometry and above the ground.
+    const Bounds3 b = s.mesh.Bounds();
+    for (const PointLight& l : s.lights) EXPECT_GT(l.position.y, b.lo.y);
+}
+
+// The differential tests of the back-ends, on real geometry: grid must match brute force
+// bit for bit (the same triangle test), Embree within a tolerance on t with exact crossing
+// counts, apart from a few rays of the two grazing kinds.
+TEST_P(RealSceneTest, BackEndsAgreeWithBruteForce) {
+    const TriangleMesh& mesh = scene().mesh;
+    // Brute force is the slow side: fewer rays on the large scene.
+    const int count = mesh.TriangleCount() > 100000 ? 270 : 1800;
+    const auto rays = testing_scenes::MakeRays(mesh, count, 2026u);
+    const auto brute = CreateAccelerator("brute", mesh);
+    const auto grid = CreateAccelerator("grid", mesh);
+    const auto embree = CreateAccelerator("embree", mesh);
+    const float radius = Length(mesh.Bounds().Diagonal());
+    int gridDiffer = 0, embreeDiffer = 0, embreeGrazes = 0, crossingsDiffer = 0;
+    for (const testing_scenes::TestRay& tr : rays) {
+        const Ray& r = tr.ray;
+        Hit hb, hg, he;
+        const bool b = brute->Intersect(r, &hb);
+        const bool g = grid->Intersect(r, &hg);
+        const bool e = embree->Intersect(r, &he);
+        const bool ob = brute->Occluded(r);
+        const int cb = brute->CountCrossings(r);
+        if (g != b || (b && (hg.t != hb.t || hg.prim != hb.prim)) || grid->Occluded(r) != ob ||
+            grid->CountCrossings(r) != cb)
+            ++gridDiffer;
+        const float tol = 1e-4f * (std::abs(hb.t) + radius / Length(r.d));
+        if (e != b || (b && std::abs(he.t - hb.t) > tol) || embree->Occluded(r) != ob) {
+            // Embree's edges are inclusive and it ignores hits at the ray's very start: a
+            // ray aimed exactly at a vertex, or starting on a face (t ~ 1e-7), may be
+            // answered differently. Those two kinds are counted; any other is a failure.
+            const std::string kind = tr.kind;
+            if (kind == "at a vertex" || kind == "on box boundary")
+                ++embreeGrazes;
+            else
+                ++embreeDiffer;
+        }
+        if (embree->CountCrossings(r) != cb) ++crossingsDiffer;
+    }
+    EXPECT_EQ(gridDiffer, 0) << "of " << rays.size() << " rays";
+    EXPECT_EQ(crossingsDiffer, 0) << "of " << rays.size() << " rays";
+    EXPECT_EQ(embreeDiffer, 0) << "of " << rays.size() << " rays";
+    // The grazing kinds are 2 of MakeRays' 9 (22 % of the rays): a few of them may differ
+    // (measured 2-8 %), not a quarter.
+    EXPECT_LE(embreeGrazes, count * 2 / 9 / 4) << "of " << rays.size() << " rays";
+    std::printf("  %s: %zu rays, grid = brute force on all, Embree on all but %d grazing\n",
+                GetParam().file.c_str(), rays.size(), embreeGrazes);
+}
+
+TEST_P(RealSceneTest, DefaultLmmIsLeakFreeAndCloseToHardShadows) {
+    const Scene& s = scene();
+    const Image rt = Render(s, "rt");
+    const Image lmm = Render(s, "lmm");  // the default variant
+    const Image object = Render(s, "lmm", "object");
+    // The default (consensus) is ОТ's image exactly: a local-visibility test at every point,
+    // so no light leaks through walls, whatever their thickness.
+    EXPECT_TRUE(lmm.pixels == object.pixels) << "default LMM differs from ОТ";
+    const ImageMetrics m = CompareImages(lmm, rt);
+    std::printf("  %s: PSNR(LMM, RT) %.1f dB, SSIM %.3f\n", GetParam().file.c_str(), m.psnr, m.ssim);
+    EXPECT_GE(m.psnr, GetParam().minPsnrVsRt);
+    EXPECT_GE(m.ssim, 0.9);
+    // Soft shadows move light around shadow edges; they neither add nor remove much of it.
+    double sumL = 0, sumR = 0;
+    for (size_t i = 0; i < rt.pixels.size(); ++i) {
+        sumL += lmm.pixels[i].r + lmm.pixels[i].g + lmm.pixels[i].b;
+        sumR += rt.pixels[i].r + rt.pixels[i].g + rt.pixels[i].b;
+    }
+    EXPECT_NEAR(sumL / sumR, 1.0, 0.05);
+}
+
+TEST_P(RealSceneTest, ReducedTestLosesLittleAgainstTemplates) {
+    const Scene& s = scene();
+    const ImageMetrics m = CompareImages(Render(s, "lmm", "reduced"), Render(s, "lmm", "templates"));
+    std::printf("  %s: PSNR(У, Ш) %.1f dB\n", GetParam().file.c_str(), m.psnr);
+    EXPECT_GE(m.psnr, 40.0);  // issue 5: the reduced test's loss, measured by PSNR
+}
+
+TEST_P(RealSceneTest, CliImagesDoNotDependOnTheThreadCount) {
+    const testing::ScratchFolder scratch("lm_real");
+    std::string first;
+    for (const char* threads : {"1", "2"}) {
+        const std::string out = scratch.path + "/t" + threads + ".png";
+        const testing::CliResult r = testing::RunLightmesh(
+            "render " + ScenePath(GetParam().file) + " --width 128 --height 96 -q --threads " + threads +
+            " --template-dir " + g_templateDir + " -o " + out);
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        const std::string bytes = testing::FileBytes(out);
+        ASSERT_GT(bytes.size(), 100u);
+        if (first.empty())
+            first = bytes;
+        else
+            EXPECT_TRUE(bytes == first) << "threads " << threads << " differs from 1 thread";
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Real, RealSceneTest, ::testing::ValuesIn(Scenes()),
+                         [](const ::testing::TestParamInfo<RealScene>& info) {
+                             return info.param.file.substr(0, info.param.file.find('.'));
+                         });
+
+}  // namespace
+}  // namespace lm
+
+int main(int argc, char** argv) {
+    ::testing::InitGoogleTest(&argc, argv);
+    lm::SetLogLevel(lm::LogLevel::Error);
+    // Unlike the unit tests' runner, XDG_CACHE_HOME stays as it is: it is where
+    // scripts/fetch-scenes.sh put the models ("cache:" paths).
+    lm::g_templateDir = ::testing::TempDir() + "/lightmesh-real-templates-" + std::to_string(getpid());
+    std::filesystem::create_directories(lm::g_templateDir);
+    const int result = RUN_ALL_TESTS();
+    std::error_code ec;
+    std::filesystem::remove_all(lm::g_templateDir, ec);
+    return result;
+}
