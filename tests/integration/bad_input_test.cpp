@@ -302,6 +302,13 @@ std::vector<Case> Corpus() {
                      "triangles are degenerate (zero area)\n",
          .files = {{"scene.json", WithMeshes(R"([{"file": "point.obj"}])")},
                    {"point.obj", "v 1 1 1\nv 1 1 1\nv 1 1 1\nv 2 2 2\nf 1 2 3\nf 1 2 4\n"}}},
+        {.name = "coordinates_beyond_float_rendering",
+         .args = kRender,
+         .expected = "lightmesh: error: $D/scene.json /meshes: the scene's coordinates reach "
+                     "1e+30, beyond the ±1e+18 that single-precision rendering allows (scale "
+                     "the model down)\n",
+         .files = {{"scene.json",
+                    WithMeshes(R"([{"file": "box.obj", "transform": {"translate": [0, 1e30, 0]}}])")}}},
         // --- Lights -------------------------------------------------------------------------
         {.name = "light_inside_object",
          .args = kRender,

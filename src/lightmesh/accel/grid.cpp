@@ -569,7 +569,9 @@ bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD,
                 if (query.Cell(span)) return true;
             }
         }
-        if (tNext >= tExit) return false;
+        // Written so that a NaN (from a ray the caller built out of overflowed values)
+        // ends the walk instead of stepping along an axis the ray does not move on.
+        if (!(tNext < tExit)) return false;
         tCell = tNext;
         // Step across the nearest plane (at a tie, either: the other follows at once).
         if (tx == tNext) {

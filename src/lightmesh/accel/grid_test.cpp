@@ -206,6 +206,16 @@ TEST(GridTraversal, DegenerateInputs) {
     EXPECT_TRUE(std::isfinite(g2.GridBounds().MaxExtent()));
     ASSERT_TRUE(g2.Intersect(Ray{{0.3f, 0.6f, 0.5f}, {0, 0, 1}}, &h));
     EXPECT_EQ(h.t, 0.5f);
+    // Rays built from overflowed values (a fuzzed scene once put light-mesh nodes at
+    // infinity): the walk ends with no hit instead of stepping forever.
+    const float inf = Infinity, nan = std::nanf("");
+    for (const Ray& r : {Ray{{0.5f, inf, 0.5f}, {0, -inf, 0}}, Ray{{inf, 0.5f, 0.5f}, {-inf, 0.1f, 0}},
+                         Ray{{0.3f, 0.6f, 0.5f}, {nan, nan, 1}}, Ray{{nan, 0.5f, 0.5f}, {1, 0, 0}},
+                         Ray{{0.3f, 0.6f, -1}, {0, 0, 1}, 0.0f, nan}}) {
+        EXPECT_FALSE(grid.Intersect(r, &h));
+        EXPECT_FALSE(grid.Occluded(r));
+        EXPECT_EQ(grid.CountCrossings(r), 0);
+    }
 }
 
 TEST(GridTraversal, ShortSegmentsMatchBruteForce) {

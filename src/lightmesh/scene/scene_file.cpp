@@ -691,6 +691,14 @@ void CheckExtent(const Reader& r, const std::string& path, const Scene& scene) {
     if (!IsFinite(b.lo) || !IsFinite(b.hi) || !IsFinite(b.Diagonal()))
         r.Fail(path, "the scene's bounding box is not finite (coordinates too large?)");
     if (!(b.MaxExtent() > 0)) r.Fail(path, "the scene has zero extent");
+    // Squared distances between points must stay finite in float (max 3.4e38): beyond
+    // ±1e18, ray set-up, light-mesh node positions and shading overflow to inf or NaN.
+    constexpr float kMaxCoordinate = 1e18f;
+    const float reach = std::max(MaxComponent(Abs(b.lo)), MaxComponent(Abs(b.hi)));
+    if (reach > kMaxCoordinate)
+        r.Fail(path, StringPrintf("the scene's coordinates reach %g, beyond the ±%g that "
+                                  "single-precision rendering allows (scale the model down)",
+                                  double(reach), double(kMaxCoordinate)));
 }
 
 /// Whether p is inside a closed solid of the mesh: the number of surfaces crossed on the
