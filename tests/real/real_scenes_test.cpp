@@ -120,7 +120,7 @@ TEST_P(RealSceneTest, LoadsWithTheDocumentedFigures) {
     EXPECT_EQ(s.report.duplicatesRemoved, want.duplicates);
     EXPECT_EQ(s.report.meshesExcluded, want.excluded);
     for (const Vec3& p : s.mesh.positions) ASSERT_TRUE(IsFinite(p));
-    // Every light is outside the scene's geometry and above the ground.
+    // Every light is above the scene's lowest point (the ground it lights).
     const Bounds3 b = s.mesh.Bounds();
     for (const PointLight& l : s.lights) EXPECT_GT(l.position.y, b.lo.y);
 }
