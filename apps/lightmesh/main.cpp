@@ -85,7 +85,7 @@ struct RenderCommand {
     std::optional<int> width, height, aa, maxDepth, grid, cc, ns;
     std::optional<float> ki, lightRadius;
     std::optional<int> samples;
-    std::optional<std::string> shadows, accel, variant, templateDir;
+    std::optional<std::string> shadows, accel, variant, templateDir, cellSummaries;
     bool stats = false;
 };
 
@@ -117,6 +117,7 @@ int RunRender(const RenderCommand& cmd) {
     if (cmd.variant) options.lightMesh.variant = *cmd.variant;
     if (cmd.ns) options.lightMesh.ns = *cmd.ns;
     if (cmd.templateDir) options.lightMesh.templateDir = *cmd.templateDir;
+    if (cmd.cellSummaries) options.lightMesh.cellSummaries = *cmd.cellSummaries;
     if (cmd.lightRadius) options.areaLight.radius = *cmd.lightRadius;
     if (cmd.samples) options.areaLight.samples = *cmd.samples;
 
@@ -186,6 +187,11 @@ int RunRender(const RenderCommand& cmd) {
                         c.interpolations ? static_cast<double>(c.nodesUsed) / static_cast<double>(c.interpolations) : 0.0,
                         static_cast<double>(c.candidates) / points, Count(c.localSegments).c_str(),
                         Count(c.fallbacks).c_str(), 100.0 * static_cast<double>(c.fallbacks) / points);
+            if (c.uniformCellPoints + c.planarCellPoints > 0)
+                std::printf("cells     points answered by their cell's summary %s (%.1f%%), in planar cells %s (%.1f%%); "
+                            "mean m counts the other points only\n",
+                            Count(c.uniformCellPoints).c_str(), 100.0 * static_cast<double>(c.uniformCellPoints) / points,
+                            Count(c.planarCellPoints).c_str(), 100.0 * static_cast<double>(c.planarCellPoints) / points);
         }
         PrintFigures("shadows", shadows->Figures());
         std::printf("memory    peak %s\n", lm::FormatBytes(lm::PeakMemoryBytes()).c_str());
@@ -459,7 +465,9 @@ int main(int argc, char** argv) {
                           "Shadows: none, rt (hard: one shadow ray per light), lmm (soft: the light mesh method) or area "
                           "(soft reference: spherical lights, --samples shadow rays each)")
         ->check(CLI::IsMember(lm::ShadowMethodNames()));
-    renderCmd->add_option("--accel", render.accel, "Ray-query back-end: brute, grid or embree")
+    renderCmd->add_option("--accel", render.accel,
+                          std::string("Ray-query back-end: brute, grid (the paper's nested grid) or embree; default ") +
+                              lm::kDefaultAccelerator)
         ->check(CLI::IsMember(lm::AcceleratorNames()));
     renderCmd->add_option("--grid", render.grid,
                           "Nested grid: top-level cells along the longest side (0: automatic)")
@@ -480,6 +488,9 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(1, 64));
     renderCmd->add_option("--template-dir", render.templateDir,
                           "Folder caching the sphere templates (default: $XDG_CACHE_HOME/lightmesh/templates)");
+    renderCmd->add_option("--cell-summaries", render.cellSummaries,
+                          "Light mesh: per-cell summaries (exact; ours): auto (for consensus only), on (also none, inside) or off")
+        ->check(CLI::IsMember({"auto", "on", "off"}));
     renderCmd->add_option("--light-radius", render.lightRadius,
                           "Area shadows: radius of the sphere each point light becomes (default 0: point lights)");
     renderCmd->add_option("--samples", render.samples,
@@ -536,8 +547,11 @@ int main(int argc, char** argv) {
     CLI::Option* benchKi = benchCmd->add_option("--ki", bench.matrix.ki, "Light mesh kI values, comma-separated; default 2")
         ->delimiter(',')->check(CLI::Range(0.01f, 16.0f));
     CLI::Option* benchVariants = benchCmd->add_option("--variants", bench.matrix.variants,
-                         "LMM variants, comma-separated; default grid,templates,reduced,none,inside,object")
+                         "LMM variants, comma-separated; default grid,templates,reduced,none,inside,object,consensus")
         ->delimiter(',');
+    benchCmd->add_option("--cell-summaries", bench.matrix.cellSummaries,
+                         "Light mesh cell summaries for every LMM cell: auto (consensus only), on or off")
+        ->check(CLI::IsMember({"auto", "on", "off"}));
     CLI::Option* benchTable = benchCmd->add_option("--table", bench.table,
                          "Reproduce the paper's table 1, 2, 3 or 4 on scenes/real (replaces --scene --size --cc --ki --variants)")
         ->check(CLI::Range(1, 4));
@@ -559,7 +573,8 @@ int main(int argc, char** argv) {
     benchCmd->add_option("--ref-samples", bench.matrix.refSamples, "Samples of the --quality reference; default 256")
         ->check(CLI::Range(1, 4096));
     benchCmd->add_option("--accels", bench.matrix.accels,
-                         "Ray-query back-ends for RT (the first also serves LMM), comma-separated; default grid")
+                         std::string("Ray-query back-ends for RT (the first also serves no shadows and LMM), comma-separated; default ") +
+                             lm::kDefaultAccelerator)
         ->delimiter(',')->check(CLI::IsMember(lm::AcceleratorNames()));
     bench.repeatOption = benchCmd->add_option("--repeat", bench.matrix.repeat, "Timed runs per cell after a warm-up; the median is reported")
         ->check(CLI::Range(1, 100));

@@ -24,57 +24,6 @@ bool IsFiniteTri(const NestedGridAccel::Tri& t) {
     return IsFinite(t.p0) && IsFinite(t.p1) && IsFinite(t.p2);
 }
 
-// Triangle/box overlap by the separating-axis theorem (Akenine-Möller, "Fast 3D
-// Triangle-Box Overlap Testing", JGT 2001): 3 box normals, the triangle's normal and the 9
-// edge cross products. In double, on a box already grown by the assignment epsilon, so a
-// triangle touching a cell is assigned to it. Exact assignment instead of the triangle's
-// bounding box keeps long diagonal triangles out of the cells they only pass near.
-bool TriBoxOverlap(const double c[3], const double h[3], const NestedGridAccel::Tri& t) {
-    double v[3][3];
-    for (int a = 0; a < 3; ++a) {
-        v[0][a] = double(t.p0[a]) - c[a];
-        v[1][a] = double(t.p1[a]) - c[a];
-        v[2][a] = double(t.p2[a]) - c[a];
-    }
-    // Box normals: the bounding boxes overlap.
-    for (int a = 0; a < 3; ++a) {
-        double lo = std::min({v[0][a], v[1][a], v[2][a]});
-        double hi = std::max({v[0][a], v[1][a], v[2][a]});
-        if (lo > h[a] || hi < -h[a]) return false;
-    }
-    double e[3][3];
-    for (int a = 0; a < 3; ++a) {
-        e[0][a] = v[1][a] - v[0][a];
-        e[1][a] = v[2][a] - v[1][a];
-        e[2][a] = v[0][a] - v[2][a];
-    }
-    // Triangle normal: the plane passes through the box.
-    {
-        double n[3] = {e[0][1] * e[1][2] - e[0][2] * e[1][1], e[0][2] * e[1][0] - e[0][0] * e[1][2],
-                       e[0][0] * e[1][1] - e[0][1] * e[1][0]};
-        double d = n[0] * v[0][0] + n[1] * v[0][1] + n[2] * v[0][2];
-        double r = h[0] * std::abs(n[0]) + h[1] * std::abs(n[1]) + h[2] * std::abs(n[2]);
-        if (std::abs(d) > r) return false;
-    }
-    // Edge × axis.
-    for (int i = 0; i < 3; ++i) {
-        for (int a = 0; a < 3; ++a) {
-            // axis = e_i × unit(a)
-            const int b = (a + 1) % 3, c2 = (a + 2) % 3;
-            double ax[3];
-            ax[a] = 0;
-            ax[b] = e[i][c2];
-            ax[c2] = -e[i][b];
-            double p0 = ax[b] * v[0][b] + ax[c2] * v[0][c2];
-            double p1 = ax[b] * v[1][b] + ax[c2] * v[1][c2];
-            double p2 = ax[b] * v[2][b] + ax[c2] * v[2][c2];
-            double r = h[b] * std::abs(ax[b]) + h[c2] * std::abs(ax[c2]);
-            if (std::min({p0, p1, p2}) > r || std::max({p0, p1, p2}) < -r) return false;
-        }
-    }
-    return true;
-}
-
 // A direct-mapped cache of the triangles this query already tested (mailboxing, Amanatides
 // & Woo §4): a triangle spanning several cells is tested once, usually. It lives on the
 // query's stack, so concurrent queries share nothing. An evicted id is merely tested again;
@@ -288,7 +237,7 @@ struct NestedGridAccel::Builder {
                 c[1] = node.lo[1] + (y + 0.5) * double(node.cellSize[1]);
                 for (int x = lo[0]; x <= hi[0]; ++x) {
                     c[0] = node.lo[0] + (x + 0.5) * double(node.cellSize[0]);
-                    if (TriBoxOverlap(c, h, t)) emit(uint32_t((z * ny + y) * nx + x));
+                    if (TriangleOverlapsBox(t.p0, t.p1, t.p2, c, h)) emit(uint32_t((z * ny + y) * nx + x));
                 }
             }
         }
@@ -632,6 +581,35 @@ bool NestedGridAccel::Occluded(const Ray& ray) const {
     AnyQuery q(ray);
     Traverse(ray, q);
     return q.found;
+}
+
+void NestedGridAccel::TrianglesOverlapping(const Bounds3& box, std::vector<uint32_t>* out, bool exact) const {
+    // The cells of every level that the box touches (each grown by the rounding allowance
+    // the build assigned triangles with), their triangles as candidates.
+    std::vector<uint32_t> ids;
+    const float pad = epsAbs_ + 4e-6f * boxMaxAbs_;
+    auto visit = [&](auto&& self, uint32_t nodeIndex) -> void {
+        const Node& g = nodes_[nodeIndex];
+        int lo[3], hi[3];
+        for (int a = 0; a < 3; ++a) {
+            const float f0 = (box.lo[a] - pad - g.lo[a]) * g.invCellSize[a];
+            const float f1 = (box.hi[a] + pad - g.lo[a]) * g.invCellSize[a];
+            if (!(f1 >= 0) || !(f0 < float(g.res[a]))) return;
+            lo[a] = f0 > 0 ? std::min(int(f0), g.res[a] - 1) : 0;
+            hi[a] = f1 < float(g.res[a]) ? int(f1) : g.res[a] - 1;
+        }
+        for (int z = lo[2]; z <= hi[2]; ++z)
+            for (int y = lo[1]; y <= hi[1]; ++y)
+                for (int x = lo[0]; x <= hi[0]; ++x) {
+                    const uint32_t idx = g.firstCell + uint32_t((z * g.res[1] + y) * g.res[0] + x);
+                    const uint32_t b = cellStart_[idx], e = cellStart_[idx + 1];
+                    if (b == e) continue;
+                    if (items_[b] & kChild) self(self, items_[b] & ~kChild);
+                    else ids.insert(ids.end(), items_.begin() + b, items_.begin() + e);
+                }
+    };
+    if (!nodes_.empty()) visit(visit, 0);
+    KeepOverlapping(mesh_, box, ids, out, exact);
 }
 
 int NestedGridAccel::CountCrossings(const Ray& ray) const {

@@ -141,4 +141,12 @@ inline Vec3 TriangleNormal(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
     return Cross(p1 - p0, p2 - p0);
 }
 
+/// Triangle/box overlap by the separating-axis theorem (Akenine-Möller, "Fast 3D
+/// Triangle-Box Overlap Testing", JGT 2001): 3 box normals, the triangle's normal and the 9
+/// edge cross products, in double. The box is given by its centre `c` and half sizes `h`;
+/// touching counts as overlapping. The nested grid assigns triangles to cells with it, and
+/// the light mesh finds the triangles near a cell with it.
+bool TriangleOverlapsBox(const Vec3& p0, const Vec3& p1, const Vec3& p2, const double c[3],
+                         const double h[3]);
+
 }  // namespace lm

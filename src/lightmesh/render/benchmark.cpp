@@ -234,6 +234,7 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                         options.lightMesh.cc = cc;
                         options.lightMesh.ki = ki;
                         options.lightMesh.variant = v;
+                        options.lightMesh.cellSummaries = m.cellSummaries;
                         run(r, lmmAccel, options);
                     }
             if (!m.quality) continue;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "lightmesh/render/counters.h"
+#include "lightmesh/render/options.h"
 
 namespace lm {
 
@@ -18,8 +19,12 @@ struct BenchMatrix {
     std::vector<std::pair<int, int>> sizes{{1024, 768}};
     std::vector<int> cc{100};
     std::vector<float> ki{2.0f};
-    std::vector<std::string> variants{"grid", "templates", "reduced", "none", "inside", "object"};
-    std::vector<std::string> accels{"grid"};  ///< first one is used for the LMM variants
+    std::vector<std::string> variants{"grid", "templates", "reduced", "none", "inside", "object", "consensus"};
+    std::string cellSummaries = "auto";  ///< LightMeshOptions::cellSummaries for every LMM cell
+    /// Back-ends for RT; the first one also serves "none" and the LMM variants, so a
+    /// matrix with one back-end compares every method on the same one. Default: the
+    /// render default (Embree when built with it).
+    std::vector<std::string> accels{kDefaultAccelerator};
     bool noShadows = true;
     int repeat = 3;       ///< timed runs per cell, after one warm-up run
     std::string imageDir; ///< if set, each cell's image is written there as PNG

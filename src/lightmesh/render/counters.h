@@ -19,6 +19,8 @@ struct RenderCounters {
     uint64_t candidates = 0;       ///< nodes within r and in front of the surface
     uint64_t localSegments = 0;    ///< local-visibility segments node→P traced
     uint64_t fallbacks = 0;        ///< points with m = 0 that used a shadow ray
+    uint64_t uniformCellPoints = 0;  ///< points answered by their cell's summary (all nodes agree)
+    uint64_t planarCellPoints = 0;   ///< points whose cell's geometry is one plane: no segment
 
     RenderCounters& operator+=(const RenderCounters& o) {
         cameraRays += o.cameraRays;
@@ -30,6 +32,8 @@ struct RenderCounters {
         candidates += o.candidates;
         localSegments += o.localSegments;
         fallbacks += o.fallbacks;
+        uniformCellPoints += o.uniformCellPoints;
+        planarCellPoints += o.planarCellPoints;
         return *this;
     }
 };

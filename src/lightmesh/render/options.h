@@ -20,6 +20,12 @@ struct LightMeshOptions {
     int ns = 0;
     /// Template cache folder; empty means the XDG cache.
     std::string templateDir;
+    /// Cell summaries (ours, not in the paper; exact: same images, less work): per mesh
+    /// cell, lazily, which lights every node a point of the cell can use agrees on, and
+    /// whether the cell's geometry is one plane. "auto" uses them for the default variant
+    /// (consensus) only, so the paper's variants run the paper's algorithms; "on" also for
+    /// none (Нет) and inside (СТ); "off" nowhere.
+    std::string cellSummaries = "auto";
 };
 
 /// Settings of the area-light reference ("--shadows area", issue 7): every point light
@@ -31,6 +37,12 @@ struct AreaLightOptions {
     int samples = 16;     ///< shadow rays per light and shading point, 1 .. 4096
 };
 
+#ifdef LIGHTMESH_HAS_EMBREE
+inline constexpr const char* kDefaultAccelerator = "embree";
+#else
+inline constexpr const char* kDefaultAccelerator = "grid";
+#endif
+
 struct RenderOptions {
     int width = 640;
     int height = 480;
@@ -40,8 +52,10 @@ struct RenderOptions {
     int maxDepth = 5;
     /// Shadow method: "none", "rt" (one shadow ray per light), "lmm" or "area".
     std::string shadows = "rt";
-    /// Ray-query back-end: "brute", "grid" or "embree".
-    std::string accel = "grid";
+    /// Ray-query back-end: "brute", "grid" or "embree". The default is the fastest one
+    /// measured (README, Benchmarks): Embree when the build has it; the nested grid (the
+    /// paper's §2, which reproduces its tables) is one flag away.
+    std::string accel = kDefaultAccelerator;
     AccelOptions accelOptions;
     LightMeshOptions lightMesh;
     AreaLightOptions areaLight;

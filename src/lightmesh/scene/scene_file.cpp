@@ -34,7 +34,8 @@
 //                2^28), "aa" (1..16), "max_depth" (1..64), "shadows" ("none" | "rt" | "lmm" |
 //                "area"), "accel" ("brute" | "grid" | "embree"), "grid" (0..4096),
 //                "cc" (1..4096), "ki" (in (0, 16]), "variant" (string), "ns" (0..64),
-//                "template_dir" (string), "light_radius" (≥ 0: the sphere each point light
+//                "template_dir" (string), "cell_summaries" ("auto" | "on" | "off"),
+//                "light_radius" (≥ 0: the sphere each point light
 //                becomes with "shadows": "area"), "samples" (1..4096, shadow rays per light).
 //
 // A colour is a number (grey) or [r, g, b]; all numbers must be finite and colours ≥ 0.
@@ -612,6 +613,8 @@ void ReadRender(const Reader& r, const Json& j, RenderOptions* ro) {
     if (const Json* v = o.Find("ns")) ro->lightMesh.ns = Int(r, *v, o.Child("ns"), 0, 64);
     if (const Json* v = o.Find("template_dir"))
         ro->lightMesh.templateDir = String(r, *v, o.Child("template_dir"));
+    if (const Json* v = o.Find("cell_summaries"))
+        ro->lightMesh.cellSummaries = Enum(r, *v, o.Child("cell_summaries"), {"auto", "on", "off"});
     if (const Json* v = o.Find("light_radius"))
         ro->areaLight.radius = NonNegative(r, *v, o.Child("light_radius"));
     if (const Json* v = o.Find("samples")) ro->areaLight.samples = Int(r, *v, o.Child("samples"), 1, 4096);

@@ -1,6 +1,12 @@
 #include "lightmesh/shadow/light_mesh.h"
 
+#include <algorithm>
+#include <array>
 #include <atomic>
+#include <cstdlib>
+#include <mutex>
+#include <new>
+#include <tuple>
 #include <cmath>
 #include <type_traits>
 #include <utility>
@@ -81,6 +87,22 @@ LightMeshVariant ParseLightMeshVariant(std::string_view name) {
 
 namespace {
 
+/// Zero-filled storage from calloc: the kernel hands out zero pages on first touch, so a
+/// large lattice costs nothing until its nodes are used (lazy, like the nodes themselves).
+/// std::atomic of an integer is a standard-layout type whose zero bytes are the value 0.
+struct FreeDeleter {
+    void operator()(void* p) const { std::free(p); }
+};
+template <typename T>
+using ZeroedPtr = std::unique_ptr<T[], FreeDeleter>;
+template <typename T>
+ZeroedPtr<std::atomic<T>> ZeroedArray(uint64_t count) {
+    static_assert(std::atomic<T>::is_always_lock_free && sizeof(std::atomic<T>) == sizeof(T));
+    void* p = std::calloc(std::max<uint64_t>(count, 1), sizeof(T));
+    if (!p) throw std::bad_alloc();
+    return ZeroedPtr<std::atomic<T>>(static_cast<std::atomic<T>*>(p));
+}
+
 /// A template entry converted for one lattice: the node's offset from LM0 as lattice
 /// coordinates, as floats (for the vector from P) and as a linear index offset.
 struct TemplateEntry {
@@ -105,13 +127,32 @@ class LightMesh final : public LightMeshShadows {
 
   public:
     LightMesh(const Scene& scene, const Accelerator& accel, const LightMeshLattice& lattice,
-              const LightMeshVariant& variant, TemplateLoad templates)
+              const LightMeshVariant& variant, TemplateLoad templates, const std::string& cellSummaries)
         : scene_(scene), accel_(accel), lattice_(lattice), variant_(variant),
-          templates_(std::move(templates)), nodes_(new std::atomic<Word>[lattice.NodeCount()]) {
-        static_assert(std::atomic<Word>::is_always_lock_free);
-        for (uint64_t i = 0; i < lattice.NodeCount(); ++i) nodes_[i].store(0, std::memory_order_relaxed);
+          templates_(std::move(templates)), nodes_(ZeroedArray<Word>(lattice.NodeCount())) {
         if (variant_.enumeration == SphereEnumeration::Templates) ConvertTemplates();
         sceneBox_ = scene.mesh.Bounds();
+        // Tolerances at the lattice's scale. delta: how far from a plane a vertex may lie and
+        // still count as on it (a few float ulps of the largest coordinate); eps: how far a
+        // triangle's unit normal may turn from the plane's. A node closer to P's plane than
+        // frontEps_ steps (their effect over the sphere, twice over) is on the surface, not
+        // in front of it: its visibility there is decided by rounding.
+        const Vec3 far = lattice_.Node(lattice_.nx - 1, lattice_.ny - 1, lattice_.nz - 1);
+        const float magnitude = std::max(MaxComponent(Abs(lattice_.origin)), MaxComponent(Abs(far)));
+        planeDelta_ = 2e-7f * magnitude;
+        frontEps_ = (4 * planeDelta_ + 2 * kPlaneEps * (lattice_.r + 2 * lattice_.h)) / lattice_.h;
+        reachMargin_ = 1e-3f * lattice_.h + 1e-5f * magnitude;
+        summaries_ = variant_.enumeration == SphereEnumeration::Templates &&
+                     (variant_.local == LocalVisibility::Consensus
+                          ? cellSummaries != "off"
+                          : cellSummaries == "on" && (variant_.local == LocalVisibility::None ||
+                                                      variant_.local == LocalVisibility::Inside));
+        if (summaries_) {
+            bricksX_ = static_cast<uint64_t>(lattice.nx + kBrick - 1) / kBrick;
+            bricksY_ = static_cast<uint64_t>(lattice.ny + kBrick - 1) / kBrick;
+            const uint64_t bricksZ = static_cast<uint64_t>(lattice.nz + kBrick - 1) / kBrick;
+            bricks_ = ZeroedArray<SummaryBrick*>(bricksX_ * bricksY_ * bricksZ);
+        }
     }
 
     const LightMeshLattice& Lattice() const override { return lattice_; }
@@ -127,12 +168,26 @@ class LightMesh final : public LightMeshShadows {
 
     void Visibility(const ShadingPoint& sp, const bool* needed, float* vis,
                     RenderCounters& counters) const override {
-        Accumulator acc;
-        if (variant_.enumeration == SphereEnumeration::Templates && TemplateWalk(sp, acc, counters)) {
+        const size_t nLights = scene_.lights.size();
+        Accumulator acc(nLights);
+        Word neededMask = 0;
+        for (size_t l = 0; l < nLights; ++l)
+            if (needed[l]) neededMask |= Word(1) << l;
+        if (variant_.enumeration == SphereEnumeration::Templates) {
+            Word uniform = 0;
+            if (!TemplateWalk(sp, neededMask, acc, counters, &uniform)) {
+                CubeWalk(sp, acc, counters);
+            } else if (uniform) {
+                // For every light needed, every node the point may use carries this bit, and
+                // the set is not empty.
+                ++counters.interpolations;
+                ++counters.uniformCellPoints;
+                for (size_t l = 0; l < nLights; ++l) vis[l] = static_cast<float>((uniform >> l) & 1);
+                return;
+            }
         } else {
             CubeWalk(sp, acc, counters);
         }
-        const size_t nLights = scene_.lights.size();
         if (acc.m == 0) {
             // No node left (a crevice, or a sphere cut off by occluders): one shadow ray
             // per light, as RT would (the paper is silent on this case).
@@ -144,6 +199,7 @@ class LightMesh final : public LightMeshShadows {
             }
             return;
         }
+        if constexpr (sizeof(Word) == 1) acc.Flush();
         ++counters.interpolations;
         counters.nodesUsed += acc.m;
         // A true division, so that m visible nodes out of m give exactly 1 (as RT does).
@@ -153,6 +209,8 @@ class LightMesh final : public LightMeshShadows {
 
     ShadowFigures Figures() const override {
         const uint64_t total = lattice_.NodeCount(), done = evaluated_.load();
+        const uint64_t cellsDone = summarized_.load(), planar = planarCells_.load(),
+                       uniform = uniformCells_.load();
         ShadowFigures f = {
             {"variant", variant_.name + " (" + variant_.paperName + ")"},
             {"mesh", StringPrintf("%dx%dx%d nodes", lattice_.nx, lattice_.ny, lattice_.nz)},
@@ -164,6 +222,11 @@ class LightMesh final : public LightMeshShadows {
                                              static_cast<unsigned long long>(total))},
             {"node segments", StringPrintf("%llu", static_cast<unsigned long long>(done * SegmentsPerNode()))},
         };
+        if (summaries_)
+            f.push_back({"cell summaries",
+                         StringPrintf("%llu cells (%llu uniform, %llu planar), %s", static_cast<unsigned long long>(cellsDone),
+                                      static_cast<unsigned long long>(uniform), static_cast<unsigned long long>(planar),
+                                      FormatBytes(SummaryBytes()).c_str())});
         if (variant_.enumeration == SphereEnumeration::Templates) {
             const TemplateLoad& t = templates_;
             f.push_back({"templates", StringPrintf("ns %d, %d sub-positions, %zu entries, %s in %.1f ms%s%s",
@@ -177,10 +240,36 @@ class LightMesh final : public LightMeshShadows {
     }
 
   private:
+    uint64_t SummaryBytes() const {
+        std::lock_guard<std::mutex> lock(brickMutex_);
+        return brickPool_.size() * sizeof(SummaryBrick) + bricksX_ * bricksY_ * sizeof(void*) *
+                                                              ((lattice_.nz + kBrick - 1) / kBrick);
+    }
+
+    // The sums of formula (2): m and, per light, the visible nodes. With one-byte node
+    // words the eight bits are counted at once, one byte lane each (kSpread), and the lanes
+    // are moved to `visible` before they can overflow, and at the end (Finish).
     struct Accumulator {
         uint32_t m = 0;
-        uint32_t visible[64] = {};
+        uint32_t pending = 0;
+        uint64_t lanes = 0;
+        uint32_t visible[64];
+        explicit Accumulator(size_t lights) {
+            for (size_t l = 0; l < lights; ++l) visible[l] = 0;
+        }
+        void Flush() {
+            for (int b = 0; b < 8; ++b) visible[b] += static_cast<uint32_t>((lanes >> (8 * b)) & 0xFF);
+            lanes = 0;
+            pending = 0;
+        }
     };
+    static constexpr std::array<uint64_t, 256> MakeSpread() {
+        std::array<uint64_t, 256> t{};
+        for (int w = 0; w < 256; ++w)
+            for (int b = 0; b < 8; ++b) t[w] |= static_cast<uint64_t>((w >> b) & 1) << (8 * b);
+        return t;
+    }
+    static constexpr std::array<uint64_t, 256> kSpread = MakeSpread();
 
     // Segments traced when a node is evaluated: one per light, plus, for СТ, the extra
     // segments that complete its vote of three (see EvaluateNode).
@@ -198,7 +287,12 @@ class LightMesh final : public LightMeshShadows {
     // Adds node x to the interpolation set.
     void Use(Accumulator& acc, Word w) const {
         ++acc.m;
-        for (size_t l = 0; l < scene_.lights.size(); ++l) acc.visible[l] += (w >> l) & 1;
+        if constexpr (sizeof(Word) == 1) {
+            acc.lanes += kSpread[w];
+            if (++acc.pending == 255) acc.Flush();
+        } else {
+            for (size_t l = 0; l < scene_.lights.size(); ++l) acc.visible[l] += (w >> l) & 1;
+        }
     }
 
     // The local-visibility segment from a node to P (paper §1.4): it must be unblocked.
@@ -249,7 +343,8 @@ class LightMesh final : public LightMeshShadows {
                     const Vec3 x = L.Node(i, j, k);
                     const Vec3 d = x - sp.p;
                     if (LengthSquared(d) > r2) continue;
-                    if (Dot(sp.n, d) <= 0) continue;  // behind the surface: (n(P), x - P) <= 0
+                    // Behind the surface, (n(P), x - P) <= 0, or on it (see frontEps_).
+                    if (Dot(sp.n, d) <= frontEps_ * L.h) continue;
                     Candidate(x, L.Index(i, j, k), sp, acc, counters);
                 }
     }
@@ -258,7 +353,11 @@ class LightMesh final : public LightMeshShadows {
     // sub-position's list; no distance tests. Returns false (and does nothing) when the
     // template would reach outside the lattice, which only happens for points on or
     // outside the far faces of the scene's box; the cube loop takes those.
-    bool TemplateWalk(const ShadingPoint& sp, Accumulator& acc, RenderCounters& counters) const {
+    //
+    // With cell summaries (ours), a point whose cell's nodes all agree is answered without
+    // the walk: *uniform gets those bits with kInit set (the caller averages nothing).
+    bool TemplateWalk(const ShadingPoint& sp, Word neededMask, Accumulator& acc, RenderCounters& counters,
+                      Word* uniform) const {
         const LightMeshLattice& L = lattice_;
         const Vec3 q = (sp.p - L.origin) * invH_;
         const int ci = static_cast<int>(std::floor(q.x)), cj = static_cast<int>(std::floor(q.y)),
@@ -268,17 +367,62 @@ class LightMesh final : public LightMeshShadows {
             return false;
         const Vec3 frac = q - Vec3(static_cast<float>(ci), static_cast<float>(cj), static_cast<float>(ck));
         const int ns = templates_.templates.ns;
-        auto snap = [ns](float f) { return std::clamp(static_cast<int>(std::lround(f * static_cast<float>(ns))), 0, ns); };
+        // Nearest sub-step, halves up (f >= 0 here, so the truncation is a floor).
+        auto snap = [ns](float f) { return std::clamp(static_cast<int>(f * static_cast<float>(ns) + 0.5f), 0, ns); };
         const int s = templates_.templates.SubPosition(snap(frac.x), snap(frac.y), snap(frac.z));
         const uint32_t begin = templates_.templates.begin[s], end = templates_.templates.begin[s + 1];
         const uint32_t innerBegin = begin + templates_.templates.boundaryCount[s];
         const int64_t base = static_cast<int64_t>(L.Index(ci, cj, ck));
-        // (n(P), x - P) with x - P = (offset - frac)·h; h > 0 does not change the sign.
-        auto front = [&](const TemplateEntry& e) { return Dot(sp.n, e.offset - frac) > 0; };
+        // (n(P), x - P) with x - P = (offset - frac)·h, over the tolerance of frontEps_.
+        auto front = [&](const TemplateEntry& e) { return Dot(sp.n, e.offset - frac) > frontEps_; };
         auto node = [&](const TemplateEntry& e) { return L.Node(ci + e.di, cj + e.dj, ck + e.dk); };
 
+        bool planar = false;
+        if (summaries_) {
+            CellSummary scratch;
+            const CellSummary& c = Summary(ci, cj, ck, &scratch);
+            int side = -1;
+            if (c.flags & kHasPlane) {
+                // Is P on Π? Its point within planeDelta_ (twice, for the rounding of this
+                // test), its normal within kPlaneEps.
+                const double hp = double(c.n[0]) * sp.p.x + double(c.n[1]) * sp.p.y + double(c.n[2]) * sp.p.z - c.d;
+                const Vec3 np(c.n[0], c.n[1], c.n[2]);
+                if (std::abs(hp) <= 2 * planeDelta_ && LengthSquared(Cross(sp.n, np)) <= kPlaneEps * kPlaneEps)
+                    side = Dot(sp.n, np) > 0 ? 0 : 1;
+            }
+            if (side >= 0) {
+                // The planar argument also needs P's own origin clearly off the plane.
+                planar = (c.flags & (side == 0 ? kClear0 : kClear1)) && Dot(sp.origin - sp.p, sp.n) > 4 * planeDelta_;
+                if (planar) ++counters.planarCellPoints;
+            }
+            if (side >= 0 && (neededMask & ~c.uniform[side]) == 0) {
+                const Word w = c.bits[side];
+                // Every light needed is uniform: the answer is w's bits if at least one
+                // candidate survives the variant's test, else the fallback (m = 0), exactly
+                // as the walk would find.
+                bool some = false;
+                if (variant_.local == LocalVisibility::Inside) {
+                    for (uint32_t t = begin; t < end && !some; ++t) {
+                        const TemplateEntry& e = entries_[t];
+                        some = front(e) && !(Evaluate(static_cast<uint64_t>(base + e.linear), node(e)) & kInside);
+                    }
+                } else if (variant_.local != LocalVisibility::Consensus || planar) {
+                    for (uint32_t t = begin; t < end && !some; ++t) some = front(entries_[t]);
+                } else {
+                    for (uint32_t t = begin; t < end && !some; ++t) {
+                        const TemplateEntry& e = entries_[t];
+                        if (!front(e)) continue;
+                        ++counters.candidates;
+                        some = SeesPoint(node(e), sp, counters);
+                    }
+                }
+                if (some) *uniform = (w & kVisMask) | kInit;
+                return true;  // with !some, m = 0: the caller falls back to shadow rays
+            }
+        }
+
         if (variant_.local == LocalVisibility::Consensus) {
-            ConsensusWalk(sp, begin, end, base, ci, cj, ck, frac, acc, counters);
+            ConsensusWalk(sp, neededMask, begin, end, base, ci, cj, ck, frac, planar, acc, counters);
             return true;
         }
         if (variant_.local != LocalVisibility::Reduced) {
@@ -316,8 +460,10 @@ class LightMesh final : public LightMeshShadows {
     // (m = 0) does the result change to the fallback, exactly as with ОТ. Where the
     // candidates disagree (penumbrae, edges of objects) every segment is traced as in ОТ.
     // The image is identical to ОТ's; only the mean m in --stats differs.
-    void ConsensusWalk(const ShadingPoint& sp, uint32_t begin, uint32_t end, int64_t base, int ci, int cj,
-                       int ck, const Vec3& frac, Accumulator& acc, RenderCounters& counters) const {
+    //
+    // In a planar cell (cell summaries) no segment is traced at all: every candidate sees P.
+    void ConsensusWalk(const ShadingPoint& sp, Word neededMask, uint32_t begin, uint32_t end, int64_t base, int ci, int cj,
+                       int ck, const Vec3& frac, bool planar, Accumulator& acc, RenderCounters& counters) const {
         struct Candidate {
             uint32_t entry;
             Word word;
@@ -334,10 +480,15 @@ class LightMesh final : public LightMeshShadows {
         const LightMeshLattice& L = lattice_;
         for (uint32_t t = begin; t < end; ++t) {
             const TemplateEntry& e = entries_[t];
-            if (!(Dot(sp.n, e.offset - frac) > 0)) continue;
+            if (!(Dot(sp.n, e.offset - frac) > frontEps_)) continue;
             ++counters.candidates;
             const Word w = Evaluate(static_cast<uint64_t>(base + e.linear), L.Node(ci + e.di, cj + e.dj, ck + e.dk));
-            if (n > 0 && ((w ^ list[0].word) & kVisMask)) agree = false;
+            if (planar) {
+                Use(acc, w);
+                continue;
+            }
+            // Only the lights the renderer needs matter (the others light P from behind).
+            if (n > 0 && ((w ^ list[0].word) & neededMask)) agree = false;
             list[n++] = {t, w};
         }
         for (uint32_t c = 0; c < n; ++c) {
@@ -359,10 +510,170 @@ class LightMesh final : public LightMeshShadows {
                 minOffset_ = std::min<int>(minOffset_, v);
                 maxOffset_ = std::max<int>(maxOffset_, v);
             }
-        for (const auto& o : t.offsets)
-            entries_.push_back({o[0], o[1], o[2], Vec3(o[0], o[1], o[2]),
-                                o[0] + static_cast<int64_t>(lattice_.nx) *
-                                           (o[1] + static_cast<int64_t>(lattice_.ny) * o[2])});
+        auto linear = [&](int di, int dj, int dk) {
+            return di + static_cast<int64_t>(lattice_.nx) * (dj + static_cast<int64_t>(lattice_.ny) * dk);
+        };
+        for (const auto& o : t.offsets) entries_.push_back({o[0], o[1], o[2], Vec3(o[0], o[1], o[2]), linear(o[0], o[1], o[2])});
+        // The union of all sub-positions' sets: every node a point of a cell may use, in
+        // memory order (the cell summaries read them all).
+        std::vector<std::array<int8_t, 3>> all(t.offsets.begin(), t.offsets.end());
+        std::sort(all.begin(), all.end(), [](const auto& a, const auto& b) {
+            return std::tie(a[2], a[1], a[0]) < std::tie(b[2], b[1], b[0]);
+        });
+        all.erase(std::unique(all.begin(), all.end()), all.end());
+        for (const auto& o : all) cellNodes_.push_back(linear(o[0], o[1], o[2]));
+    }
+
+    // ---- Cell summaries (ours, not in the paper; exact) ------------------------------
+    //
+    // A summary belongs to a mesh cell (the cell whose lower corner is node (ci, cj, ck))
+    // and to its main plane Π: the plane of the largest triangle meeting the cell (ties:
+    // the lower id, so it does not depend on the back-end). It is used by the points of
+    // the cell that lie on Π (within planeDelta_, normal within kPlaneEps), which is most
+    // points of floors, walls and other flat faces. For each side s of Π:
+    //  - uniform_s: every node a point of the cell may use (cellNodes_) that lies on side
+    //    s of Π has the same visibility bits bits_s (and, for СТ, the same inside flag).
+    //    A point on Π seen from side s uses only such nodes (its front test keeps nodes
+    //    more than frontEps_ steps in front of its own plane, which is within the
+    //    tolerances of Π), so any non-empty subset averages to exactly bits_s: formula (2)
+    //    needs neither the walk nor the node words.
+    //  - clear_s (consensus): no triangle meeting the cell grown by the sphere's reach has
+    //    a vertex more than planeDelta_ on side s. A local-visibility segment runs from a
+    //    node to P's origin, both clearly on side s, inside that box, so nothing can block
+    //    it: no segment is traced.
+    // Summaries are computed on first use and published like the nodes: the values depend
+    // on the cell only, and the thread that claims a record is the only one to write it.
+    struct CellSummary {
+        float n[3] = {0, 0, 0};  // Π: unit normal and offset, (n, x) = d on Π
+        double d = 0;
+        uint8_t flags = 0;
+        Word bits[2] = {0, 0};     // bits_s: the bits of the nodes on side s ...
+        Word uniform[2] = {0, 0};  // ... for the lights whose bit is the same on all of them
+    };
+    static constexpr uint8_t kHasPlane = 1, kClear0 = 8, kClear1 = 16;
+    static constexpr int kBrick = 4;  // summaries are stored by bricks of 4³ cells
+    struct SummaryBrick {
+        std::atomic<uint8_t> state[kBrick * kBrick * kBrick];  // 0 empty, 1 being written, 2 ready
+        CellSummary cell[kBrick * kBrick * kBrick];
+    };
+
+    // The summary of cell (ci, cj, ck): the stored one, or one computed into `scratch`.
+    const CellSummary& Summary(int ci, int cj, int ck, CellSummary* scratch) const {
+        const uint64_t brick = (static_cast<uint64_t>(ck / kBrick) * bricksY_ + static_cast<uint64_t>(cj / kBrick)) * bricksX_ +
+                               static_cast<uint64_t>(ci / kBrick);
+        SummaryBrick* b = bricks_[brick].load(std::memory_order_acquire);
+        if (!b) b = AllocateBrick(brick);
+        const int slot = ((ck % kBrick) * kBrick + (cj % kBrick)) * kBrick + (ci % kBrick);
+        uint8_t state = b->state[slot].load(std::memory_order_acquire);
+        if (state == 2) return b->cell[slot];
+        *scratch = ComputeSummary(ci, cj, ck);
+        if (state == 0 && b->state[slot].compare_exchange_strong(state, 1, std::memory_order_acquire)) {
+            b->cell[slot] = *scratch;
+            b->state[slot].store(2, std::memory_order_release);
+            summarized_.fetch_add(1, std::memory_order_relaxed);
+            if ((scratch->uniform[0] | scratch->uniform[1]) == kVisMask)
+                uniformCells_.fetch_add(1, std::memory_order_relaxed);
+            if (scratch->flags & (kClear0 | kClear1)) planarCells_.fetch_add(1, std::memory_order_relaxed);
+        }
+        return *scratch;
+    }
+
+    SummaryBrick* AllocateBrick(uint64_t brick) const {
+        auto fresh = std::make_unique<SummaryBrick>();
+        for (auto& st : fresh->state) st.store(0, std::memory_order_relaxed);
+        SummaryBrick* expected = nullptr;
+        if (bricks_[brick].compare_exchange_strong(expected, fresh.get(), std::memory_order_acq_rel)) {
+            std::lock_guard<std::mutex> lock(brickMutex_);
+            brickPool_.push_back(std::move(fresh));
+            return brickPool_.back().get();
+        }
+        return expected;  // another thread's brick
+    }
+
+    CellSummary ComputeSummary(int ci, int cj, int ck) const {
+        CellSummary c;
+        const LightMeshLattice& L = lattice_;
+        const TriangleMesh& mesh = scene_.mesh;
+        thread_local std::vector<uint32_t> tris;
+        // Π: the largest triangle meeting the cell (grown by the reach margin).
+        tris.clear();
+        accel_.TrianglesOverlapping(Bounds3(L.Node(ci, cj, ck) - Vec3(reachMargin_), L.Node(ci + 1, cj + 1, ck + 1) + Vec3(reachMargin_)),
+                                    &tris);
+        double best = 0, n[3] = {0, 0, 0};
+        uint32_t plane = UINT32_MAX;
+        for (const uint32_t t : tris) {
+            double m[3];
+            const double area = TriangleNormal(mesh, t, m);
+            if (area > best) {
+                best = area;
+                plane = t;
+                for (int a = 0; a < 3; ++a) n[a] = m[a];
+            }
+        }
+        if (plane == UINT32_MAX) return c;
+        const Vec3& v0 = mesh.Vertex(plane, 0);
+        const double d = n[0] * v0.x + n[1] * v0.y + n[2] * v0.z;
+        c.n[0] = static_cast<float>(n[0]);
+        c.n[1] = static_cast<float>(n[1]);
+        c.n[2] = static_cast<float>(n[2]);
+        // Heights are measured with the stored (float) normal, as the points are tested.
+        const double nf[3] = {c.n[0], c.n[1], c.n[2]};
+        c.d = nf[0] * v0.x + nf[1] * v0.y + nf[2] * v0.z;
+        (void)d;
+        c.flags = kHasPlane;
+        auto height = [&](const Vec3& x) { return nf[0] * x.x + nf[1] * x.y + nf[2] * x.z - c.d; };
+
+        // uniform_s over the cell's nodes on each side of Π, light by light.
+        const int64_t base = static_cast<int64_t>(L.Index(ci, cj, ck));
+        Word all[2] = {kVisMask, kVisMask}, any[2] = {0, 0};
+        for (const int64_t off : cellNodes_) {
+            const uint64_t index = static_cast<uint64_t>(base + off);
+            const Vec3 x = L.NodeAt(index);
+            const double hx = height(x);
+            if (hx == 0) continue;  // on Π: never in front of a point on it
+            const int side = hx > 0 ? 0 : 1;
+            const Word w = Evaluate(index, x) & kVisMask;
+            all[side] &= w;
+            any[side] |= w;
+        }
+        for (int side = 0; side < 2; ++side) {
+            c.bits[side] = all[side];
+            c.uniform[side] = static_cast<Word>(~(all[side] ^ any[side]) & kVisMask);
+        }
+
+        if (variant_.local == LocalVisibility::Consensus) {
+            // clear_s: the extreme heights of the vertices of the triangles in reach (of all
+            // whose bounding box is in reach: more triangles can only make it stricter).
+            tris.clear();
+            accel_.TrianglesOverlapping(
+                Bounds3(L.Node(ci + minOffset_, cj + minOffset_, ck + minOffset_) - Vec3(reachMargin_),
+                        L.Node(ci + maxOffset_, cj + maxOffset_, ck + maxOffset_) + Vec3(reachMargin_)),
+                &tris, /*exact=*/false);  // bounding boxes: a superset, enough for a bound
+            double lo = 0, hi = 0;
+            for (const uint32_t t : tris)
+                for (int k = 0; k < 3; ++k) {
+                    const double hv = height(mesh.Vertex(t, k));
+                    lo = std::min(lo, hv);
+                    hi = std::max(hi, hv);
+                }
+            if (hi <= planeDelta_) c.flags |= kClear0;
+            if (lo >= -planeDelta_) c.flags |= kClear1;
+        }
+        return c;
+    }
+
+    // Unit normal of triangle t in double into n; returns twice its area (0 if degenerate).
+    static double TriangleNormal(const TriangleMesh& mesh, uint32_t t, double n[3]) {
+        const Vec3 &a = mesh.Vertex(t, 0), &b = mesh.Vertex(t, 1), &c = mesh.Vertex(t, 2);
+        const double e1[3] = {double(b.x) - a.x, double(b.y) - a.y, double(b.z) - a.z};
+        const double e2[3] = {double(c.x) - a.x, double(c.y) - a.y, double(c.z) - a.z};
+        n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+        n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+        n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (!(len > 0) || !std::isfinite(len)) return 0;
+        for (int k = 0; k < 3; ++k) n[k] /= len;
+        return len;
     }
 
     // The node's word, computing it on first use: one shadow ray to each light; for СТ
@@ -427,6 +738,8 @@ class LightMesh final : public LightMeshShadows {
         return value;
     }
 
+    static constexpr float kPlaneEps = 1e-5f;
+
     const Scene& scene_;
     const Accelerator& accel_;
     const LightMeshLattice lattice_;
@@ -436,8 +749,15 @@ class LightMesh final : public LightMeshShadows {
     int minOffset_ = 0, maxOffset_ = 0;
     float invH_ = 0;
     Bounds3 sceneBox_;
-    std::unique_ptr<std::atomic<Word>[]> nodes_;
-    mutable std::atomic<uint64_t> evaluated_{0};
+    float planeDelta_ = 0, frontEps_ = 0, reachMargin_ = 0;
+    bool summaries_ = false;
+    std::vector<int64_t> cellNodes_;  // linear offsets of the union of the templates
+    ZeroedPtr<std::atomic<Word>> nodes_;
+    uint64_t bricksX_ = 0, bricksY_ = 0;
+    ZeroedPtr<std::atomic<SummaryBrick*>> bricks_;  // per brick of cells, allocated on first use
+    mutable std::mutex brickMutex_;
+    mutable std::vector<std::unique_ptr<SummaryBrick>> brickPool_;
+    mutable std::atomic<uint64_t> evaluated_{0}, summarized_{0}, uniformCells_{0}, planarCells_{0};
 };
 
 }  // namespace
@@ -451,6 +771,8 @@ std::unique_ptr<LightMeshShadows> CreateLightMeshShadows(const Scene& scene, con
     const int ns = options.ns == 0 ? kDefaultTemplateSubsteps : options.ns;
     if (ns < 1 || ns > 64) ThrowError("light mesh: ns must be between 1 and 64, got %d", ns);
     const int bytes = LightMeshBytesPerNode(nLights);
+    // Node words. (Cell summaries add a pointer per 4³ cells, zero pages until used, and
+    // their records, about 32 bytes per cell used, lazily like the nodes.)
     const uint64_t need = lattice.NodeCount() * static_cast<uint64_t>(bytes);
     const uint64_t physical = PhysicalMemoryBytes();
     if (physical && need > physical / 2)
@@ -470,11 +792,14 @@ std::unique_ptr<LightMeshShadows> CreateLightMeshShadows(const Scene& scene, con
         templates = LoadOrBuildSphereTemplates(ns, options.ki, options.templateDir);
         if (!templates.note.empty()) LogWarning("templates: " + templates.note);
     }
+    const std::string& summaries = options.cellSummaries;
+    if (summaries != "auto" && summaries != "on" && summaries != "off")
+        ThrowError("cell summaries \"%s\": choose auto, on or off", summaries.c_str());
     switch (bytes) {
-        case 1: return std::make_unique<LightMesh<uint8_t>>(scene, accel, lattice, variant, std::move(templates));
-        case 2: return std::make_unique<LightMesh<uint16_t>>(scene, accel, lattice, variant, std::move(templates));
-        case 4: return std::make_unique<LightMesh<uint32_t>>(scene, accel, lattice, variant, std::move(templates));
-        default: return std::make_unique<LightMesh<uint64_t>>(scene, accel, lattice, variant, std::move(templates));
+        case 1: return std::make_unique<LightMesh<uint8_t>>(scene, accel, lattice, variant, std::move(templates), summaries);
+        case 2: return std::make_unique<LightMesh<uint16_t>>(scene, accel, lattice, variant, std::move(templates), summaries);
+        case 4: return std::make_unique<LightMesh<uint32_t>>(scene, accel, lattice, variant, std::move(templates), summaries);
+        default: return std::make_unique<LightMesh<uint64_t>>(scene, accel, lattice, variant, std::move(templates), summaries);
     }
 }
 
