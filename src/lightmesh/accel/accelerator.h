@@ -56,11 +56,12 @@ class Accelerator {
     /// tie-breaking rule of IntersectTriangle). Parity gives inside/outside (paper §4).
     virtual int CountCrossings(const Ray& ray) const = 0;
 
-    /// Appends to `out` the id of every triangle whose bounding box overlaps `box` (touching
-    /// counts), each once, in increasing order, so the answer is the same for every
-    /// back-end; with `exact`, only those the triangle itself overlaps (the separating-axis
-    /// test TriangleOverlapsBox). The light mesh asks it once per mesh cell, for the
-    /// triangles that could block a local-visibility segment there.
+    /// Appends to `out`, each once and in increasing order, the id of every triangle that
+    /// overlaps `box` (touching counts; the separating-axis test TriangleOverlapsBox
+    /// decides), so the answer is the same for every back-end. With exact = false the
+    /// back-end may skip that test and also return triangles whose bounding box meets the
+    /// box (a superset, cheaper, that differs between back-ends). The light mesh asks it
+    /// once per mesh cell, for the triangles that could block a local-visibility segment.
     virtual void TrianglesOverlapping(const Bounds3& box, std::vector<uint32_t>* out,
                                       bool exact = true) const = 0;
 

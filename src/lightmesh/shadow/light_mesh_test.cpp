@@ -4,6 +4,7 @@
 #include <tbb/task_arena.h>
 
 #include <cmath>
+#include <random>
 #include <functional>
 #include <unordered_map>
 
@@ -272,6 +273,116 @@ TEST(LightMesh, ConsensusGivesTheObjectTestsImageExactly) {
                 << "scene " << sceneIndex << " kI " << ki;
         }
     }
+}
+
+// Scenes for the exactness tests of the cell summaries: the builtin gazebo, the thin-slab
+// leak scene, and seeded random scenes (boxes of all sizes on a floor, some floating, some
+// touching each other, 1 to 7 lights) on which every case of the summaries happens.
+Scene SummaryTestScene(int index) {
+    if (index == 0) return MakeBuiltinScene("gazebo");
+    Scene s = FloorScene(4.0f);
+    if (index == 1) {
+        AddBox(&s, {-3, 0.1f, -3}, {3, 0.12f, 3});
+        s.lights = {{{0.1f, 8, 0.2f}, Color(1.0f), Falloff::None}};
+        return s;
+    }
+    std::mt19937 rng(static_cast<uint32_t>(index) * 7919u);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    const int boxes = 3 + static_cast<int>(u(rng) * 8);
+    for (int b = 0; b < boxes; ++b) {
+        const Vec3 c(-3 + 6 * u(rng), u(rng) < 0.7f ? 0.0f : 1.5f * u(rng), -3 + 6 * u(rng));
+        const Vec3 half(0.05f + 0.8f * u(rng), 0.05f + 0.8f * u(rng), 0.05f + 0.8f * u(rng));
+        AddBox(&s, c - Vec3(half.x, 0, half.z), c + Vec3(half.x, 2 * half.y, half.z));
+    }
+    s.lights.clear();
+    const int lights = 1 + static_cast<int>(u(rng) * 7);
+    for (int l = 0; l < lights; ++l)
+        s.lights.push_back({{-5 + 10 * u(rng), 3 + 4 * u(rng), -5 + 10 * u(rng)}, Color(4.0f + 8 * u(rng)), Falloff::InverseSquare});
+    s.camera = Camera{{5 * u(rng) - 2.5f, 3 + 3 * u(rng), 6}, {0, 0.3f, 0}, {0, 1, 0}, 55.0f};
+    return s;
+}
+
+RenderResult RenderLmm(Scene s, const Accelerator& accel, const std::string& variant, const std::string& summaries,
+                       float ki) {
+    s.render.width = 96;
+    s.render.height = 72;
+    s.render.lightMesh.ki = ki;
+    s.render.lightMesh.variant = variant;
+    s.render.lightMesh.cellSummaries = summaries;
+    auto lmm = CreateShadowMethod("lmm", s, accel, s.render);
+    return WhittedRenderer(s, accel, *lmm, s.render).Render();
+}
+
+// The cell summaries are exact: consensus with them gives ОТ's image bit for bit on every
+// back-end, and Нет and СТ with them ("on") their own images without them. The test
+// also checks that the summaries did answer points and skip segments, so it can fail.
+TEST(LightMesh, CellSummariesKeepEveryImageExactly) {
+    uint64_t uniformPoints = 0, planarPoints = 0;
+    for (int index = 0; index < 8; ++index) {
+        const Scene s = SummaryTestScene(index);
+        for (const char* accelName : {"grid", "embree", "brute"}) {
+            if (std::string(accelName) == "brute" && index != 2) continue;  // slow: one scene
+            std::unique_ptr<Accelerator> accel;
+            try {
+                accel = CreateAccelerator(accelName, s.mesh);
+            } catch (const Error&) {
+                continue;  // built without Embree
+            }
+            for (float ki : {1.2f, 2.0f, 3.0f}) {
+                const std::string what = StringPrintf("scene %d, %s, kI %g", index, accelName, ki);
+                const RenderResult ot = RenderLmm(s, *accel, "object", "auto", ki);
+                const RenderResult fast = RenderLmm(s, *accel, "consensus", "auto", ki);
+                const RenderResult slow = RenderLmm(s, *accel, "consensus", "off", ki);
+                EXPECT_EQ(ot.image.pixels, fast.image.pixels) << what;
+                EXPECT_EQ(ot.image.pixels, slow.image.pixels) << what;
+                EXPECT_EQ(ot.counters.fallbacks, fast.counters.fallbacks) << what;
+                EXPECT_LE(fast.counters.localSegments, slow.counters.localSegments) << what;
+                uniformPoints += fast.counters.uniformCellPoints;
+                planarPoints += fast.counters.planarCellPoints;
+                if (ki != 2.0f) continue;
+                for (const char* variant : {"none", "inside"}) {
+                    const RenderResult off = RenderLmm(s, *accel, variant, "off", ki);
+                    const RenderResult on = RenderLmm(s, *accel, variant, "on", ki);
+                    EXPECT_EQ(off.image.pixels, on.image.pixels) << what << " " << variant;
+                    EXPECT_GT(on.counters.uniformCellPoints, 0u) << what << " " << variant;
+                    EXPECT_EQ(off.counters.uniformCellPoints, 0u) << what << " " << variant;
+                }
+            }
+        }
+    }
+    EXPECT_GT(uniformPoints, 0u);
+    EXPECT_GT(planarPoints, 0u);
+}
+
+// On an open floor far from any occluder every node sees every light: the summary answers
+// the point (no walk, no segment) with RT's exact 1; in an umbra with 0.
+TEST(LightMesh, CellSummaryAnswersOpenFloorWithoutSegments) {
+    Scene s = FloorScene();
+    AddBox(&s, {-1, 0, -1}, {1, 0.5f, 1});
+    s.lights = {{{0, 6, 0}, Color(1.0f), Falloff::None}};
+    auto accel = CreateAccelerator("grid", s.mesh);
+    LightMeshOptions o;
+    o.variant = "consensus";
+    auto lmm = CreateLightMeshShadows(s, *accel, o);
+    bool needed[kMaxLights] = {true};
+    for (const auto& [x, expected] : {std::pair{6.0f, 1.0f}, std::pair{8.5f, 1.0f}}) {
+        float vis[kMaxLights] = {};
+        RenderCounters c;
+        lmm->Visibility(FloorPoint(x, 0.3f), needed, vis, c);
+        EXPECT_EQ(vis[0], expected) << x;
+        EXPECT_EQ(c.uniformCellPoints, 1u) << x;
+        EXPECT_EQ(c.planarCellPoints, 1u) << x;
+        EXPECT_EQ(c.localSegments, 0u) << x;
+    }
+    // On the box's top face, next to its edge: planar only if the reach stays on the face.
+    float vis[kMaxLights] = {};
+    RenderCounters c;
+    ShadingPoint top;
+    top.p = Vec3(0.1f, 0.5f, 0.1f);
+    top.n = Vec3(0, 1, 0);
+    top.origin = Vec3(0.1f, 0.5f + 1e-5f, 0.1f);
+    lmm->Visibility(top, needed, vis, c);
+    EXPECT_EQ(vis[0], 1.0f);
 }
 
 // У (§3.2) skips the inner nodes' segments only when every boundary node sees P; when no
