@@ -188,10 +188,11 @@ int RunRender(const RenderCommand& cmd) {
                         static_cast<double>(c.candidates) / points, Count(c.localSegments).c_str(),
                         Count(c.fallbacks).c_str(), 100.0 * static_cast<double>(c.fallbacks) / points);
             if (c.uniformCellPoints + c.planarCellPoints > 0)
-                std::printf("cells     points answered by their cell's summary %s (%.1f%%), in planar cells %s (%.1f%%); "
-                            "mean m counts the other points only\n",
+                std::printf("cells     points answered by their cell's summary %s (%.1f%%), in planar cells %s (%.1f%%), "
+                            "segments decided without a ray %s; mean m counts the other points only\n",
                             Count(c.uniformCellPoints).c_str(), 100.0 * static_cast<double>(c.uniformCellPoints) / points,
-                            Count(c.planarCellPoints).c_str(), 100.0 * static_cast<double>(c.planarCellPoints) / points);
+                            Count(c.planarCellPoints).c_str(), 100.0 * static_cast<double>(c.planarCellPoints) / points,
+                            Count(c.culledSegments).c_str());
         }
         PrintFigures("shadows", shadows->Figures());
         std::printf("memory    peak %s\n", lm::FormatBytes(lm::PeakMemoryBytes()).c_str());

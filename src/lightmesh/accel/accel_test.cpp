@@ -461,38 +461,6 @@ TEST(AccelThreads, ConcurrentQueriesMatchSerial) {
     }
 }
 
-// TrianglesOverlapping is exact and the same on every back-end: the triangles the
-// separating-axis test finds in the box, sorted; with exact = false, a superset of them.
-TEST(AccelBoxQuery, EveryBackEndFindsWhatBruteForceFinds) {
-    for (const auto& mesh : {ts::Soup(3000, 7), ts::HeightField(24, 3), ts::Sphere(12, 24), ts::TessellatedBox(6)}) {
-        Bounds3 bounds;
-        for (const Vec3& p : mesh.positions) bounds.Extend(p);
-        std::mt19937 rng(11);
-        std::uniform_real_distribution<float> u(0.0f, 1.0f);
-        const BruteForceAccel brute(mesh);
-        for (const char* name : {"grid", "embree"}) {
-            if (std::string(name) == "embree" && !HasEmbree()) continue;
-            const auto accel = CreateAccelerator(name, mesh);
-            size_t found = 0;
-            for (int q = 0; q < 300; ++q) {
-                const Vec3 d = bounds.Diagonal();
-                const Vec3 c = bounds.lo + Vec3(u(rng) * d.x, u(rng) * d.y, u(rng) * d.z);
-                const Vec3 half = d * (0.01f + 0.1f * u(rng));
-                const Bounds3 box(c - half, c + half);
-                std::vector<uint32_t> want, got, loose;
-                brute.TrianglesOverlapping(box, &want, true);
-                accel->TrianglesOverlapping(box, &got, true);
-                ASSERT_EQ(want, got) << name << " query " << q;
-                found += got.size();
-                accel->TrianglesOverlapping(box, &loose, false);
-                EXPECT_TRUE(std::is_sorted(loose.begin(), loose.end()));
-                EXPECT_TRUE(std::includes(loose.begin(), loose.end(), want.begin(), want.end())) << name << " " << q;
-            }
-            EXPECT_GT(found, 0u) << name;  // the boxes were not all empty
-        }
-    }
-}
-
 TEST(AccelFactory, NamesAndErrors) {
     EXPECT_EQ(AcceleratorNames(), (std::vector<std::string>{"brute", "grid", "embree"}));
     const TriangleMesh mesh = ts::Soup(10, 1);

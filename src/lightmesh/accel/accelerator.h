@@ -9,7 +9,6 @@
 #include <vector>
 
 #include "lightmesh/geometry/mesh.h"
-#include "lightmesh/math/bounds.h"
 #include "lightmesh/math/ray.h"
 
 namespace lm {
@@ -56,24 +55,9 @@ class Accelerator {
     /// tie-breaking rule of IntersectTriangle). Parity gives inside/outside (paper §4).
     virtual int CountCrossings(const Ray& ray) const = 0;
 
-    /// Appends to `out`, each once and in increasing order, the id of every triangle that
-    /// overlaps `box` (touching counts; the separating-axis test TriangleOverlapsBox
-    /// decides), so the answer is the same for every back-end. With exact = false the
-    /// back-end may skip that test and also return triangles whose bounding box meets the
-    /// box (a superset, cheaper, that differs between back-ends). The light mesh asks it
-    /// once per mesh cell, for the triangles that could block a local-visibility segment.
-    virtual void TrianglesOverlapping(const Bounds3& box, std::vector<uint32_t>* out,
-                                      bool exact = true) const = 0;
-
     /// Build figures: cells, empty cells, triangles per cell, depth, bytes, build time.
     virtual AccelFigures Figures() const = 0;
 };
-
-/// The part of TrianglesOverlapping shared by the back-ends: keeps, of the candidate ids in
-/// `ids` (any order, duplicates allowed; a back-end's superset), those whose bounding box
-/// (with `exact`, whose triangle) overlaps `box`, sorted and unique, and appends them to `out`.
-void KeepOverlapping(const TriangleMesh& mesh, const Bounds3& box, std::vector<uint32_t>& ids,
-                     std::vector<uint32_t>* out, bool exact);
 
 /// The back-end names CreateAccelerator accepts, in the order of the help text.
 std::vector<std::string> AcceleratorNames();

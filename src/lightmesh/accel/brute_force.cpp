@@ -35,12 +35,6 @@ int BruteForceAccel::CountCrossings(const Ray& ray) const {
     return n;
 }
 
-void BruteForceAccel::TrianglesOverlapping(const Bounds3& box, std::vector<uint32_t>* out, bool exact) const {
-    std::vector<uint32_t> ids(mesh_.triangles.size());
-    for (uint32_t i = 0; i < ids.size(); ++i) ids[i] = i;
-    KeepOverlapping(mesh_, box, ids, out, exact);
-}
-
 AccelFigures BruteForceAccel::Figures() const {
     return {{"triangles", StringPrintf("%zu", mesh_.triangles.size())},
             {"bytes per triangle", "0"}};

@@ -15,8 +15,6 @@ class BruteForceAccel final : public Accelerator {
     bool Intersect(const Ray& ray, Hit* hit) const override;
     bool Occluded(const Ray& ray) const override;
     int CountCrossings(const Ray& ray) const override;
-    void TrianglesOverlapping(const Bounds3& box, std::vector<uint32_t>* out,
-                              bool exact = true) const override;
     AccelFigures Figures() const override;
 
   private:

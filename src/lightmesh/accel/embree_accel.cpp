@@ -270,45 +270,6 @@ int EmbreeAccel::CountCrossings(const Ray& ray) const {
     return int(std::unique(hits.begin(), hits.end()) - hits.begin());
 }
 
-namespace {
-// rtcPointQuery's callback: every primitive whose BVH leaf the query sphere reaches is
-// offered; its bounding box decides whether it is a candidate.
-struct BoxQuery {
-    const TriangleMesh* mesh;
-    Bounds3 box;
-    std::vector<uint32_t>* ids;
-};
-bool CollectInBox(RTCPointQueryFunctionArguments* args) {
-    auto* q = static_cast<BoxQuery*>(args->userPtr);
-    const uint32_t prim = args->primID;
-    Bounds3 b(q->mesh->Vertex(prim, 0), q->mesh->Vertex(prim, 1));
-    b.Extend(q->mesh->Vertex(prim, 2));
-    if (b.lo.x <= q->box.hi.x && b.hi.x >= q->box.lo.x && b.lo.y <= q->box.hi.y &&
-        b.hi.y >= q->box.lo.y && b.lo.z <= q->box.hi.z && b.hi.z >= q->box.lo.z)
-        q->ids->push_back(prim);
-    return false;  // the query sphere stays as it is
-}
-}  // namespace
-
-void EmbreeAccel::TrianglesOverlapping(const Bounds3& box, std::vector<uint32_t>* out, bool exact) const {
-    if (impl_->mesh.triangles.empty() || box.IsEmpty()) return;
-    std::vector<uint32_t> ids;
-    BoxQuery q{&impl_->mesh, box, &ids};
-    // A sphere around the box, grown a little so rounding never loses a leaf.
-    const Vec3 c = box.Center();
-    const float radius = Length(box.Diagonal()) * 0.5f * (1 + 1e-5f) + 1e-6f * impl_->extent;
-    RTCPointQuery query;
-    query.x = c.x;
-    query.y = c.y;
-    query.z = c.z;
-    query.time = 0;
-    query.radius = radius;
-    RTCPointQueryContext context;
-    rtcInitPointQueryContext(&context);
-    rtcPointQuery(impl_->scene, &query, &context, &CollectInBox, &q);
-    KeepOverlapping(impl_->mesh, box, ids, out, exact);
-}
-
 AccelFigures EmbreeAccel::Figures() const {
     const Impl& m = *impl_;
     const size_t tris = std::max<size_t>(m.mesh.triangles.size(), 1);

@@ -583,35 +583,6 @@ bool NestedGridAccel::Occluded(const Ray& ray) const {
     return q.found;
 }
 
-void NestedGridAccel::TrianglesOverlapping(const Bounds3& box, std::vector<uint32_t>* out, bool exact) const {
-    // The cells of every level that the box touches (each grown by the rounding allowance
-    // the build assigned triangles with), their triangles as candidates.
-    std::vector<uint32_t> ids;
-    const float pad = epsAbs_ + 4e-6f * boxMaxAbs_;
-    auto visit = [&](auto&& self, uint32_t nodeIndex) -> void {
-        const Node& g = nodes_[nodeIndex];
-        int lo[3], hi[3];
-        for (int a = 0; a < 3; ++a) {
-            const float f0 = (box.lo[a] - pad - g.lo[a]) * g.invCellSize[a];
-            const float f1 = (box.hi[a] + pad - g.lo[a]) * g.invCellSize[a];
-            if (!(f1 >= 0) || !(f0 < float(g.res[a]))) return;
-            lo[a] = f0 > 0 ? std::min(int(f0), g.res[a] - 1) : 0;
-            hi[a] = f1 < float(g.res[a]) ? int(f1) : g.res[a] - 1;
-        }
-        for (int z = lo[2]; z <= hi[2]; ++z)
-            for (int y = lo[1]; y <= hi[1]; ++y)
-                for (int x = lo[0]; x <= hi[0]; ++x) {
-                    const uint32_t idx = g.firstCell + uint32_t((z * g.res[1] + y) * g.res[0] + x);
-                    const uint32_t b = cellStart_[idx], e = cellStart_[idx + 1];
-                    if (b == e) continue;
-                    if (items_[b] & kChild) self(self, items_[b] & ~kChild);
-                    else ids.insert(ids.end(), items_.begin() + b, items_.begin() + e);
-                }
-    };
-    if (!nodes_.empty()) visit(visit, 0);
-    KeepOverlapping(mesh_, box, ids, out, exact);
-}
-
 int NestedGridAccel::CountCrossings(const Ray& ray) const {
     CountQuery q(ray);
     Traverse(ray, q);

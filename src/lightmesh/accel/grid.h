@@ -37,8 +37,6 @@ class NestedGridAccel final : public Accelerator {
     bool Intersect(const Ray& ray, Hit* hit) const override;
     bool Occluded(const Ray& ray) const override;
     int CountCrossings(const Ray& ray) const override;
-    void TrianglesOverlapping(const Bounds3& box, std::vector<uint32_t>* out,
-                              bool exact = true) const override;
     AccelFigures Figures() const override;
 
     /// Cells per axis of the top level for `triangles` triangles in `box` (the box after

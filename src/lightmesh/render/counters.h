@@ -21,6 +21,7 @@ struct RenderCounters {
     uint64_t fallbacks = 0;        ///< points with m = 0 that used a shadow ray
     uint64_t uniformCellPoints = 0;  ///< points answered by their cell's summary (all nodes agree)
     uint64_t planarCellPoints = 0;   ///< points whose cell's geometry is one plane: no segment
+    uint64_t culledSegments = 0;     ///< local-visibility segments decided without a ray
 
     RenderCounters& operator+=(const RenderCounters& o) {
         cameraRays += o.cameraRays;
@@ -34,6 +35,7 @@ struct RenderCounters {
         fallbacks += o.fallbacks;
         uniformCellPoints += o.uniformCellPoints;
         planarCellPoints += o.planarCellPoints;
+        culledSegments += o.culledSegments;
         return *this;
     }
 };

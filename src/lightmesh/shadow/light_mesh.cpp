@@ -12,8 +12,10 @@
 #include <utility>
 #include <vector>
 
+#include "lightmesh/geometry/triangle.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/log.h"
+#include "lightmesh/util/parallel.h"
 #include "lightmesh/util/system.h"
 
 namespace lm {
@@ -142,6 +144,9 @@ class LightMesh final : public LightMeshShadows {
         planeDelta_ = 2e-7f * magnitude;
         frontEps_ = (4 * planeDelta_ + 2 * kPlaneEps * (lattice_.r + 2 * lattice_.h)) / lattice_.h;
         reachMargin_ = 1e-3f * lattice_.h + 1e-5f * magnitude;
+        cullMargin_ = 4 * planeDelta_;
+        // A point's segments end at nodes within r of its snapped sub-position.
+        pointReach_ = lattice_.r + 0.87f * lattice_.h / static_cast<float>(std::max(templates_.templates.ns, 1)) + reachMargin_;
         summaries_ = variant_.enumeration == SphereEnumeration::Templates &&
                      (variant_.local == LocalVisibility::Consensus
                           ? cellSummaries != "off"
@@ -152,7 +157,65 @@ class LightMesh final : public LightMeshShadows {
             bricksY_ = static_cast<uint64_t>(lattice.ny + kBrick - 1) / kBrick;
             const uint64_t bricksZ = static_cast<uint64_t>(lattice.nz + kBrick - 1) / kBrick;
             bricks_ = ZeroedArray<SummaryBrick*>(bricksX_ * bricksY_ * bricksZ);
+            {
+                const TriangleMesh& mesh = scene.mesh;
+                planes_.resize(mesh.triangles.size());
+                ParallelFor(size_t(0), planes_.size(), [&](size_t t) {
+                    const uint32_t id = static_cast<uint32_t>(t);
+                    const Vec3 &a = mesh.Vertex(id, 0), &b = mesh.Vertex(id, 1), &c = mesh.Vertex(id, 2);
+                    double n[3];
+                    TriangleNormal(mesh, id, n);  // zero for a degenerate triangle: never culled
+                    TrianglePlane& pl = planes_[t];
+                    pl.n = Vec3(static_cast<float>(n[0]), static_cast<float>(n[1]), static_cast<float>(n[2]));
+                    pl.d = Dot(pl.n, a);
+                    pl.lo = Min(a, Min(b, c)) - Vec3(cullMargin_);
+                    pl.hi = Max(a, Max(b, c)) + Vec3(cullMargin_);
+                });
+            }
+            BinTrianglesByBrick(bricksZ);
         }
+    }
+
+    // Every brick's candidate list: the triangles whose bounding box meets the box of all
+    // that its cells' summaries look at (their reach). Built once, in parallel, in two
+    // passes (count, fill); the order within a list is the fill's, which nothing depends
+    // on (the uses are order-free: a maximum, extreme heights, a filter).
+    void BinTrianglesByBrick(uint64_t bricksZ) {
+        const LightMeshLattice& L = lattice_;
+        const uint64_t nb[3] = {bricksX_, bricksY_, bricksZ};
+        const float lo[3] = {static_cast<float>(minOffset_), static_cast<float>(minOffset_), static_cast<float>(minOffset_)};
+        const float span = static_cast<float>(kBrick - 1 + maxOffset_);
+        const float slack = reachMargin_ / L.h + 0.01f;
+        // The bricks [b0, b1] per axis whose reach meets the triangle's box (none if b0 > b1).
+        auto range = [&](const TrianglePlane& pl, int axis, int64_t* b0, int64_t* b1) {
+            const float tlo = (pl.lo[axis] - L.origin[axis]) / L.h, thi = (pl.hi[axis] - L.origin[axis]) / L.h;
+            // brick B covers nodes [kBrick·B + minOffset, kBrick·B + span] (± slack)
+            const float f0 = std::ceil((tlo - span - slack) / kBrick), f1 = std::floor((thi - lo[axis] + slack) / kBrick);
+            const float maxB = static_cast<float>(nb[axis] - 1);
+            *b0 = static_cast<int64_t>(std::clamp(f0, 0.0f, maxB + 1));
+            *b1 = static_cast<int64_t>(std::clamp(f1, -1.0f, maxB));
+        };
+        const uint64_t bricks = bricksX_ * bricksY_ * bricksZ;
+        std::vector<std::atomic<uint32_t>> count(bricks);
+        auto each = [&](size_t t, auto&& visit) {
+            int64_t b0[3], b1[3];
+            for (int a = 0; a < 3; ++a) range(planes_[t], a, &b0[a], &b1[a]);
+            for (int64_t z = b0[2]; z <= b1[2]; ++z)
+                for (int64_t y = b0[1]; y <= b1[1]; ++y)
+                    for (int64_t x = b0[0]; x <= b1[0]; ++x) visit((static_cast<uint64_t>(z) * bricksY_ + y) * bricksX_ + x);
+        };
+        ParallelFor(size_t(0), planes_.size(), [&](size_t t) {
+            each(t, [&](uint64_t b) { count[b].fetch_add(1, std::memory_order_relaxed); });
+        });
+        brickStart_.assign(bricks + 1, 0);
+        for (uint64_t b = 0; b < bricks; ++b) brickStart_[b + 1] = brickStart_[b] + count[b].load(std::memory_order_relaxed);
+        brickTris_.resize(brickStart_[bricks]);
+        for (uint64_t b = 0; b < bricks; ++b) count[b].store(0, std::memory_order_relaxed);
+        ParallelFor(size_t(0), planes_.size(), [&](size_t t) {
+            each(t, [&](uint64_t b) {
+                brickTris_[brickStart_[b] + count[b].fetch_add(1, std::memory_order_relaxed)] = static_cast<uint32_t>(t);
+            });
+        });
     }
 
     const LightMeshLattice& Lattice() const override { return lattice_; }
@@ -240,10 +303,316 @@ class LightMesh final : public LightMeshShadows {
     }
 
   private:
+    // ---- Cell summaries (ours, not in the paper; exact) ------------------------------
+    //
+    // A summary belongs to a mesh cell (the cell whose lower corner is node (ci, cj, ck))
+    // and to its main plane Π: the plane of the largest triangle meeting the cell (ties:
+    // the lower id, so it does not depend on the back-end). It is used by the points of
+    // the cell that lie on Π (within planeDelta_, normal within kPlaneEps), which is most
+    // points of floors, walls and other flat faces. For each side s of Π:
+    //  - uniform_s: every node a point of the cell may use (cellNodes_) that lies on side
+    //    s of Π has the same visibility bits bits_s (and, for СТ, the same inside flag).
+    //    A point on Π seen from side s uses only such nodes (its front test keeps nodes
+    //    more than frontEps_ steps in front of its own plane, which is within the
+    //    tolerances of Π), so any non-empty subset averages to exactly bits_s: formula (2)
+    //    needs neither the walk nor the node words.
+    //  - clear_s (consensus): no triangle meeting the cell grown by the sphere's reach has
+    //    a vertex more than planeDelta_ on side s. A local-visibility segment runs from a
+    //    node to P's origin, both clearly on side s, inside that box, so nothing can block
+    //    it: no segment is traced.
+    // Summaries are computed on first use and published like the nodes: the values depend
+    // on the cell only, and the thread that claims a record is the only one to write it.
+    struct CellSummary {
+        float n[3] = {0, 0, 0};  // Π: unit normal and offset, (n, x) = d on Π
+        double d = 0;
+        uint8_t flags = 0;
+        // Consensus: the triangles whose bounding box meets the reach box (kTooMany: more
+        // than kMaxReach, the back-end tests every segment), in an arena of the mesh.
+        const uint32_t* reach = nullptr;
+        uint32_t reachCount = 0;
+    };
+    static constexpr uint32_t kMaxReach = 256, kTooMany = UINT32_MAX;
+
+    // Consensus with cell summaries: the triangles that could block a segment from a node
+    // to this P. Every such segment lies in the cell's reach box, so only the reach list's
+    // triangles can block it; of those, one whose vertices all lie on or behind P's plane
+    // cannot (the segment runs clearly in front of it, like the planar argument).
+    struct Blockers {
+        bool known = false;  // false: test every segment with the back-end
+        uint32_t count = 0;
+        // Per blocker, in arrays for the vectorised loop of SeesPointCulled: its plane, the
+        // side P's origin is on (+1, -1; 0 within the margin), and its bounding box.
+        float nx[kMaxReach], ny[kMaxReach], nz[kMaxReach], d[kMaxReach], side[kMaxReach];
+        float lox[kMaxReach], loy[kMaxReach], loz[kMaxReach], hix[kMaxReach], hiy[kMaxReach], hiz[kMaxReach];
+    };
+    void FindBlockers(const CellSummary& c, const ShadingPoint& sp, Blockers* b) const {
+        b->known = false;
+        if (c.reachCount == kTooMany || !(Dot(sp.origin - sp.p, sp.n) > 4 * planeDelta_)) return;
+        const TriangleMesh& mesh = scene_.mesh;
+        // The segments of this P lie within pointReach_ of it.
+        const Vec3 lo = sp.p - Vec3(pointReach_), hi = sp.p + Vec3(pointReach_);
+        const float far = pointReach_ + 2 * cullMargin_;
+        uint32_t n = 0;
+        for (uint32_t i = 0; i < c.reachCount; ++i) {
+            const uint32_t t = c.reach[i];
+            const TrianglePlane& pl = planes_[t];
+            if (pl.hi.x < lo.x || pl.lo.x > hi.x || pl.hi.y < lo.y || pl.lo.y > hi.y || pl.hi.z < lo.z || pl.lo.z > hi.z)
+                continue;
+            // A plane farther from P's origin than any node: every segment is on one side.
+            const float so = Dot(pl.n, sp.origin) - pl.d;
+            if (std::abs(so) > far) continue;
+            // Heights over P's plane, in float: v - p is exact to an ulp of the coordinates
+            // and short, so the error is well below planeDelta_, and the segments run more
+            // than 4 planeDelta_ in front of the plane.
+            bool front = false;
+            for (int k = 0; k < 3 && !front; ++k) front = Dot(sp.n, mesh.Vertex(t, k) - sp.p) > planeDelta_;
+            if (!front) continue;
+            b->nx[n] = pl.n.x;
+            b->ny[n] = pl.n.y;
+            b->nz[n] = pl.n.z;
+            b->d[n] = pl.d;
+            b->side[n] = so > cullMargin_ ? 1.0f : (so < -cullMargin_ ? -1.0f : 0.0f);
+            b->lox[n] = pl.lo.x;
+            b->loy[n] = pl.lo.y;
+            b->loz[n] = pl.lo.z;
+            b->hix[n] = pl.hi.x;
+            b->hiy[n] = pl.hi.y;
+            b->hiz[n] = pl.hi.z;
+            ++n;
+        }
+        b->count = n;
+        b->known = true;
+    }
+    // Whether the segment from node x to P certainly meets none of the blockers: for each,
+    // both ends clearly on one side of its plane, or the segment's box apart from its box.
+    // Then any exact test finds no hit, so no segment is traced; otherwise the back-end
+    // decides, as for ОТ. The image is ОТ's either way.
+    bool SeesPointCulled(const Vec3& x, const ShadingPoint& sp, const Blockers& b, RenderCounters& counters) const {
+        if (b.known) {
+            const float m = cullMargin_;
+            const Vec3 lo = Min(x, sp.origin), hi = Max(x, sp.origin);
+            int maybe = 0;  // branch-free, so the compiler can vectorise it
+            for (uint32_t i = 0; i < b.count; ++i) {
+                const float sx = b.nx[i] * x.x + b.ny[i] * x.y + b.nz[i] * x.z - b.d[i];
+                const bool sameSide = sx * b.side[i] > m;
+                const bool apart = (hi.x < b.lox[i]) | (lo.x > b.hix[i]) | (hi.y < b.loy[i]) | (lo.y > b.hiy[i]) |
+                                   (hi.z < b.loz[i]) | (lo.z > b.hiz[i]);
+                maybe |= !(sameSide | apart);
+            }
+            if (!maybe) {
+                ++counters.culledSegments;
+                return true;
+            }
+        }
+        return SeesPoint(x, sp, counters);
+    }
+    static constexpr uint8_t kHasPlane = 1, kClear0 = 8, kClear1 = 16;
+    static constexpr int kBrick = 4;  // summaries are stored by bricks of 4³ cells
+    struct SideSummary {
+        Word bits = 0, uniform = 0;
+    };
+    struct SummaryBrick {
+        std::atomic<uint8_t> state[kBrick * kBrick * kBrick];  // 0 empty, 1 being written, 2 ready
+        CellSummary cell[kBrick * kBrick * kBrick];
+        // The back-end's candidates for every box the brick's cells ask about (one query per
+        // brick instead of two per cell); kTooMany if more than kMaxBrickNear.
+        const uint32_t* near = nullptr;
+        uint32_t nearCount = 0;
+        std::atomic<uint8_t> sideState[kBrick * kBrick * kBrick][2];  // like state, per side of Π
+        SideSummary side[kBrick * kBrick * kBrick][2];
+    };
+    static constexpr uint32_t kMaxBrickNear = 16384;
+
+    // The summary of cell (ci, cj, ck): the stored one, or one computed into `scratch`.
+    const CellSummary& Summary(int ci, int cj, int ck, CellSummary* scratch, SummaryBrick** brickOut,
+                               int* slotOut) const {
+        const uint64_t brick = (static_cast<uint64_t>(ck / kBrick) * bricksY_ + static_cast<uint64_t>(cj / kBrick)) * bricksX_ +
+                               static_cast<uint64_t>(ci / kBrick);
+        SummaryBrick* b = bricks_[brick].load(std::memory_order_acquire);
+        if (!b) b = AllocateBrick(brick, ci / kBrick * kBrick, cj / kBrick * kBrick, ck / kBrick * kBrick);
+        const int slot = ((ck % kBrick) * kBrick + (cj % kBrick)) * kBrick + (ci % kBrick);
+        *brickOut = b;
+        *slotOut = slot;
+        uint8_t state = b->state[slot].load(std::memory_order_acquire);
+        if (state == 2) return b->cell[slot];
+        *scratch = ComputeSummary(ci, cj, ck, *b);
+        if (state == 0 && b->state[slot].compare_exchange_strong(state, 1, std::memory_order_acquire)) {
+            b->cell[slot] = *scratch;
+            b->state[slot].store(2, std::memory_order_release);
+            summarized_.fetch_add(1, std::memory_order_relaxed);
+            if (scratch->flags & (kClear0 | kClear1)) planarCells_.fetch_add(1, std::memory_order_relaxed);
+        }
+        return *scratch;
+    }
+
+    // Copies a reach list into the arena (chunks never move, so the pointer stays valid).
+    const uint32_t* StoreReach(const std::vector<uint32_t>& ids) const {
+        if (ids.empty()) return nullptr;
+        std::lock_guard<std::mutex> lock(brickMutex_);
+        if (reachArena_.empty() || reachUsed_ + ids.size() > kReachChunk) {
+            reachArena_.push_back(std::make_unique<uint32_t[]>(kReachChunk));
+            reachUsed_ = 0;
+        }
+        uint32_t* out = reachArena_.back().get() + reachUsed_;
+        std::copy(ids.begin(), ids.end(), out);
+        reachUsed_ += ids.size();
+        reachBytes_ += ids.size() * sizeof(uint32_t);
+        return out;
+    }
+
+    // The box of everything a cell's summary looks at: the reach of cells (ci..ci+n-1, ...).
+    Bounds3 ReachBox(int ci, int cj, int ck, int n) const {
+        const LightMeshLattice& L = lattice_;
+        return Bounds3(L.Node(ci + minOffset_, cj + minOffset_, ck + minOffset_) - Vec3(reachMargin_),
+                       L.Node(ci + n - 1 + maxOffset_, cj + n - 1 + maxOffset_, ck + n - 1 + maxOffset_) + Vec3(reachMargin_));
+    }
+
+    SummaryBrick* AllocateBrick(uint64_t brick, int bi, int bj, int bk) const {
+        auto fresh = std::make_unique<SummaryBrick>();
+        for (auto& st : fresh->state) st.store(0, std::memory_order_relaxed);
+        for (auto& st : fresh->sideState) st[0].store(0, std::memory_order_relaxed), st[1].store(0, std::memory_order_relaxed);
+        (void)bi, (void)bj, (void)bk;
+        const uint64_t begin = brickStart_[brick], end = brickStart_[brick + 1];
+        fresh->nearCount = end - begin > kMaxBrickNear ? kTooMany : static_cast<uint32_t>(end - begin);
+        fresh->near = brickTris_.data() + begin;
+        SummaryBrick* expected = nullptr;
+        if (bricks_[brick].compare_exchange_strong(expected, fresh.get(), std::memory_order_acq_rel)) {
+            std::lock_guard<std::mutex> lock(brickMutex_);
+            brickPool_.push_back(std::move(fresh));
+            return brickPool_.back().get();
+        }
+        return expected;  // another thread's brick
+    }
+
+    CellSummary ComputeSummary(int ci, int cj, int ck, const SummaryBrick& brick) const {
+        CellSummary c;
+        const LightMeshLattice& L = lattice_;
+        const TriangleMesh& mesh = scene_.mesh;
+        thread_local std::vector<uint32_t> tris;
+        thread_local std::vector<uint32_t> reach;
+        reach.clear();
+        tris.clear();
+        const Bounds3 cellBox(L.Node(ci, cj, ck) - Vec3(reachMargin_), L.Node(ci + 1, cj + 1, ck + 1) + Vec3(reachMargin_));
+        const Bounds3 reachBox = ReachBox(ci, cj, ck, 1);
+        // Too crowded a brick (dense foliage): no summary; such points walk and trace.
+        if (brick.nearCount == kTooMany) {
+            c.reachCount = kTooMany;
+            return c;
+        }
+        // From the brick's candidates: the reach (bounding boxes meeting the reach box) and
+        // the triangles meeting the cell (bounding boxes too: they only choose Π).
+        auto meets = [](const TrianglePlane& pl, const Bounds3& b) {
+            return pl.hi.x >= b.lo.x && pl.lo.x <= b.hi.x && pl.hi.y >= b.lo.y && pl.lo.y <= b.hi.y &&
+                   pl.hi.z >= b.lo.z && pl.lo.z <= b.hi.z;
+        };
+        for (uint32_t i = 0; i < brick.nearCount; ++i) {
+            const uint32_t t = brick.near[i];
+            const TrianglePlane& pl = planes_[t];
+            if (!meets(pl, reachBox)) continue;
+            reach.push_back(t);
+            if (meets(pl, cellBox)) tris.push_back(t);
+        }
+        if (variant_.local == LocalVisibility::Consensus) {
+            if (reach.size() > kMaxReach) {
+                c.reachCount = kTooMany;
+            } else {
+                c.reachCount = static_cast<uint32_t>(reach.size());
+                c.reach = StoreReach(reach);
+            }
+        }
+        // Π: the largest triangle meeting the cell (grown by the reach margin); a tie goes to
+        // the lower id, so the choice does not depend on the lists' order.
+        double best = 0, n[3] = {0, 0, 0};
+        uint32_t plane = UINT32_MAX;
+        for (const uint32_t t : tris) {
+            double m[3];
+            const double area = TriangleNormal(mesh, t, m);
+            if (area > best || (area == best && area > 0 && t < plane)) {
+                best = area;
+                plane = t;
+                for (int a = 0; a < 3; ++a) n[a] = m[a];
+            }
+        }
+        if (plane == UINT32_MAX) return c;
+        const Vec3& v0 = mesh.Vertex(plane, 0);
+        const double d = n[0] * v0.x + n[1] * v0.y + n[2] * v0.z;
+        c.n[0] = static_cast<float>(n[0]);
+        c.n[1] = static_cast<float>(n[1]);
+        c.n[2] = static_cast<float>(n[2]);
+        // Heights are measured with the stored (float) normal, as the points are tested.
+        const double nf[3] = {c.n[0], c.n[1], c.n[2]};
+        c.d = nf[0] * v0.x + nf[1] * v0.y + nf[2] * v0.z;
+        (void)d;
+        c.flags = kHasPlane;
+        auto height = [&](const Vec3& x) { return nf[0] * x.x + nf[1] * x.y + nf[2] * x.z - c.d; };
+
+        if (variant_.local == LocalVisibility::Consensus) {
+            // clear_s: the extreme heights of the vertices of the triangles in reach (of all
+            // whose bounding box is in reach: more triangles can only make it stricter).
+            double lo = 0, hi = 0;
+            for (const uint32_t t : reach)
+                for (int k = 0; k < 3; ++k) {
+                    const double hv = height(mesh.Vertex(t, k));
+                    lo = std::min(lo, hv);
+                    hi = std::max(hi, hv);
+                }
+            if (hi <= planeDelta_) c.flags |= kClear0;
+            if (lo >= -planeDelta_) c.flags |= kClear1;
+        }
+        return c;
+    }
+
+    // uniform_s of the cell's plane, for one side, light by light: computed the first time
+    // a point on that side asks (so only the nodes on the side that is seen are evaluated,
+    // as a walk would), and stored in the brick like the summary itself.
+    SideSummary Side(const CellSummary& c, SummaryBrick* brick, int slot, int side, int ci, int cj, int ck) const {
+        if (brick) {
+            if (brick->sideState[slot][side].load(std::memory_order_acquire) == 2) return brick->side[slot][side];
+        }
+        const LightMeshLattice& L = lattice_;
+        const int64_t base = static_cast<int64_t>(L.Index(ci, cj, ck));
+        const double nf[3] = {c.n[0], c.n[1], c.n[2]};
+        Word all = kVisMask, any = 0;
+        for (const int64_t off : cellNodes_) {
+            const uint64_t index = static_cast<uint64_t>(base + off);
+            const Vec3 x = L.NodeAt(index);
+            const double hx = nf[0] * x.x + nf[1] * x.y + nf[2] * x.z - c.d;
+            if (side == 0 ? !(hx > 0) : !(hx < 0)) continue;  // the other side, or on Π
+            const Word w = Evaluate(index, x) & kVisMask;
+            all &= w;
+            any |= w;
+        }
+        SideSummary r{all, static_cast<Word>(~(all ^ any) & kVisMask)};
+        if (brick) {
+            uint8_t expected = 0;
+            if (brick->sideState[slot][side].compare_exchange_strong(expected, 1, std::memory_order_acquire)) {
+                brick->side[slot][side] = r;
+                brick->sideState[slot][side].store(2, std::memory_order_release);
+                if (r.uniform == kVisMask) uniformCells_.fetch_add(1, std::memory_order_relaxed);
+            }
+        }
+        return r;
+    }
+
+    // Unit normal of triangle t in double into n; returns twice its area (0 if degenerate).
+    static double TriangleNormal(const TriangleMesh& mesh, uint32_t t, double n[3]) {
+        const Vec3 &a = mesh.Vertex(t, 0), &b = mesh.Vertex(t, 1), &c = mesh.Vertex(t, 2);
+        const double e1[3] = {double(b.x) - a.x, double(b.y) - a.y, double(b.z) - a.z};
+        const double e2[3] = {double(c.x) - a.x, double(c.y) - a.y, double(c.z) - a.z};
+        n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+        n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+        n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (!(len > 0) || !std::isfinite(len)) return 0;
+        for (int k = 0; k < 3; ++k) n[k] /= len;
+        return len;
+    }
+
     uint64_t SummaryBytes() const {
         std::lock_guard<std::mutex> lock(brickMutex_);
-        return brickPool_.size() * sizeof(SummaryBrick) + bricksX_ * bricksY_ * sizeof(void*) *
-                                                              ((lattice_.nz + kBrick - 1) / kBrick);
+        return brickPool_.size() * sizeof(SummaryBrick) + reachBytes_ + planes_.size() * sizeof(TrianglePlane) +
+               brickTris_.size() * sizeof(uint32_t) + brickStart_.size() * sizeof(uint64_t) +
+               bricksX_ * bricksY_ * sizeof(void*) * ((lattice_.nz + kBrick - 1) / kBrick);
     }
 
     // The sums of formula (2): m and, per light, the visible nodes. With one-byte node
@@ -300,6 +669,8 @@ class LightMesh final : public LightMeshShadows {
         ++counters.localSegments;
         return !accel_.Occluded(Segment(x, sp.origin));
     }
+
+
 
     // A candidate that passed the sphere and surface tests, for the variants that decide
     // node by node (all but У).
@@ -378,9 +749,14 @@ class LightMesh final : public LightMeshShadows {
         auto node = [&](const TemplateEntry& e) { return L.Node(ci + e.di, cj + e.dj, ck + e.dk); };
 
         bool planar = false;
+        Blockers blockers;
+        CellSummary scratch;
+        const CellSummary* summary = nullptr;
         if (summaries_) {
-            CellSummary scratch;
-            const CellSummary& c = Summary(ci, cj, ck, &scratch);
+            SummaryBrick* brick = nullptr;
+            int slot = 0;
+            const CellSummary& c = Summary(ci, cj, ck, &scratch, &brick, &slot);
+            summary = &c;
             int side = -1;
             if (c.flags & kHasPlane) {
                 // Is P on Π? Its point within planeDelta_ (twice, for the rounding of this
@@ -395,8 +771,9 @@ class LightMesh final : public LightMeshShadows {
                 planar = (c.flags & (side == 0 ? kClear0 : kClear1)) && Dot(sp.origin - sp.p, sp.n) > 4 * planeDelta_;
                 if (planar) ++counters.planarCellPoints;
             }
-            if (side >= 0 && (neededMask & ~c.uniform[side]) == 0) {
-                const Word w = c.bits[side];
+            const SideSummary sideSummary = side >= 0 ? Side(c, brick, slot, side, ci, cj, ck) : SideSummary{};
+            if (side >= 0 && (neededMask & ~sideSummary.uniform) == 0) {
+                const Word w = sideSummary.bits;
                 // Every light needed is uniform: the answer is w's bits if at least one
                 // candidate survives the variant's test, else the fallback (m = 0), exactly
                 // as the walk would find.
@@ -409,11 +786,12 @@ class LightMesh final : public LightMeshShadows {
                 } else if (variant_.local != LocalVisibility::Consensus || planar) {
                     for (uint32_t t = begin; t < end && !some; ++t) some = front(entries_[t]);
                 } else {
+                    FindBlockers(c, sp, &blockers);
                     for (uint32_t t = begin; t < end && !some; ++t) {
                         const TemplateEntry& e = entries_[t];
                         if (!front(e)) continue;
                         ++counters.candidates;
-                        some = SeesPoint(node(e), sp, counters);
+                        some = SeesPointCulled(node(e), sp, blockers, counters);
                     }
                 }
                 if (some) *uniform = (w & kVisMask) | kInit;
@@ -422,7 +800,8 @@ class LightMesh final : public LightMeshShadows {
         }
 
         if (variant_.local == LocalVisibility::Consensus) {
-            ConsensusWalk(sp, neededMask, begin, end, base, ci, cj, ck, frac, planar, acc, counters);
+            if (summary && !planar && !blockers.known) FindBlockers(*summary, sp, &blockers);
+            ConsensusWalk(sp, neededMask, begin, end, base, ci, cj, ck, frac, planar, blockers, acc, counters);
             return true;
         }
         if (variant_.local != LocalVisibility::Reduced) {
@@ -463,7 +842,8 @@ class LightMesh final : public LightMeshShadows {
     //
     // In a planar cell (cell summaries) no segment is traced at all: every candidate sees P.
     void ConsensusWalk(const ShadingPoint& sp, Word neededMask, uint32_t begin, uint32_t end, int64_t base, int ci, int cj,
-                       int ck, const Vec3& frac, bool planar, Accumulator& acc, RenderCounters& counters) const {
+                       int ck, const Vec3& frac, bool planar, const Blockers& blockers, Accumulator& acc,
+                       RenderCounters& counters) const {
         struct Candidate {
             uint32_t entry;
             Word word;
@@ -493,7 +873,7 @@ class LightMesh final : public LightMeshShadows {
         }
         for (uint32_t c = 0; c < n; ++c) {
             const TemplateEntry& e = entries_[list[c].entry];
-            if (!SeesPoint(L.Node(ci + e.di, cj + e.dj, ck + e.dk), sp, counters)) continue;
+            if (!SeesPointCulled(L.Node(ci + e.di, cj + e.dj, ck + e.dk), sp, blockers, counters)) continue;
             Use(acc, list[c].word);
             if (agree) return;
         }
@@ -522,158 +902,6 @@ class LightMesh final : public LightMeshShadows {
         });
         all.erase(std::unique(all.begin(), all.end()), all.end());
         for (const auto& o : all) cellNodes_.push_back(linear(o[0], o[1], o[2]));
-    }
-
-    // ---- Cell summaries (ours, not in the paper; exact) ------------------------------
-    //
-    // A summary belongs to a mesh cell (the cell whose lower corner is node (ci, cj, ck))
-    // and to its main plane Π: the plane of the largest triangle meeting the cell (ties:
-    // the lower id, so it does not depend on the back-end). It is used by the points of
-    // the cell that lie on Π (within planeDelta_, normal within kPlaneEps), which is most
-    // points of floors, walls and other flat faces. For each side s of Π:
-    //  - uniform_s: every node a point of the cell may use (cellNodes_) that lies on side
-    //    s of Π has the same visibility bits bits_s (and, for СТ, the same inside flag).
-    //    A point on Π seen from side s uses only such nodes (its front test keeps nodes
-    //    more than frontEps_ steps in front of its own plane, which is within the
-    //    tolerances of Π), so any non-empty subset averages to exactly bits_s: formula (2)
-    //    needs neither the walk nor the node words.
-    //  - clear_s (consensus): no triangle meeting the cell grown by the sphere's reach has
-    //    a vertex more than planeDelta_ on side s. A local-visibility segment runs from a
-    //    node to P's origin, both clearly on side s, inside that box, so nothing can block
-    //    it: no segment is traced.
-    // Summaries are computed on first use and published like the nodes: the values depend
-    // on the cell only, and the thread that claims a record is the only one to write it.
-    struct CellSummary {
-        float n[3] = {0, 0, 0};  // Π: unit normal and offset, (n, x) = d on Π
-        double d = 0;
-        uint8_t flags = 0;
-        Word bits[2] = {0, 0};     // bits_s: the bits of the nodes on side s ...
-        Word uniform[2] = {0, 0};  // ... for the lights whose bit is the same on all of them
-    };
-    static constexpr uint8_t kHasPlane = 1, kClear0 = 8, kClear1 = 16;
-    static constexpr int kBrick = 4;  // summaries are stored by bricks of 4³ cells
-    struct SummaryBrick {
-        std::atomic<uint8_t> state[kBrick * kBrick * kBrick];  // 0 empty, 1 being written, 2 ready
-        CellSummary cell[kBrick * kBrick * kBrick];
-    };
-
-    // The summary of cell (ci, cj, ck): the stored one, or one computed into `scratch`.
-    const CellSummary& Summary(int ci, int cj, int ck, CellSummary* scratch) const {
-        const uint64_t brick = (static_cast<uint64_t>(ck / kBrick) * bricksY_ + static_cast<uint64_t>(cj / kBrick)) * bricksX_ +
-                               static_cast<uint64_t>(ci / kBrick);
-        SummaryBrick* b = bricks_[brick].load(std::memory_order_acquire);
-        if (!b) b = AllocateBrick(brick);
-        const int slot = ((ck % kBrick) * kBrick + (cj % kBrick)) * kBrick + (ci % kBrick);
-        uint8_t state = b->state[slot].load(std::memory_order_acquire);
-        if (state == 2) return b->cell[slot];
-        *scratch = ComputeSummary(ci, cj, ck);
-        if (state == 0 && b->state[slot].compare_exchange_strong(state, 1, std::memory_order_acquire)) {
-            b->cell[slot] = *scratch;
-            b->state[slot].store(2, std::memory_order_release);
-            summarized_.fetch_add(1, std::memory_order_relaxed);
-            if ((scratch->uniform[0] | scratch->uniform[1]) == kVisMask)
-                uniformCells_.fetch_add(1, std::memory_order_relaxed);
-            if (scratch->flags & (kClear0 | kClear1)) planarCells_.fetch_add(1, std::memory_order_relaxed);
-        }
-        return *scratch;
-    }
-
-    SummaryBrick* AllocateBrick(uint64_t brick) const {
-        auto fresh = std::make_unique<SummaryBrick>();
-        for (auto& st : fresh->state) st.store(0, std::memory_order_relaxed);
-        SummaryBrick* expected = nullptr;
-        if (bricks_[brick].compare_exchange_strong(expected, fresh.get(), std::memory_order_acq_rel)) {
-            std::lock_guard<std::mutex> lock(brickMutex_);
-            brickPool_.push_back(std::move(fresh));
-            return brickPool_.back().get();
-        }
-        return expected;  // another thread's brick
-    }
-
-    CellSummary ComputeSummary(int ci, int cj, int ck) const {
-        CellSummary c;
-        const LightMeshLattice& L = lattice_;
-        const TriangleMesh& mesh = scene_.mesh;
-        thread_local std::vector<uint32_t> tris;
-        // Π: the largest triangle meeting the cell (grown by the reach margin).
-        tris.clear();
-        accel_.TrianglesOverlapping(Bounds3(L.Node(ci, cj, ck) - Vec3(reachMargin_), L.Node(ci + 1, cj + 1, ck + 1) + Vec3(reachMargin_)),
-                                    &tris);
-        double best = 0, n[3] = {0, 0, 0};
-        uint32_t plane = UINT32_MAX;
-        for (const uint32_t t : tris) {
-            double m[3];
-            const double area = TriangleNormal(mesh, t, m);
-            if (area > best) {
-                best = area;
-                plane = t;
-                for (int a = 0; a < 3; ++a) n[a] = m[a];
-            }
-        }
-        if (plane == UINT32_MAX) return c;
-        const Vec3& v0 = mesh.Vertex(plane, 0);
-        const double d = n[0] * v0.x + n[1] * v0.y + n[2] * v0.z;
-        c.n[0] = static_cast<float>(n[0]);
-        c.n[1] = static_cast<float>(n[1]);
-        c.n[2] = static_cast<float>(n[2]);
-        // Heights are measured with the stored (float) normal, as the points are tested.
-        const double nf[3] = {c.n[0], c.n[1], c.n[2]};
-        c.d = nf[0] * v0.x + nf[1] * v0.y + nf[2] * v0.z;
-        (void)d;
-        c.flags = kHasPlane;
-        auto height = [&](const Vec3& x) { return nf[0] * x.x + nf[1] * x.y + nf[2] * x.z - c.d; };
-
-        // uniform_s over the cell's nodes on each side of Π, light by light.
-        const int64_t base = static_cast<int64_t>(L.Index(ci, cj, ck));
-        Word all[2] = {kVisMask, kVisMask}, any[2] = {0, 0};
-        for (const int64_t off : cellNodes_) {
-            const uint64_t index = static_cast<uint64_t>(base + off);
-            const Vec3 x = L.NodeAt(index);
-            const double hx = height(x);
-            if (hx == 0) continue;  // on Π: never in front of a point on it
-            const int side = hx > 0 ? 0 : 1;
-            const Word w = Evaluate(index, x) & kVisMask;
-            all[side] &= w;
-            any[side] |= w;
-        }
-        for (int side = 0; side < 2; ++side) {
-            c.bits[side] = all[side];
-            c.uniform[side] = static_cast<Word>(~(all[side] ^ any[side]) & kVisMask);
-        }
-
-        if (variant_.local == LocalVisibility::Consensus) {
-            // clear_s: the extreme heights of the vertices of the triangles in reach (of all
-            // whose bounding box is in reach: more triangles can only make it stricter).
-            tris.clear();
-            accel_.TrianglesOverlapping(
-                Bounds3(L.Node(ci + minOffset_, cj + minOffset_, ck + minOffset_) - Vec3(reachMargin_),
-                        L.Node(ci + maxOffset_, cj + maxOffset_, ck + maxOffset_) + Vec3(reachMargin_)),
-                &tris, /*exact=*/false);  // bounding boxes: a superset, enough for a bound
-            double lo = 0, hi = 0;
-            for (const uint32_t t : tris)
-                for (int k = 0; k < 3; ++k) {
-                    const double hv = height(mesh.Vertex(t, k));
-                    lo = std::min(lo, hv);
-                    hi = std::max(hi, hv);
-                }
-            if (hi <= planeDelta_) c.flags |= kClear0;
-            if (lo >= -planeDelta_) c.flags |= kClear1;
-        }
-        return c;
-    }
-
-    // Unit normal of triangle t in double into n; returns twice its area (0 if degenerate).
-    static double TriangleNormal(const TriangleMesh& mesh, uint32_t t, double n[3]) {
-        const Vec3 &a = mesh.Vertex(t, 0), &b = mesh.Vertex(t, 1), &c = mesh.Vertex(t, 2);
-        const double e1[3] = {double(b.x) - a.x, double(b.y) - a.y, double(b.z) - a.z};
-        const double e2[3] = {double(c.x) - a.x, double(c.y) - a.y, double(c.z) - a.z};
-        n[0] = e1[1] * e2[2] - e1[2] * e2[1];
-        n[1] = e1[2] * e2[0] - e1[0] * e2[2];
-        n[2] = e1[0] * e2[1] - e1[1] * e2[0];
-        const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        if (!(len > 0) || !std::isfinite(len)) return 0;
-        for (int k = 0; k < 3; ++k) n[k] /= len;
-        return len;
     }
 
     // The node's word, computing it on first use: one shadow ray to each light; for СТ
@@ -749,10 +977,23 @@ class LightMesh final : public LightMeshShadows {
     int minOffset_ = 0, maxOffset_ = 0;
     float invH_ = 0;
     Bounds3 sceneBox_;
-    float planeDelta_ = 0, frontEps_ = 0, reachMargin_ = 0;
+    float planeDelta_ = 0, frontEps_ = 0, reachMargin_ = 0, cullMargin_ = 0, pointReach_ = 0;
     bool summaries_ = false;
     std::vector<int64_t> cellNodes_;  // linear offsets of the union of the templates
     ZeroedPtr<std::atomic<Word>> nodes_;
+    static constexpr size_t kReachChunk = 1 << 18;
+    mutable std::vector<std::unique_ptr<uint32_t[]>> reachArena_;
+    mutable size_t reachUsed_ = 0, reachBytes_ = 0;
+    // Consensus: each triangle's plane (unit normal, offset) and bounding box, for the
+    // segment culling of Blockers.
+    struct TrianglePlane {
+        Vec3 n;
+        float d;
+        Vec3 lo, hi;
+    };
+    std::vector<TrianglePlane> planes_;
+    std::vector<uint64_t> brickStart_;  // CSR of the bricks' candidate triangles
+    std::vector<uint32_t> brickTris_;
     uint64_t bricksX_ = 0, bricksY_ = 0;
     ZeroedPtr<std::atomic<SummaryBrick*>> bricks_;  // per brick of cells, allocated on first use
     mutable std::mutex brickMutex_;
