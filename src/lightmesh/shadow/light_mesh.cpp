@@ -578,7 +578,7 @@ class LightMesh final : public LightMeshShadows {
             const Vec3 x = L.NodeAt(index);
             const double hx = nf[0] * x.x + nf[1] * x.y + nf[2] * x.z - c.d;
             if (side == 0 ? !(hx > 0) : !(hx < 0)) continue;  // the other side, or on Π
-            const Word w = Evaluate(index, x) & kVisMask;
+            const Word w = Evaluate(index) & kVisMask;
             all &= w;
             any |= w;
         }
@@ -650,7 +650,8 @@ class LightMesh final : public LightMeshShadows {
     Word NodeWord(uint64_t index) const {
         const uint64_t i = index % lattice_.nx, j = (index / lattice_.nx) % lattice_.ny,
                        k = index / (static_cast<uint64_t>(lattice_.nx) * lattice_.ny);
-        return Evaluate(index, lattice_.Node(static_cast<int>(i), static_cast<int>(j), static_cast<int>(k)));
+        (void)i, (void)j, (void)k;
+        return Evaluate(index);
     }
 
     // Adds node x to the interpolation set.
@@ -684,13 +685,13 @@ class LightMesh final : public LightMeshShadows {
                 if (!SeesPoint(x, sp, counters)) return;
                 break;
             case LocalVisibility::Inside: {
-                const Word w = Evaluate(index, x);
+                const Word w = Evaluate(index);
                 if (!(w & kInside)) Use(acc, w);
                 return;
             }
             default: break;
         }
-        Use(acc, Evaluate(index, x));
+        Use(acc, Evaluate(index));
     }
 
     // The paper's "Grid" enumeration (§3.1 pseudocode): the cube of nodes around the
@@ -745,7 +746,9 @@ class LightMesh final : public LightMeshShadows {
         const uint32_t innerBegin = begin + templates_.templates.boundaryCount[s];
         const int64_t base = static_cast<int64_t>(L.Index(ci, cj, ck));
         // (n(P), x - P) with x - P = (offset - frac)·h, over the tolerance of frontEps_.
-        auto front = [&](const TemplateEntry& e) { return Dot(sp.n, e.offset - frac) > frontEps_; };
+        // (offset - frac)·n = offset·n - frac·n: the second term once per point.
+        const float nfrac = Dot(sp.n, frac);
+        auto front = [&](const TemplateEntry& e) { return Dot(sp.n, e.offset) - nfrac > frontEps_; };
         auto node = [&](const TemplateEntry& e) { return L.Node(ci + e.di, cj + e.dj, ck + e.dk); };
 
         bool planar = false;
@@ -781,7 +784,7 @@ class LightMesh final : public LightMeshShadows {
                 if (variant_.local == LocalVisibility::Inside) {
                     for (uint32_t t = begin; t < end && !some; ++t) {
                         const TemplateEntry& e = entries_[t];
-                        some = front(e) && !(Evaluate(static_cast<uint64_t>(base + e.linear), node(e)) & kInside);
+                        some = front(e) && !(Evaluate(static_cast<uint64_t>(base + e.linear)) & kInside);
                     }
                 } else if (variant_.local != LocalVisibility::Consensus || planar) {
                     for (uint32_t t = begin; t < end && !some; ++t) some = front(entries_[t]);
@@ -820,7 +823,7 @@ class LightMesh final : public LightMeshShadows {
             if (!front(e)) continue;
             ++counters.candidates;
             const Vec3 x = node(e);
-            if (SeesPoint(x, sp, counters)) Use(acc, Evaluate(static_cast<uint64_t>(base + e.linear), x));
+            if (SeesPoint(x, sp, counters)) Use(acc, Evaluate(static_cast<uint64_t>(base + e.linear)));
             else allSee = false;
         }
         for (uint32_t t = innerBegin; t < end; ++t) {
@@ -828,7 +831,7 @@ class LightMesh final : public LightMeshShadows {
             if (!front(e)) continue;
             ++counters.candidates;
             const Vec3 x = node(e);
-            if (allSee || SeesPoint(x, sp, counters)) Use(acc, Evaluate(static_cast<uint64_t>(base + e.linear), x));
+            if (allSee || SeesPoint(x, sp, counters)) Use(acc, Evaluate(static_cast<uint64_t>(base + e.linear)));
         }
         return true;
     }
@@ -844,6 +847,7 @@ class LightMesh final : public LightMeshShadows {
     void ConsensusWalk(const ShadingPoint& sp, Word neededMask, uint32_t begin, uint32_t end, int64_t base, int ci, int cj,
                        int ck, const Vec3& frac, bool planar, const Blockers& blockers, Accumulator& acc,
                        RenderCounters& counters) const {
+        const float nfrac = Dot(sp.n, frac);
         struct Candidate {
             uint32_t entry;
             Word word;
@@ -860,9 +864,9 @@ class LightMesh final : public LightMeshShadows {
         const LightMeshLattice& L = lattice_;
         for (uint32_t t = begin; t < end; ++t) {
             const TemplateEntry& e = entries_[t];
-            if (!(Dot(sp.n, e.offset - frac) > frontEps_)) continue;
+            if (!(Dot(sp.n, e.offset) - nfrac > frontEps_)) continue;  // as TemplateWalk's front()
             ++counters.candidates;
-            const Word w = Evaluate(static_cast<uint64_t>(base + e.linear), L.Node(ci + e.di, cj + e.dj, ck + e.dk));
+            const Word w = Evaluate(static_cast<uint64_t>(base + e.linear));
             if (planar) {
                 Use(acc, w);
                 continue;
@@ -906,9 +910,14 @@ class LightMesh final : public LightMeshShadows {
 
     // The node's word, computing it on first use: one shadow ray to each light; for СТ
     // also the inside flag.
-    Word Evaluate(uint64_t index, const Vec3& x) const {
+    // The node's position is only computed when the node is, so a use costs one load.
+    Word Evaluate(uint64_t index) const {
         const Word w = nodes_[index].load(std::memory_order_acquire);
-        if (w & kInit) return w;
+        if (w & kInit) [[likely]] return w;
+        return EvaluateSlow(index);
+    }
+    [[gnu::noinline]] Word EvaluateSlow(uint64_t index) const {
+        const Vec3 x = lattice_.NodeAt(index);
         const Word value = variant_.local == LocalVisibility::Inside ? EvaluateWithInside(x) : EvaluateVisibility(x);
         Word expected = 0;
         if (nodes_[index].compare_exchange_strong(expected, value, std::memory_order_acq_rel))
