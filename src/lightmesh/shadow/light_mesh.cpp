@@ -345,28 +345,55 @@ class LightMesh final : public LightMeshShadows {
         float nx[kMaxReach], ny[kMaxReach], nz[kMaxReach], d[kMaxReach], side[kMaxReach];
         float lox[kMaxReach], loy[kMaxReach], loz[kMaxReach], hix[kMaxReach], hiy[kMaxReach], hiz[kMaxReach];
     };
-    void FindBlockers(const CellSummary& c, const ShadingPoint& sp, Blockers* b) const {
+    // The reach triangles with a vertex in front of P's triangle's plane (by more than
+    // planeDelta_ / 2, measured with the triangle's own plane so the list depends on the
+    // cell, the triangle and the side only): points of one triangle in one cell, which a
+    // tile shades one after another, share it, so each thread keeps the last one.
+    struct FrontList {
+        uint64_t owner = 0;  // serial_ of the light mesh it belongs to
+        int64_t base = -1;
+        uint32_t prim = UINT32_MAX;
+        float sign = 0;
+        uint32_t count = 0;
+        uint32_t id[kMaxReach];
+    };
+    const FrontList& FrontTriangles(const CellSummary& c, int64_t base, const ShadingPoint& sp) const {
+        thread_local FrontList list;
+        const TrianglePlane& own = planes_[sp.prim];
+        const float sign = Dot(own.n, sp.n) >= 0 ? 1.0f : -1.0f;
+        if (list.owner == serial_ && list.base == base && list.prim == sp.prim && list.sign == sign) return list;
+        const TriangleMesh& mesh = scene_.mesh;
+        const Vec3 n = own.n * sign;
+        const float d = own.d * sign;
+        uint32_t count = 0;
+        for (uint32_t i = 0; i < c.reachCount; ++i) {
+            const uint32_t t = c.reach[i];
+            bool front = false;
+            for (int k = 0; k < 3 && !front; ++k) front = Dot(n, mesh.Vertex(t, k)) - d > 0.5f * planeDelta_;
+            if (front) list.id[count++] = t;
+        }
+        list.owner = serial_;
+        list.base = base;
+        list.prim = sp.prim;
+        list.sign = sign;
+        list.count = count;
+        return list;
+    }
+    void FindBlockers(const CellSummary& c, int64_t base, const ShadingPoint& sp, Blockers* b) const {
         b->known = false;
         if (c.reachCount == kTooMany || !(Dot(sp.origin - sp.p, sp.n) > 4 * planeDelta_)) return;
-        const TriangleMesh& mesh = scene_.mesh;
+        const FrontList& front = FrontTriangles(c, base, sp);
         // The segments of this P lie within pointReach_ of it.
         const Vec3 lo = sp.p - Vec3(pointReach_), hi = sp.p + Vec3(pointReach_);
         const float far = pointReach_ + 2 * cullMargin_;
         uint32_t n = 0;
-        for (uint32_t i = 0; i < c.reachCount; ++i) {
-            const uint32_t t = c.reach[i];
-            const TrianglePlane& pl = planes_[t];
+        for (uint32_t i = 0; i < front.count; ++i) {
+            const TrianglePlane& pl = planes_[front.id[i]];
             if (pl.hi.x < lo.x || pl.lo.x > hi.x || pl.hi.y < lo.y || pl.lo.y > hi.y || pl.hi.z < lo.z || pl.lo.z > hi.z)
                 continue;
             // A plane farther from P's origin than any node: every segment is on one side.
             const float so = Dot(pl.n, sp.origin) - pl.d;
             if (std::abs(so) > far) continue;
-            // Heights over P's plane, in float: v - p is exact to an ulp of the coordinates
-            // and short, so the error is well below planeDelta_, and the segments run more
-            // than 4 planeDelta_ in front of the plane.
-            bool front = false;
-            for (int k = 0; k < 3 && !front; ++k) front = Dot(sp.n, mesh.Vertex(t, k) - sp.p) > planeDelta_;
-            if (!front) continue;
             b->nx[n] = pl.n.x;
             b->ny[n] = pl.n.y;
             b->nz[n] = pl.n.z;
@@ -789,7 +816,7 @@ class LightMesh final : public LightMeshShadows {
                 } else if (variant_.local != LocalVisibility::Consensus || planar) {
                     for (uint32_t t = begin; t < end && !some; ++t) some = front(entries_[t]);
                 } else {
-                    FindBlockers(c, sp, &blockers);
+                    FindBlockers(c, base, sp, &blockers);
                     for (uint32_t t = begin; t < end && !some; ++t) {
                         const TemplateEntry& e = entries_[t];
                         if (!front(e)) continue;
@@ -803,7 +830,7 @@ class LightMesh final : public LightMeshShadows {
         }
 
         if (variant_.local == LocalVisibility::Consensus) {
-            if (summary && !planar && !blockers.known) FindBlockers(*summary, sp, &blockers);
+            if (summary && !planar && !blockers.known) FindBlockers(*summary, base, sp, &blockers);
             ConsensusWalk(sp, neededMask, begin, end, base, ci, cj, ck, frac, planar, blockers, acc, counters);
             return true;
         }
@@ -987,6 +1014,11 @@ class LightMesh final : public LightMeshShadows {
     float invH_ = 0;
     Bounds3 sceneBox_;
     float planeDelta_ = 0, frontEps_ = 0, reachMargin_ = 0, cullMargin_ = 0, pointReach_ = 0;
+    const uint64_t serial_ = NextSerial();  // tells this mesh's thread-local caches from others'
+    static uint64_t NextSerial() {
+        static std::atomic<uint64_t> next{1};
+        return next.fetch_add(1, std::memory_order_relaxed);
+    }
     bool summaries_ = false;
     std::vector<int64_t> cellNodes_;  // linear offsets of the union of the templates
     ZeroedPtr<std::atomic<Word>> nodes_;
