@@ -407,6 +407,22 @@ std::string BenchMarkdown(const std::vector<BenchResult>& rs) {
             out += " " + Ratio(Find(rs, *g, "inside", cc, ki), Find(rs, *g, "none", cc, ki)) + " |";
             out += "\n";
         }
+        // The shadow work alone: what each method adds to the render without shadows.
+        if (none && rt && rt->median > none->median) {
+            out += "\nShadow part, (method - no shadows) / (RT - no shadows), same run:\n\n| CC | kI |";
+            for (const std::string& v : variants) out += " " + ParseLightMeshVariant(v).paperName + " |";
+            out += "\n|---|---|";
+            for (size_t i = 0; i < variants.size(); ++i) out += "---|";
+            out += "\n";
+            for (auto [cc, ki] : rows) {
+                out += StringPrintf("| %d | %g |", cc, ki);
+                for (const std::string& v : variants) {
+                    const BenchResult* r = Find(rs, *g, v, cc, ki);
+                    out += r ? StringPrintf(" %.2f |", (r->median - none->median) / (rt->median - none->median)) : " – |";
+                }
+                out += "\n";
+            }
+        }
         out += "\n";
     }
     return out;

@@ -74,6 +74,32 @@ TEST(BenchTablePreset, QuickDividesSizes) {
 #endif
 }
 
+// The shadow-part table: what each method adds to the render without shadows, over what
+// RT adds, from the same run's medians.
+TEST(BenchMarkdown, ShadowPartIsTheWorkAboveNoShadows) {
+    std::vector<BenchResult> rs(3);
+    for (BenchResult& r : rs) {
+        r.scene = "s";
+        r.width = 8;
+        r.height = 8;
+        r.seconds = {0};
+    }
+    rs[0].method = "none";
+    rs[0].median = 1.0;
+    rs[1].method = "rt";
+    rs[1].accel = "embree";
+    rs[1].median = 3.0;
+    rs[2].method = "lmm";
+    rs[2].variant = "consensus";
+    rs[2].cc = 100;
+    rs[2].ki = 2;
+    rs[2].median = 1.5;
+    const std::string md = BenchMarkdown(rs);
+    EXPECT_NE(md.find("Shadow part, (method - no shadows) / (RT - no shadows)"), std::string::npos) << md;
+    EXPECT_NE(md.find("| 100 | 2 | 0.25 |"), std::string::npos) << md;  // (1.5 - 1) / (3 - 1)
+    EXPECT_NE(md.find("| 100 | 2 | 0.50 |"), std::string::npos) << md;  // consensus / RT
+}
+
 // A tiny end-to-end run: the quick sizes of the presets, on the builtin gazebo, with
 // images, the quality report and the HTML.
 TEST(RunBenchmark, QuickHtmlReport) {
