@@ -32,8 +32,11 @@ void WriteImage(const std::string& path, const Image& image);
 /// Reads a PNG (decoded from sRGB to linear) or an EXR. Throws Error naming the file.
 Image ReadImage(const std::string& path);
 
-/// The 8-bit sRGB bytes of a linear value (clamped to [0, 1], rounded to nearest).
+/// The 8-bit sRGB bytes of a linear value (clamped to [0, 1], rounded to nearest; NaN is 0).
+/// A table lookup, exactly EncodeSrgb8Reference's result for every float.
 unsigned char EncodeSrgb8(float linear);
+/// The same by the formula (std::pow), slow: the definition EncodeSrgb8 is tested against.
+unsigned char EncodeSrgb8Reference(float linear);
 /// The linear value of an 8-bit sRGB byte.
 float DecodeSrgb8(unsigned char encoded);
 
