@@ -40,4 +40,10 @@ unsigned char EncodeSrgb8Reference(float linear);
 /// The linear value of an 8-bit sRGB byte.
 float DecodeSrgb8(unsigned char encoded);
 
+/// The PNG file WriteImage writes: 8-bit sRGB RGB, deflated by zlib in strips of
+/// PngStripRows(width) rows, in parallel; the same bytes whatever the thread count.
+std::vector<unsigned char> EncodePng(const Image& image);
+/// The rows per deflate strip of a PNG of this width (about 256 KiB of filtered bytes).
+int PngStripRows(int width);
+
 }  // namespace lm

@@ -13,18 +13,20 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <stdexcept>
 
+#include <tbb/enumerable_thread_specific.h>
+#include <zlib.h>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
 
 #include "lightmesh/io/image.h"
 #include "lightmesh/util/error.h"
+#include "lightmesh/util/parallel.h"
 #include "lightmesh/util/system.h"
 
-// stb's implementation lives in this one translation unit, with internal linkage.
-#define STB_IMAGE_WRITE_IMPLEMENTATION
-#define STB_IMAGE_WRITE_STATIC
+// stb's PNG decoder lives in this one translation unit, with internal linkage.
 #define STB_IMAGE_IMPLEMENTATION
 #define STB_IMAGE_STATIC
 #define STBI_ONLY_PNG
@@ -32,7 +34,6 @@
 #pragma GCC diagnostic ignored "-Wmissing-field-initializers"
 #pragma GCC diagnostic ignored "-Wunused-function"
 #include <stb_image.h>
-#include <stb_image_write.h>
 #pragma GCC diagnostic pop
 
 namespace lm {
@@ -157,25 +158,195 @@ const Srgb8Encoder& Srgb8() {
     return encoder;
 }
 
+// ---- PNG encoding: 8-bit RGB, Paeth-filtered, deflated by zlib in strips.
+//
+// The rows are cut into strips of a fixed number of rows (from the width only, never from
+// the thread count, so the file is the same whatever the threads). Each strip is converted,
+// filtered and deflated on its own, as raw deflate ending in a sync flush (a byte-aligned,
+// non-final empty stored block; the last strip ends the stream instead), so the strips
+// concatenate into one deflate stream. The zlib header goes before the first, and the
+// Adler-32 of all filtered bytes (the strips' checksums combined) after the last.
+// Each strip is one IDAT chunk.
+
+// Measured on renders of builtin:gazebo (1024x768 and 3072x1536; rt, lmm and area shadows,
+// anti-aliased) and on smooth and noisy synthetic images: Paeth with zlib's run-length
+// strategy (matches at distance 1 only, the fastest zlib mode) gave files 10-20% smaller
+// than stb_image_write's on the renders and was good on every kind of image. No filter at
+// level 1 was about 20% faster and up to 9% smaller on the renders, but 50x larger on a
+// smooth gradient; Up or Sub at level 1 were about as fast and 10-15% larger; Paeth at
+// level 3 up to 5% smaller and 50% slower.
+constexpr size_t kPngStripBytes = 256 * 1024;  // filtered bytes per strip, about
+constexpr int kPngDeflateLevel = 1;             // any level > 0 is the same with Z_RLE
+constexpr int kPngStrategy = Z_RLE;
+
+void PutBe32(unsigned char* p, uint32_t v) {
+    p[0] = static_cast<unsigned char>(v >> 24);
+    p[1] = static_cast<unsigned char>(v >> 16);
+    p[2] = static_cast<unsigned char>(v >> 8);
+    p[3] = static_cast<unsigned char>(v);
+}
+
+// PNG's Paeth filter (type 4) on one row of n bytes, 3 per pixel, with `prev` the row above
+// (zeros above the first): each byte minus the one of its left, upper and upper-left
+// neighbours closest to left + upper - upper-left. Written to vectorise.
+void PaethFilterRow(const unsigned char* row, const unsigned char* prev, size_t n,
+                    unsigned char* out) {
+    out[0] = 4;
+    ++out;
+    for (size_t i = 0; i < 3 && i < n; ++i) out[i] = static_cast<unsigned char>(row[i] - prev[i]);
+    for (size_t i = 3; i < n; ++i) {
+        const int a = row[i - 3], b = prev[i], c = prev[i - 3];
+        const int pa = std::abs(b - c), pb = std::abs(a - c), pc = std::abs(a + b - 2 * c);
+        const int pred = (pa <= pb && pa <= pc) ? a : (pb <= pc ? b : c);
+        out[i] = static_cast<unsigned char>(row[i] - pred);
+    }
+}
+
+struct PngStrip {
+    std::vector<unsigned char> data;  // this strip's part of the zlib stream
+    uLong adler = 1;                  // of its filtered bytes
+    size_t filteredBytes = 0;
+    uLong crc = 0;                    // of "IDAT" + data
+};
+
+// One worker thread's buffers and deflate state, reused from strip to strip.
+class PngWorkspace {
+  public:
+    PngWorkspace() = default;
+    PngWorkspace(const PngWorkspace&) = delete;
+    PngWorkspace& operator=(const PngWorkspace&) = delete;
+    ~PngWorkspace() {
+        if (ready_) deflateEnd(&zs_);
+    }
+
+    std::vector<unsigned char> rgb, filtered;
+
+    // Deflates n bytes (at most 1 GiB) as raw deflate, appending to `out`: a sync flush
+    // at the end, or the end of the stream if `last`.
+    void Deflate(const unsigned char* in, size_t n, bool last, std::vector<unsigned char>& out) {
+        if (!ready_) {
+            if (deflateInit2(&zs_, kPngDeflateLevel, Z_DEFLATED, -15, 8, kPngStrategy) != Z_OK)
+                throw std::runtime_error("zlib: deflateInit2 failed");
+            ready_ = true;
+        } else if (deflateReset(&zs_) != Z_OK) {
+            throw std::runtime_error("zlib: deflateReset failed");
+        }
+        size_t used = out.size();
+        out.resize(used + deflateBound(&zs_, static_cast<uLong>(n)) + 64);
+        zs_.next_in = const_cast<unsigned char*>(in);
+        zs_.avail_in = static_cast<uInt>(n);
+        const int flush = last ? Z_FINISH : Z_SYNC_FLUSH;
+        for (;;) {
+            zs_.next_out = out.data() + used;
+            zs_.avail_out = static_cast<uInt>(out.size() - used);
+            const int rc = deflate(&zs_, flush);
+            if (rc != Z_OK && rc != Z_STREAM_END && rc != Z_BUF_ERROR)
+                throw std::runtime_error("zlib: deflate failed");
+            used = out.size() - zs_.avail_out;
+            // A sync flush is complete when deflate leaves output space unused.
+            if (last ? rc == Z_STREAM_END : (zs_.avail_in == 0 && zs_.avail_out != 0)) break;
+            if (zs_.avail_out != 0) throw std::runtime_error("zlib: deflate stopped early");
+            out.resize(out.size() + out.size() / 2 + 4096);  // more room, and again
+        }
+        out.resize(used);
+    }
+
+  private:
+    z_stream zs_{};
+    bool ready_ = false;
+};
+
 }  // namespace
 
 unsigned char EncodeSrgb8(float v) { return Srgb8()(v); }
 
+int PngStripRows(int width) {
+    const size_t rowBytes = 1 + 3 * static_cast<size_t>(width);
+    return static_cast<int>(std::max<size_t>(1, (kPngStripBytes + rowBytes - 1) / rowBytes));
+}
+
+std::vector<unsigned char> EncodePng(const Image& image) {
+    static_assert(sizeof(Color) == 3 * sizeof(float), "a row of pixels is 3 * width floats");
+    const int w = image.width, h = image.height;
+    if (w <= 0 || h <= 0 || image.pixels.size() != static_cast<size_t>(w) * h)
+        throw std::invalid_argument("EncodePng: bad image size");
+    // A strip (one row at least) must fit zlib's 32-bit counts and a PNG chunk.
+    if (static_cast<size_t>(w) > ((size_t(1) << 30) - 1) / 3)
+        throw std::length_error("image too wide for PNG");
+    const Srgb8Encoder& encode = Srgb8();
+    const size_t rgbBytes = 3 * static_cast<size_t>(w), rowBytes = 1 + rgbBytes;
+    const int stripRows = PngStripRows(w);
+    const int strips = (h + stripRows - 1) / stripRows;
+    std::vector<PngStrip> out(strips);
+    tbb::enumerable_thread_specific<PngWorkspace> workspaces;
+    ParallelFor(0, strips, [&](int s) {
+        PngWorkspace& ws = workspaces.local();
+        const int y0 = s * stripRows, y1 = std::min(h, y0 + stripRows);
+        // Row y0 - 1 too (zeros above the image), which the filter predicts from.
+        ws.rgb.resize(rgbBytes * (y1 - y0 + 1));
+        if (y0 == 0) std::fill_n(ws.rgb.begin(), rgbBytes, 0);
+        for (int y = std::max(0, y0 - 1); y < y1; ++y)
+            encode(&image.pixels[static_cast<size_t>(y) * w].r, rgbBytes,
+                   &ws.rgb[rgbBytes * (y - y0 + 1)]);
+        ws.filtered.resize(rowBytes * (y1 - y0));
+        for (int y = y0; y < y1; ++y)
+            PaethFilterRow(&ws.rgb[rgbBytes * (y - y0 + 1)], &ws.rgb[rgbBytes * (y - y0)], rgbBytes,
+                           &ws.filtered[rowBytes * (y - y0)]);
+        PngStrip& strip = out[s];
+        strip.filteredBytes = ws.filtered.size();
+        strip.adler = adler32_z(1, ws.filtered.data(), ws.filtered.size());
+        if (s == 0) strip.data = {0x78, 0x01};  // the zlib header: deflate, 32 KiB window
+        ws.Deflate(ws.filtered.data(), ws.filtered.size(), s == strips - 1, strip.data);
+        strip.crc = crc32_z(crc32(0, reinterpret_cast<const Bytef*>("IDAT"), 4), strip.data.data(),
+                            strip.data.size());
+    });
+
+    uLong adler = 1;
+    size_t total = 8 + 25 + 4 + 12;  // signature, IHDR, the Adler-32, IEND
+    for (const PngStrip& strip : out) {
+        adler = adler32_combine(adler, strip.adler, static_cast<z_off_t>(strip.filteredBytes));
+        total += 12 + strip.data.size();
+    }
+    std::vector<unsigned char> png(total);
+    unsigned char* p = png.data();
+    auto chunk = [&](const char* type, const unsigned char* data, size_t n, uLong crc) {
+        PutBe32(p, static_cast<uint32_t>(n));
+        std::memcpy(p + 4, type, 4);
+        if (n) std::memcpy(p + 8, data, n);
+        PutBe32(p + 8 + n, static_cast<uint32_t>(crc));
+        p += 12 + n;
+    };
+    static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    std::memcpy(p, kSignature, 8);
+    p += 8;
+    unsigned char ihdr[13];
+    PutBe32(ihdr, static_cast<uint32_t>(w));
+    PutBe32(ihdr + 4, static_cast<uint32_t>(h));
+    ihdr[8] = 8;   // bits per channel
+    ihdr[9] = 2;   // colour type: RGB
+    ihdr[10] = 0;  // deflate
+    ihdr[11] = 0;  // adaptive filtering (one filter type per row)
+    ihdr[12] = 0;  // not interlaced
+    chunk("IHDR", ihdr, 13, crc32(crc32(0, reinterpret_cast<const Bytef*>("IHDR"), 4), ihdr, 13));
+    unsigned char adlerBytes[4];
+    PutBe32(adlerBytes, static_cast<uint32_t>(adler));
+    for (int s = 0; s < strips; ++s) {
+        PngStrip& strip = out[s];
+        if (s == strips - 1) {  // the stream's checksum ends the last IDAT
+            strip.data.insert(strip.data.end(), adlerBytes, adlerBytes + 4);
+            strip.crc = crc32(strip.crc, adlerBytes, 4);
+        }
+        chunk("IDAT", strip.data.data(), strip.data.size(), strip.crc);
+    }
+    chunk("IEND", nullptr, 0, crc32(0, reinterpret_cast<const Bytef*>("IEND"), 4));
+    png.resize(static_cast<size_t>(p - png.data()));
+    return png;
+}
+
 namespace {
 
 void WritePng(const std::string& tmp, const Image& image) {
-    static_assert(sizeof(Color) == 3 * sizeof(float), "the pixels are 3 * width * height floats");
-    std::vector<unsigned char> rgb(image.pixels.size() * 3);
-    Srgb8()(&image.pixels[0].r, rgb.size(), rgb.data());
-    std::vector<unsigned char> bytes;
-    auto append = [](void* ctx, void* data, int size) {
-        auto* out = static_cast<std::vector<unsigned char>*>(ctx);
-        out->insert(out->end(), static_cast<unsigned char*>(data),
-                    static_cast<unsigned char*>(data) + size);
-    };
-    if (!stbi_write_png_to_func(append, &bytes, image.width, image.height, 3, rgb.data(),
-                                image.width * 3))
-        ThrowError("%s: PNG encoding failed", tmp.c_str());
+    const std::vector<unsigned char> bytes = EncodePng(image);
     std::ofstream out(tmp, std::ios::binary);
     out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
     out.close();
