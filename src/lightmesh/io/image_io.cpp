@@ -91,9 +91,9 @@ class Srgb8Encoder {
             }
             step[k] = BitsFloat(hi);
         }
+        int k = 0;
         for (uint32_t b = 0; b < kBuckets; ++b) {
             const float first = BitsFloat((kFirstBucket + b) << 16);
-            int k = 0;
             while (k < 255 && step[k + 1] <= first) ++k;
             // At most one step per bucket, or one compare could not refine the lookup.
             assert(k == 255 || step[k + 2] > BitsFloat(((kFirstBucket + b + 1) << 16) - 1));
@@ -231,27 +231,28 @@ class PngWorkspace {
         } else if (deflateReset(&zs_) != Z_OK) {
             throw std::runtime_error("zlib: deflateReset failed");
         }
-        size_t used = out.size();
-        out.resize(used + deflateBound(&zs_, static_cast<uLong>(n)) + 64);
+        deflated_.resize(deflateBound(&zs_, static_cast<uLong>(n)) + 64);
         zs_.next_in = const_cast<unsigned char*>(in);
         zs_.avail_in = static_cast<uInt>(n);
         const int flush = last ? Z_FINISH : Z_SYNC_FLUSH;
+        size_t used = 0;
         for (;;) {
-            zs_.next_out = out.data() + used;
-            zs_.avail_out = static_cast<uInt>(out.size() - used);
+            zs_.next_out = deflated_.data() + used;
+            zs_.avail_out = static_cast<uInt>(deflated_.size() - used);
             const int rc = deflate(&zs_, flush);
             if (rc != Z_OK && rc != Z_STREAM_END && rc != Z_BUF_ERROR)
                 throw std::runtime_error("zlib: deflate failed");
-            used = out.size() - zs_.avail_out;
+            used = deflated_.size() - zs_.avail_out;
             // A sync flush is complete when deflate leaves output space unused.
             if (last ? rc == Z_STREAM_END : (zs_.avail_in == 0 && zs_.avail_out != 0)) break;
             if (zs_.avail_out != 0) throw std::runtime_error("zlib: deflate stopped early");
-            out.resize(out.size() + out.size() / 2 + 4096);  // more room, and again
+            deflated_.resize(deflated_.size() + deflated_.size() / 2 + 4096);  // more room
         }
-        out.resize(used);
+        out.insert(out.end(), deflated_.data(), deflated_.data() + used);
     }
 
   private:
+    std::vector<unsigned char> deflated_;  // room for a strip's worst case
     z_stream zs_{};
     bool ready_ = false;
 };
