@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(cmake ninja-build g++ pkg-config
           libassimp-dev libembree-dev libtbb-dev nlohmann-json3-dev libcli11-dev
-          libstb-dev libopenexr-dev libgtest-dev libgmock-dev libbenchmark-dev
+          libstb-dev zlib1g-dev libopenexr-dev libgtest-dev libgmock-dev libbenchmark-dev
           clang libclang-rt-14-dev)  # sanitizer builds and libFuzzer (scripts/fuzz.sh)
 packages+=("$@")
 

@@ -32,9 +32,18 @@ void WriteImage(const std::string& path, const Image& image);
 /// Reads a PNG (decoded from sRGB to linear) or an EXR. Throws Error naming the file.
 Image ReadImage(const std::string& path);
 
-/// The 8-bit sRGB bytes of a linear value (clamped to [0, 1], rounded to nearest).
+/// The 8-bit sRGB bytes of a linear value (clamped to [0, 1], rounded to nearest; NaN is 0).
+/// A table lookup, exactly EncodeSrgb8Reference's result for every float.
 unsigned char EncodeSrgb8(float linear);
+/// The same by the formula (std::pow), slow: the definition EncodeSrgb8 is tested against.
+unsigned char EncodeSrgb8Reference(float linear);
 /// The linear value of an 8-bit sRGB byte.
 float DecodeSrgb8(unsigned char encoded);
+
+/// The PNG file WriteImage writes: 8-bit sRGB RGB, deflated by zlib in strips of
+/// PngStripRows(width) rows, in parallel; the same bytes whatever the thread count.
+std::vector<unsigned char> EncodePng(const Image& image);
+/// The rows per deflate strip of a PNG of this width (about 256 KiB of filtered bytes).
+int PngStripRows(int width);
 
 }  // namespace lm

@@ -5,18 +5,28 @@
 #include <OpenEXR/ImfOutputFile.h>
 
 #include <algorithm>
+#include <bit>
+#include <cassert>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <limits>
+#include <stdexcept>
+
+#include <tbb/enumerable_thread_specific.h>
+#include <zlib.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "lightmesh/io/image.h"
 #include "lightmesh/util/error.h"
+#include "lightmesh/util/parallel.h"
 #include "lightmesh/util/system.h"
 
-// stb's implementation lives in this one translation unit, with internal linkage.
-#define STB_IMAGE_WRITE_IMPLEMENTATION
-#define STB_IMAGE_WRITE_STATIC
+// stb's PNG decoder lives in this one translation unit, with internal linkage.
 #define STB_IMAGE_IMPLEMENTATION
 #define STB_IMAGE_STATIC
 #define STBI_ONLY_PNG
@@ -24,7 +34,6 @@
 #pragma GCC diagnostic ignored "-Wmissing-field-initializers"
 #pragma GCC diagnostic ignored "-Wunused-function"
 #include <stb_image.h>
-#include <stb_image_write.h>
 #pragma GCC diagnostic pop
 
 namespace lm {
@@ -41,7 +50,7 @@ ImageFormat ImageFormatFor(const std::string& path) {
     ThrowError("%s: unknown image extension \"%s\" (use .png or .exr)", path.c_str(), ext.c_str());
 }
 
-unsigned char EncodeSrgb8(float v) {
+unsigned char EncodeSrgb8Reference(float v) {
     if (!(v > 0)) return 0;  // also maps NaN to 0
     if (v >= 1) return 255;
     const float s = v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
@@ -55,22 +64,290 @@ float DecodeSrgb8(unsigned char e) {
 
 namespace {
 
-void WritePng(const std::string& tmp, const Image& image) {
-    std::vector<unsigned char> rgb(static_cast<size_t>(image.width) * image.height * 3);
-    for (size_t i = 0; i < image.pixels.size(); ++i) {
-        rgb[3 * i + 0] = EncodeSrgb8(image.pixels[i].r);
-        rgb[3 * i + 1] = EncodeSrgb8(image.pixels[i].g);
-        rgb[3 * i + 2] = EncodeSrgb8(image.pixels[i].b);
+constexpr uint32_t FloatBits(float f) { return std::bit_cast<uint32_t>(f); }
+constexpr float BitsFloat(uint32_t u) { return std::bit_cast<float>(u); }
+
+// EncodeSrgb8Reference is monotonic, so its result is the number of its 255 steps at or
+// below v. The steps (the smallest float that encodes to k, for k = 1..255) are found
+// once, by bisection over float bit patterns with the reference itself. The encoder then
+// looks v's top 16 bits (exponent and 7 mantissa bits) up in a table of buckets, each of
+// which holds at most one step, and refines with one compare against that step.
+class Srgb8Encoder {
+  public:
+    // Buckets are the floats sharing their top 16 bits, from 2^-15 (below the first step,
+    // 1.5e-4) up to 1; everything below 2^-15 (and 0, after clamping) falls in bucket 0.
+    static constexpr uint32_t kFirstBucket = (127 - 15) << 7;  // FloatBits(2^-15) >> 16
+    static constexpr uint32_t kBuckets = (FloatBits(1.0f) >> 16) - kFirstBucket + 1;
+
+    Srgb8Encoder() {
+        float step[257];  // step[k]: the smallest float encoding to k; +-inf at the ends
+        step[0] = -std::numeric_limits<float>::infinity();
+        step[256] = std::numeric_limits<float>::infinity();
+        for (int k = 1; k <= 255; ++k) {
+            uint32_t lo = FloatBits(0.0f), hi = FloatBits(1.0f);  // Ref(lo) < k <= Ref(hi)
+            while (hi - lo > 1) {
+                const uint32_t mid = lo + (hi - lo) / 2;
+                (EncodeSrgb8Reference(BitsFloat(mid)) >= k ? hi : lo) = mid;
+            }
+            step[k] = BitsFloat(hi);
+        }
+        int k = 0;
+        for (uint32_t b = 0; b < kBuckets; ++b) {
+            const float first = BitsFloat((kFirstBucket + b) << 16);
+            while (k < 255 && step[k + 1] <= first) ++k;
+            // At most one step per bucket, or one compare could not refine the lookup.
+            assert(k == 255 || step[k + 2] > BitsFloat(((kFirstBucket + b + 1) << 16) - 1));
+            bucket_[b] = {step[k + 1], k};
+        }
     }
-    std::vector<unsigned char> bytes;
-    auto append = [](void* ctx, void* data, int size) {
-        auto* out = static_cast<std::vector<unsigned char>*>(ctx);
-        out->insert(out->end(), static_cast<unsigned char*>(data),
-                    static_cast<unsigned char*>(data) + size);
+
+    unsigned char operator()(float v) const {
+        float c = v > 0.0f ? v : 0.0f;  // NaN and negatives: 0
+        c = c < 1.0f ? c : 1.0f;
+        uint32_t b = FloatBits(c) >> 16;
+        b = b > kFirstBucket ? b - kFirstBucket : 0;
+        const Bucket& e = bucket_[b];
+        return static_cast<unsigned char>(e.first + (c >= e.next));
+    }
+
+    /// Encodes n floats: out[i] = (*this)(in[i]).
+    void operator()(const float* in, size_t n, unsigned char* out) const {
+        size_t i = 0;
+#if defined(__SSE2__)
+        const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
+        const __m128i firstBucket = _mm_set1_epi32(static_cast<int>(kFirstBucket));
+        for (; i + 4 <= n; i += 4) {
+            // max(v, 0) gives its second operand, 0, for NaN.
+            const __m128 c = _mm_min_ps(_mm_max_ps(_mm_loadu_ps(in + i), zero), one);
+            __m128i b = _mm_srli_epi32(_mm_castps_si128(c), 16);
+            b = _mm_and_si128(_mm_sub_epi32(b, firstBucket), _mm_cmpgt_epi32(b, firstBucket));
+            alignas(16) uint32_t idx[4];
+            _mm_store_si128(reinterpret_cast<__m128i*>(idx), b);
+            const __m128i e01 = _mm_unpacklo_epi64(
+                _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&bucket_[idx[0]])),
+                _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&bucket_[idx[1]])));
+            const __m128i e23 = _mm_unpacklo_epi64(
+                _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&bucket_[idx[2]])),
+                _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&bucket_[idx[3]])));
+            const __m128 next = _mm_shuffle_ps(_mm_castsi128_ps(e01), _mm_castsi128_ps(e23),
+                                               _MM_SHUFFLE(2, 0, 2, 0));
+            const __m128i first = _mm_castps_si128(_mm_shuffle_ps(
+                _mm_castsi128_ps(e01), _mm_castsi128_ps(e23), _MM_SHUFFLE(3, 1, 3, 1)));
+            // The compare's mask is -1 where c reaches the bucket's next step.
+            __m128i k = _mm_sub_epi32(first, _mm_castps_si128(_mm_cmpge_ps(c, next)));
+            k = _mm_packs_epi32(k, k);
+            k = _mm_packus_epi16(k, k);
+            const uint32_t bytes = static_cast<uint32_t>(_mm_cvtsi128_si32(k));
+            std::memcpy(out + i, &bytes, 4);
+        }
+#endif
+        for (; i < n; ++i) out[i] = (*this)(in[i]);
+    }
+
+  private:
+    struct Bucket {
+        float next;     // the step after `first`: the smallest float encoding to first + 1
+        int32_t first;  // the encoding of the bucket's first float
     };
-    if (!stbi_write_png_to_func(append, &bytes, image.width, image.height, 3, rgb.data(),
-                                image.width * 3))
-        ThrowError("%s: PNG encoding failed", tmp.c_str());
+    static_assert(sizeof(Bucket) == 8);
+    Bucket bucket_[kBuckets];
+};
+
+const Srgb8Encoder& Srgb8() {
+    static const Srgb8Encoder encoder;
+    return encoder;
+}
+
+// ---- PNG encoding: 8-bit RGB, Paeth-filtered, deflated by zlib in strips.
+//
+// The rows are cut into strips of a fixed number of rows (from the width only, never from
+// the thread count, so the file is the same whatever the threads). Each strip is converted,
+// filtered and deflated on its own, as raw deflate ending in a sync flush (a byte-aligned,
+// non-final empty stored block; the last strip ends the stream instead), so the strips
+// concatenate into one deflate stream. The zlib header goes before the first, and the
+// Adler-32 of all filtered bytes (the strips' checksums combined) after the last.
+// Each strip is one IDAT chunk.
+
+// Measured on renders of builtin:gazebo (1024x768 and 3072x1536; rt, lmm and area shadows,
+// anti-aliased) and on smooth and noisy synthetic images: Paeth with zlib's run-length
+// strategy (matches at distance 1 only, the fastest zlib mode) gave files 10-20% smaller
+// than stb_image_write's on the renders and was good on every kind of image. No filter at
+// level 1 was about 20% faster and up to 9% smaller on the renders, but 50x larger on a
+// smooth gradient; Up or Sub at level 1 were about as fast and 10-15% larger; Paeth at
+// level 3 up to 5% smaller and 50% slower.
+constexpr size_t kPngStripBytes = 256 * 1024;  // filtered bytes per strip, about
+constexpr int kPngDeflateLevel = 1;             // any level > 0 is the same with Z_RLE
+constexpr int kPngStrategy = Z_RLE;
+
+void PutBe32(unsigned char* p, uint32_t v) {
+    p[0] = static_cast<unsigned char>(v >> 24);
+    p[1] = static_cast<unsigned char>(v >> 16);
+    p[2] = static_cast<unsigned char>(v >> 8);
+    p[3] = static_cast<unsigned char>(v);
+}
+
+// PNG's Paeth filter (type 4) on one row of n bytes, 3 per pixel, with `prev` the row above
+// (zeros above the first): each byte minus the one of its left, upper and upper-left
+// neighbours closest to left + upper - upper-left. Written to vectorise.
+void PaethFilterRow(const unsigned char* row, const unsigned char* prev, size_t n,
+                    unsigned char* out) {
+    out[0] = 4;
+    ++out;
+    for (size_t i = 0; i < 3 && i < n; ++i) out[i] = static_cast<unsigned char>(row[i] - prev[i]);
+    for (size_t i = 3; i < n; ++i) {
+        const int a = row[i - 3], b = prev[i], c = prev[i - 3];
+        const int pa = std::abs(b - c), pb = std::abs(a - c), pc = std::abs(a + b - 2 * c);
+        const int pred = (pa <= pb && pa <= pc) ? a : (pb <= pc ? b : c);
+        out[i] = static_cast<unsigned char>(row[i] - pred);
+    }
+}
+
+struct PngStrip {
+    std::vector<unsigned char> data;  // this strip's part of the zlib stream
+    uLong adler = 1;                  // of its filtered bytes
+    size_t filteredBytes = 0;
+    uLong crc = 0;                    // of "IDAT" + data
+};
+
+// One worker thread's buffers and deflate state, reused from strip to strip.
+class PngWorkspace {
+  public:
+    PngWorkspace() = default;
+    PngWorkspace(const PngWorkspace&) = delete;
+    PngWorkspace& operator=(const PngWorkspace&) = delete;
+    ~PngWorkspace() {
+        if (ready_) deflateEnd(&zs_);
+    }
+
+    std::vector<unsigned char> rgb, filtered;
+
+    // Deflates n bytes (at most 1 GiB) as raw deflate, appending to `out`: a sync flush
+    // at the end, or the end of the stream if `last`.
+    void Deflate(const unsigned char* in, size_t n, bool last, std::vector<unsigned char>& out) {
+        if (!ready_) {
+            if (deflateInit2(&zs_, kPngDeflateLevel, Z_DEFLATED, -15, 8, kPngStrategy) != Z_OK)
+                throw std::runtime_error("zlib: deflateInit2 failed");
+            ready_ = true;
+        } else if (deflateReset(&zs_) != Z_OK) {
+            throw std::runtime_error("zlib: deflateReset failed");
+        }
+        deflated_.resize(deflateBound(&zs_, static_cast<uLong>(n)) + 64);
+        zs_.next_in = const_cast<unsigned char*>(in);
+        zs_.avail_in = static_cast<uInt>(n);
+        const int flush = last ? Z_FINISH : Z_SYNC_FLUSH;
+        size_t used = 0;
+        for (;;) {
+            zs_.next_out = deflated_.data() + used;
+            zs_.avail_out = static_cast<uInt>(deflated_.size() - used);
+            const int rc = deflate(&zs_, flush);
+            if (rc != Z_OK && rc != Z_STREAM_END && rc != Z_BUF_ERROR)
+                throw std::runtime_error("zlib: deflate failed");
+            used = deflated_.size() - zs_.avail_out;
+            // A sync flush is complete when deflate leaves output space unused.
+            if (last ? rc == Z_STREAM_END : (zs_.avail_in == 0 && zs_.avail_out != 0)) break;
+            if (zs_.avail_out != 0) throw std::runtime_error("zlib: deflate stopped early");
+            deflated_.resize(deflated_.size() + deflated_.size() / 2 + 4096);  // more room
+        }
+        out.insert(out.end(), deflated_.data(), deflated_.data() + used);
+    }
+
+  private:
+    std::vector<unsigned char> deflated_;  // room for a strip's worst case
+    z_stream zs_{};
+    bool ready_ = false;
+};
+
+}  // namespace
+
+unsigned char EncodeSrgb8(float v) { return Srgb8()(v); }
+
+int PngStripRows(int width) {
+    const size_t rowBytes = 1 + 3 * static_cast<size_t>(width);
+    return static_cast<int>(std::max<size_t>(1, (kPngStripBytes + rowBytes - 1) / rowBytes));
+}
+
+std::vector<unsigned char> EncodePng(const Image& image) {
+    static_assert(sizeof(Color) == 3 * sizeof(float), "a row of pixels is 3 * width floats");
+    const int w = image.width, h = image.height;
+    if (w <= 0 || h <= 0 || image.pixels.size() != static_cast<size_t>(w) * h)
+        throw std::invalid_argument("EncodePng: bad image size");
+    // A strip (one row at least) must fit zlib's 32-bit counts and a PNG chunk.
+    if (static_cast<size_t>(w) > ((size_t(1) << 30) - 1) / 3)
+        throw std::length_error("image too wide for PNG");
+    const Srgb8Encoder& encode = Srgb8();
+    const size_t rgbBytes = 3 * static_cast<size_t>(w), rowBytes = 1 + rgbBytes;
+    const int stripRows = PngStripRows(w);
+    const int strips = (h + stripRows - 1) / stripRows;
+    std::vector<PngStrip> out(strips);
+    tbb::enumerable_thread_specific<PngWorkspace> workspaces;
+    ParallelFor(0, strips, [&](int s) {
+        PngWorkspace& ws = workspaces.local();
+        const int y0 = s * stripRows, y1 = std::min(h, y0 + stripRows);
+        // Row y0 - 1 too (zeros above the image), which the filter predicts from.
+        ws.rgb.resize(rgbBytes * (y1 - y0 + 1));
+        if (y0 == 0) std::fill_n(ws.rgb.begin(), rgbBytes, 0);
+        for (int y = std::max(0, y0 - 1); y < y1; ++y)
+            encode(&image.pixels[static_cast<size_t>(y) * w].r, rgbBytes,
+                   &ws.rgb[rgbBytes * (y - y0 + 1)]);
+        ws.filtered.resize(rowBytes * (y1 - y0));
+        for (int y = y0; y < y1; ++y)
+            PaethFilterRow(&ws.rgb[rgbBytes * (y - y0 + 1)], &ws.rgb[rgbBytes * (y - y0)], rgbBytes,
+                           &ws.filtered[rowBytes * (y - y0)]);
+        PngStrip& strip = out[s];
+        strip.filteredBytes = ws.filtered.size();
+        strip.adler = adler32_z(1, ws.filtered.data(), ws.filtered.size());
+        if (s == 0) strip.data = {0x78, 0x01};  // the zlib header: deflate, 32 KiB window
+        ws.Deflate(ws.filtered.data(), ws.filtered.size(), s == strips - 1, strip.data);
+        strip.crc = crc32_z(crc32(0, reinterpret_cast<const Bytef*>("IDAT"), 4), strip.data.data(),
+                            strip.data.size());
+    });
+
+    uLong adler = 1;
+    size_t total = 8 + 25 + 4 + 12;  // signature, IHDR, the Adler-32, IEND
+    for (const PngStrip& strip : out) {
+        adler = adler32_combine(adler, strip.adler, static_cast<z_off_t>(strip.filteredBytes));
+        total += 12 + strip.data.size();
+    }
+    std::vector<unsigned char> png(total);
+    unsigned char* p = png.data();
+    auto chunk = [&](const char* type, const unsigned char* data, size_t n, uLong crc) {
+        PutBe32(p, static_cast<uint32_t>(n));
+        std::memcpy(p + 4, type, 4);
+        if (n) std::memcpy(p + 8, data, n);
+        PutBe32(p + 8 + n, static_cast<uint32_t>(crc));
+        p += 12 + n;
+    };
+    static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    std::memcpy(p, kSignature, 8);
+    p += 8;
+    unsigned char ihdr[13];
+    PutBe32(ihdr, static_cast<uint32_t>(w));
+    PutBe32(ihdr + 4, static_cast<uint32_t>(h));
+    ihdr[8] = 8;   // bits per channel
+    ihdr[9] = 2;   // colour type: RGB
+    ihdr[10] = 0;  // deflate
+    ihdr[11] = 0;  // adaptive filtering (one filter type per row)
+    ihdr[12] = 0;  // not interlaced
+    chunk("IHDR", ihdr, 13, crc32(crc32(0, reinterpret_cast<const Bytef*>("IHDR"), 4), ihdr, 13));
+    unsigned char adlerBytes[4];
+    PutBe32(adlerBytes, static_cast<uint32_t>(adler));
+    for (int s = 0; s < strips; ++s) {
+        PngStrip& strip = out[s];
+        if (s == strips - 1) {  // the stream's checksum ends the last IDAT
+            strip.data.insert(strip.data.end(), adlerBytes, adlerBytes + 4);
+            strip.crc = crc32(strip.crc, adlerBytes, 4);
+        }
+        chunk("IDAT", strip.data.data(), strip.data.size(), strip.crc);
+    }
+    chunk("IEND", nullptr, 0, crc32(0, reinterpret_cast<const Bytef*>("IEND"), 4));
+    png.resize(static_cast<size_t>(p - png.data()));
+    return png;
+}
+
+namespace {
+
+void WritePng(const std::string& tmp, const Image& image) {
+    const std::vector<unsigned char> bytes = EncodePng(image);
     std::ofstream out(tmp, std::ios::binary);
     out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
     out.close();
