@@ -665,7 +665,7 @@ class LightMesh final : public LightMeshShadows {
 
     // The sums of formula (2): m and, per light, the visible nodes. With one-byte node
     // words the eight bits are counted at once, one byte lane each (kSpread), and the lanes
-    // are moved to `visible` before they can overflow, and at the end (Finish).
+    // are moved to `visible` before they can overflow, and at the end (Flush).
     struct Accumulator {
         uint32_t m = 0;
         uint32_t pending = 0;
@@ -695,12 +695,7 @@ class LightMesh final : public LightMeshShadows {
         return variant_.local == LocalVisibility::Inside && n < 3 ? 3 : n;
     }
 
-    Word NodeWord(uint64_t index) const {
-        const uint64_t i = index % lattice_.nx, j = (index / lattice_.nx) % lattice_.ny,
-                       k = index / (static_cast<uint64_t>(lattice_.nx) * lattice_.ny);
-        (void)i, (void)j, (void)k;
-        return Evaluate(index);
-    }
+    Word NodeWord(uint64_t index) const { return Evaluate(index); }
 
     // Adds node x to the interpolation set.
     void Use(Accumulator& acc, Word w) const {
@@ -718,8 +713,6 @@ class LightMesh final : public LightMeshShadows {
         ++counters.localSegments;
         return !accel_.Occluded(Segment(x, sp.origin));
     }
-
-
 
     // A candidate that passed the sphere and surface tests, for the variants that decide
     // node by node (all but У).
