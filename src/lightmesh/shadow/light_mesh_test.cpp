@@ -304,8 +304,8 @@ Scene SummaryTestScene(int index) {
 
 RenderResult RenderLmm(Scene s, const Accelerator& accel, const std::string& variant, const std::string& summaries,
                        float ki) {
-    s.render.width = 96;
-    s.render.height = 72;
+    s.render.width = 72;
+    s.render.height = 54;
     s.render.lightMesh.ki = ki;
     s.render.lightMesh.variant = variant;
     s.render.lightMesh.cellSummaries = summaries;
@@ -317,7 +317,7 @@ RenderResult RenderLmm(Scene s, const Accelerator& accel, const std::string& var
 // back-end, and Нет and СТ with them ("on") their own images without them. The test
 // also checks that the summaries did answer points and skip segments, so it can fail.
 TEST(LightMesh, CellSummariesKeepEveryImageExactly) {
-    uint64_t uniformPoints = 0, planarPoints = 0;
+    uint64_t uniformPoints = 0, planarPoints = 0, culledSegments = 0;
     for (int index = 0; index < 8; ++index) {
         const Scene s = SummaryTestScene(index);
         for (const char* accelName : {"grid", "embree", "brute"}) {
@@ -339,6 +339,7 @@ TEST(LightMesh, CellSummariesKeepEveryImageExactly) {
                 EXPECT_LE(fast.counters.localSegments, slow.counters.localSegments) << what;
                 uniformPoints += fast.counters.uniformCellPoints;
                 planarPoints += fast.counters.planarCellPoints;
+                culledSegments += fast.counters.culledSegments;
                 if (ki != 2.0f) continue;
                 for (const char* variant : {"none", "inside"}) {
                     const RenderResult off = RenderLmm(s, *accel, variant, "off", ki);
@@ -352,6 +353,7 @@ TEST(LightMesh, CellSummariesKeepEveryImageExactly) {
     }
     EXPECT_GT(uniformPoints, 0u);
     EXPECT_GT(planarPoints, 0u);
+    EXPECT_GT(culledSegments, 0u);  // the blockers' culling decided segments too
 }
 
 // On an open floor far from any occluder every node sees every light: the summary answers
@@ -481,8 +483,13 @@ TEST(LightMesh, ImagesAreIdenticalForAnyThreadCount) {
     s.render.width = 96;
     s.render.height = 72;
     auto accel = CreateAccelerator("grid", s.mesh);
-    for (const std::string& variant : LightMeshVariantNames()) {
+    std::vector<std::pair<std::string, std::string>> cases;
+    for (const std::string& variant : LightMeshVariantNames()) cases.push_back({variant, "auto"});
+    cases.push_back({"none", "on"});  // the cell summaries of Нет and СТ too
+    cases.push_back({"inside", "on"});
+    for (const auto& [variant, summaries] : cases) {
         s.render.lightMesh.variant = variant;
+        s.render.lightMesh.cellSummaries = summaries;
         RenderResult one, many;
         uint64_t nodesOne = 0, nodesMany = 0;
         tbb::task_arena(1).execute([&] {
@@ -498,6 +505,8 @@ TEST(LightMesh, ImagesAreIdenticalForAnyThreadCount) {
         EXPECT_EQ(one.image.pixels, many.image.pixels) << variant;
         EXPECT_EQ(nodesOne, nodesMany) << variant;
         EXPECT_EQ(one.counters.localSegments, many.counters.localSegments) << variant;
+        EXPECT_EQ(one.counters.uniformCellPoints, many.counters.uniformCellPoints) << variant;
+        EXPECT_EQ(one.counters.culledSegments, many.counters.culledSegments) << variant;
     }
 }
 
