@@ -341,11 +341,15 @@ class LightMesh final : public LightMeshShadows {
         bool known = false;  // false: test every segment with the back-end
         uint32_t count = 0;
         // Per blocker, in arrays for the vectorised loop of SeesPointCulled: its plane, the
-        // side P's origin is on (+1, -1; 0 within the margin), and its bounding box.
-        // Padded to a multiple of 4 with entries that never block (see FindBlockers).
-        alignas(16) float nx[kMaxReach + 4], ny[kMaxReach + 4], nz[kMaxReach + 4], d[kMaxReach + 4], side[kMaxReach + 4];
-        alignas(16) float lox[kMaxReach + 4], loy[kMaxReach + 4], loz[kMaxReach + 4];
-        alignas(16) float hix[kMaxReach + 4], hiy[kMaxReach + 4], hiz[kMaxReach + 4];
+        // side P's origin is on (+1, -1; 0 within the margin), its bounding box, and the
+        // normals c_k = a_k × a_k+1 of the planes through P's origin and each edge (a_k:
+        // vertex k - origin) with their rounding margins. Padded to a multiple of 4 with
+        // entries that never block (see FindBlockers).
+        static constexpr size_t N = kMaxReach + 4;
+        alignas(16) float nx[N], ny[N], nz[N], d[N], side[N];
+        alignas(16) float lox[N], loy[N], loz[N], hix[N], hiy[N], hiz[N];
+        alignas(16) float c0x[N], c0y[N], c0z[N], c1x[N], c1y[N], c1z[N], c2x[N], c2y[N], c2z[N];
+        alignas(16) float m0[N], m1[N], m2[N];
     };
     // The reach triangles with a vertex in front of P's triangle's plane (by more than
     // planeDelta_ / 2, measured with the triangle's own plane so the list depends on the
@@ -385,6 +389,7 @@ class LightMesh final : public LightMeshShadows {
         b->known = false;
         if (c.reachCount == kTooMany || !(Dot(sp.origin - sp.p, sp.n) > 4 * planeDelta_)) return;
         const FrontList& front = FrontTriangles(c, base, sp);
+        const TriangleMesh& mesh = scene_.mesh;
         // The segments of this P lie within pointReach_ of it.
         const Vec3 lo = sp.p - Vec3(pointReach_), hi = sp.p + Vec3(pointReach_);
         const float far = pointReach_ + 2 * cullMargin_;
@@ -407,6 +412,24 @@ class LightMesh final : public LightMeshShadows {
             b->hix[n] = pl.hi.x;
             b->hiy[n] = pl.hi.y;
             b->hiz[n] = pl.hi.z;
+            // The edge planes through P's origin. Their error: a_k is exact to about
+            // planeDelta_ (an ulp or two of the coordinates), so c_k to a few planeDelta_·|a|
+            // plus its own rounding; a node's d = x - origin is at most pointReach_ long.
+            const Vec3 a[3] = {mesh.Vertex(front.id[i], 0) - sp.origin, mesh.Vertex(front.id[i], 1) - sp.origin,
+                               mesh.Vertex(front.id[i], 2) - sp.origin};
+            float* cx[3] = {b->c0x, b->c1x, b->c2x};
+            float* cy[3] = {b->c0y, b->c1y, b->c2y};
+            float* cz[3] = {b->c0z, b->c1z, b->c2z};
+            float* mk[3] = {b->m0, b->m1, b->m2};
+            for (int k = 0; k < 3; ++k) {
+                const Vec3 &p = a[k], &q = a[(k + 1) % 3];
+                const Vec3 ck = Cross(p, q);
+                cx[k][n] = ck.x;
+                cy[k][n] = ck.y;
+                cz[k][n] = ck.z;
+                const float lp = Length(p), lq = Length(q);
+                mk[k][n] = pointReach_ * (8 * planeDelta_ * (lp + lq) + 1e-5f * lp * lq) + 8 * planeDelta_ * Length(ck);
+            }
             ++n;
         }
         b->count = n;
@@ -417,13 +440,19 @@ class LightMesh final : public LightMeshShadows {
             b->side[n] = 1;
             b->lox[n] = b->loy[n] = b->loz[n] = 0;
             b->hix[n] = b->hiy[n] = b->hiz[n] = 0;
+            b->c0x[n] = b->c0y[n] = b->c0z[n] = b->c1x[n] = b->c1y[n] = b->c1z[n] = 0;
+            b->c2x[n] = b->c2y[n] = b->c2z[n] = b->m0[n] = b->m1[n] = b->m2[n] = 0;
         }
         b->known = true;
     }
-    // Whether the segment from node x to P certainly meets none of the blockers: for each,
-    // both ends clearly on one side of its plane, or the segment's box apart from its box.
-    // Then any exact test finds no hit, so no segment is traced; otherwise the back-end
-    // decides, as for ОТ. The image is ОТ's either way.
+    // Whether the segment from node x to P's origin o is unblocked, decided without a ray
+    // where the answer is certain: it misses a blocker if its two ends lie clearly on one
+    // side of the blocker's plane, or its box is apart from the blocker's, or the line
+    // passes clearly outside one of its edges (the triple products d·c_k, d = x - o, have
+    // both signs); it hits one if the ends lie clearly on both sides of its plane and d·c_k
+    // have one sign clearly (it crosses the inside). Any exact test agrees on such segments,
+    // so when every blocker is missed the answer is "sees", when one is hit "blocked", and
+    // otherwise the back-end decides, as for ОТ. The image is ОТ's either way.
     bool SeesPointCulled(const Vec3& x, const ShadingPoint& sp, const Blockers& b, RenderCounters& counters) const {
         if (b.known) {
             const float m = cullMargin_;
@@ -435,14 +464,30 @@ class LightMesh final : public LightMeshShadows {
             const V4 xx = zero + x.x, xy = zero + x.y, xz = zero + x.z, mm = zero + m;
             const V4 lx = zero + lo.x, ly = zero + lo.y, lz = zero + lo.z;
             const V4 hx = zero + hi.x, hy = zero + hi.y, hz = zero + hi.z;
-            I4 maybe = {0, 0, 0, 0};
+            const Vec3 dv = x - sp.origin;
+            const V4 dx = zero + dv.x, dy = zero + dv.y, dz = zero + dv.z;
+            I4 maybe = {0, 0, 0, 0}, hit = {0, 0, 0, 0};
             for (uint32_t i = 0; i < b.count; i += 4) {
                 auto at = [&](const float* a) { return *reinterpret_cast<const V4*>(a + i); };
                 const V4 sx = at(b.nx) * xx + at(b.ny) * xy + at(b.nz) * xz - at(b.d);
-                const I4 sameSide = sx * at(b.side) > mm;
+                const V4 sideX = sx * at(b.side);
+                const I4 sameSide = sideX > mm, across = sideX < -mm;
                 const I4 apart = (hx < at(b.lox)) | (lx > at(b.hix)) | (hy < at(b.loy)) | (ly > at(b.hiy)) |
                                  (hz < at(b.loz)) | (lz > at(b.hiz));
-                maybe |= ~(sameSide | apart);
+                const V4 t0 = at(b.c0x) * dx + at(b.c0y) * dy + at(b.c0z) * dz;
+                const V4 t1 = at(b.c1x) * dx + at(b.c1y) * dy + at(b.c1z) * dz;
+                const V4 t2 = at(b.c2x) * dx + at(b.c2y) * dy + at(b.c2z) * dz;
+                const V4 m0 = at(b.m0), m1 = at(b.m1), m2 = at(b.m2);
+                const I4 pos0 = t0 > m0, pos1 = t1 > m1, pos2 = t2 > m2;
+                const I4 neg0 = t0 < -m0, neg1 = t1 < -m1, neg2 = t2 < -m2;
+                const I4 outside = (pos0 | pos1 | pos2) & (neg0 | neg1 | neg2);
+                const I4 inside = (pos0 & pos1 & pos2) | (neg0 & neg1 & neg2);
+                maybe |= ~(sameSide | apart | outside);
+                hit |= inside & across;
+            }
+            if (hit[0] | hit[1] | hit[2] | hit[3]) {
+                ++counters.culledSegments;
+                return false;
             }
             if (!(maybe[0] | maybe[1] | maybe[2] | maybe[3])) {
                 ++counters.culledSegments;
