@@ -421,14 +421,16 @@ class LightMesh final : public LightMeshShadows {
             float* cy[3] = {b->c0y, b->c1y, b->c2y};
             float* cz[3] = {b->c0z, b->c1z, b->c2z};
             float* mk[3] = {b->m0, b->m1, b->m2};
+            // Lengths bounded by L1 norms (no square roots; larger margins are safe).
+            auto l1 = [](const Vec3& v) { return std::abs(v.x) + std::abs(v.y) + std::abs(v.z); };
+            const float la[3] = {l1(a[0]), l1(a[1]), l1(a[2])};
             for (int k = 0; k < 3; ++k) {
-                const Vec3 &p = a[k], &q = a[(k + 1) % 3];
-                const Vec3 ck = Cross(p, q);
+                const int k1 = k == 2 ? 0 : k + 1;
+                const Vec3 ck = Cross(a[k], a[k1]);
                 cx[k][n] = ck.x;
                 cy[k][n] = ck.y;
                 cz[k][n] = ck.z;
-                const float lp = Length(p), lq = Length(q);
-                mk[k][n] = pointReach_ * (8 * planeDelta_ * (lp + lq) + 1e-5f * lp * lq) + 8 * planeDelta_ * Length(ck);
+                mk[k][n] = pointReach_ * (8 * planeDelta_ * (la[k] + la[k1]) + 1e-5f * la[k] * la[k1]) + 8 * planeDelta_ * l1(ck);
             }
             ++n;
         }
