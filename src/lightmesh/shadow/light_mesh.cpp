@@ -105,6 +105,81 @@ ZeroedPtr<std::atomic<T>> ZeroedArray(uint64_t count) {
     return ZeroedPtr<std::atomic<T>>(static_cast<std::atomic<T>*>(p));
 }
 
+/// Consensus with cell summaries: the triangles that could block a segment from a node to
+/// one shading point P (LightMesh::FindBlockers), in arrays for the vectorised culling loop:
+/// each one's plane, the side P's origin is on (+1, -1; 0 within the margin), and the
+/// normals c_k = a_k × a_k+1 of the planes through P's origin and each edge (a_k: vertex k
+/// minus the origin) with their rounding margins. Padded to a multiple of kCullWidth with
+/// entries that never block.
+constexpr uint32_t kMaxBlockers = 256;
+constexpr uint32_t kCullWidth = 8;
+struct Blockers {
+    bool known = false;  // false: test every segment with the back-end
+    uint32_t count = 0;
+    static constexpr size_t N = kMaxBlockers + kCullWidth;
+    alignas(32) float nx[N], ny[N], nz[N], d[N], side[N];
+    alignas(32) float c0x[N], c0y[N], c0z[N], c1x[N], c1y[N], c1z[N], c2x[N], c2y[N], c2z[N];
+    alignas(32) float m0[N], m1[N], m2[N];
+};
+
+/// The culling loop of LightMesh::SeesPointCulled over W blockers at a time (GCC/clang
+/// vector extensions): 1 if a blocker is certainly hit, 0 if every blocker is certainly
+/// missed, -1 if undecided.
+template <int W>
+struct CullVectors;
+template <>
+struct CullVectors<4> {
+    typedef float F __attribute__((vector_size(16)));
+    typedef int I __attribute__((vector_size(16)));
+};
+template <>
+struct CullVectors<8> {
+    typedef float F __attribute__((vector_size(32)));
+    typedef int I __attribute__((vector_size(32)));
+};
+template <int W>
+[[gnu::always_inline]] inline int CullSegment(const Blockers& b, const Vec3& x, const Vec3& o, float m) {
+    using VF = typename CullVectors<W>::F;
+    using VI = typename CullVectors<W>::I;
+    const VF zero = {};
+    const VF xx = zero + x.x, xy = zero + x.y, xz = zero + x.z, mm = zero + m;
+    const Vec3 dv = x - o;
+    const VF dx = zero + dv.x, dy = zero + dv.y, dz = zero + dv.z;
+    VI maybe = {}, hit = {};
+    for (uint32_t i = 0; i < b.count; i += W) {
+#define LM_AT(a) (*reinterpret_cast<const VF*>((a) + i))
+        // Both ends clearly on one side of the plane (miss), or on both sides (a hit if
+        // the line crosses the inside).
+        const VF sideX = (LM_AT(b.nx) * xx + LM_AT(b.ny) * xy + LM_AT(b.nz) * xz - LM_AT(b.d)) * LM_AT(b.side);
+        const VI sameSide = sideX > mm, across = sideX < -mm;
+        // The line's side of each edge plane through the origin.
+        const VF t0 = LM_AT(b.c0x) * dx + LM_AT(b.c0y) * dy + LM_AT(b.c0z) * dz;
+        const VF t1 = LM_AT(b.c1x) * dx + LM_AT(b.c1y) * dy + LM_AT(b.c1z) * dz;
+        const VF t2 = LM_AT(b.c2x) * dx + LM_AT(b.c2y) * dy + LM_AT(b.c2z) * dz;
+        const VF m0 = LM_AT(b.m0), m1 = LM_AT(b.m1), m2 = LM_AT(b.m2);
+        const VI pos0 = t0 > m0, pos1 = t1 > m1, pos2 = t2 > m2;
+        const VI neg0 = t0 < -m0, neg1 = t1 < -m1, neg2 = t2 < -m2;
+        const VI outside = (pos0 | pos1 | pos2) & (neg0 | neg1 | neg2);
+        const VI inside = (pos0 & pos1 & pos2) | (neg0 & neg1 & neg2);
+        maybe |= ~(sameSide | outside);
+        hit |= inside & across;
+#undef LM_AT
+    }
+    int anyHit = 0, anyMaybe = 0;
+    for (int k = 0; k < W; ++k) {
+        anyHit |= hit[k];
+        anyMaybe |= maybe[k];
+    }
+    return anyHit ? 1 : (anyMaybe ? -1 : 0);
+}
+int CullSegmentSse(const Blockers& b, const Vec3& x, const Vec3& o, float m) { return CullSegment<4>(b, x, o, m); }
+// The same eight at a time where the processor has AVX2 (chosen once, at run time).
+__attribute__((target("avx2"))) int CullSegmentAvx2(const Blockers& b, const Vec3& x, const Vec3& o, float m) {
+    return CullSegment<8>(b, x, o, m);
+}
+using CullFunction = int (*)(const Blockers&, const Vec3&, const Vec3&, float);
+CullFunction ChooseCullFunction() { return __builtin_cpu_supports("avx2") ? CullSegmentAvx2 : CullSegmentSse; }
+
 /// A template entry converted for one lattice: the node's offset from LM0 as lattice
 /// coordinates, as floats (for the vector from P) and as a linear index offset.
 struct TemplateEntry {
@@ -327,30 +402,16 @@ class LightMesh final : public LightMeshShadows {
         double d = 0;
         uint8_t flags = 0;
         // Consensus: the triangles whose bounding box meets the reach box (kTooMany: more
-        // than kMaxReach, the back-end tests every segment), in an arena of the mesh.
+        // than kMaxBlockers, the back-end tests every segment), in an arena of the mesh.
         const uint32_t* reach = nullptr;
         uint32_t reachCount = 0;
     };
-    static constexpr uint32_t kMaxReach = 256, kTooMany = UINT32_MAX;
+    static constexpr uint32_t kTooMany = UINT32_MAX;
 
     // Consensus with cell summaries: the triangles that could block a segment from a node
     // to this P. Every such segment lies in the cell's reach box, so only the reach list's
     // triangles can block it; of those, one whose vertices all lie on or behind P's plane
     // cannot (the segment runs clearly in front of it, like the planar argument).
-    struct Blockers {
-        bool known = false;  // false: test every segment with the back-end
-        uint32_t count = 0;
-        // Per blocker, in arrays for the vectorised loop of SeesPointCulled: its plane, the
-        // side P's origin is on (+1, -1; 0 within the margin), its bounding box, and the
-        // normals c_k = a_k × a_k+1 of the planes through P's origin and each edge (a_k:
-        // vertex k - origin) with their rounding margins. Padded to a multiple of 4 with
-        // entries that never block (see FindBlockers).
-        static constexpr size_t N = kMaxReach + 4;
-        alignas(16) float nx[N], ny[N], nz[N], d[N], side[N];
-        alignas(16) float lox[N], loy[N], loz[N], hix[N], hiy[N], hiz[N];
-        alignas(16) float c0x[N], c0y[N], c0z[N], c1x[N], c1y[N], c1z[N], c2x[N], c2y[N], c2z[N];
-        alignas(16) float m0[N], m1[N], m2[N];
-    };
     // The reach triangles with a vertex in front of P's triangle's plane (by more than
     // planeDelta_ / 2, measured with the triangle's own plane so the list depends on the
     // cell, the triangle and the side only): points of one triangle in one cell, which a
@@ -361,7 +422,7 @@ class LightMesh final : public LightMeshShadows {
         uint32_t prim = UINT32_MAX;
         float sign = 0;
         uint32_t count = 0;
-        uint32_t id[kMaxReach];
+        uint32_t id[kMaxBlockers];
     };
     const FrontList& FrontTriangles(const CellSummary& c, int64_t base, const ShadingPoint& sp) const {
         thread_local FrontList list;
@@ -406,12 +467,6 @@ class LightMesh final : public LightMeshShadows {
             b->nz[n] = pl.n.z;
             b->d[n] = pl.d;
             b->side[n] = so > cullMargin_ ? 1.0f : (so < -cullMargin_ ? -1.0f : 0.0f);
-            b->lox[n] = pl.lo.x;
-            b->loy[n] = pl.lo.y;
-            b->loz[n] = pl.lo.z;
-            b->hix[n] = pl.hi.x;
-            b->hiy[n] = pl.hi.y;
-            b->hiz[n] = pl.hi.z;
             // The edge planes through P's origin. Their error: a_k is exact to about
             // planeDelta_ (an ulp or two of the coordinates), so c_k to a few planeDelta_·|a|
             // plus its own rounding; a node's d = x - origin is at most pointReach_ long.
@@ -436,12 +491,10 @@ class LightMesh final : public LightMeshShadows {
         }
         b->count = n;
         // Padding: a plane x·0 - d with d = -1e30 puts every end at 1e30 on the + side.
-        for (; n % 4 != 0; ++n) {
+        for (; n % kCullWidth != 0; ++n) {
             b->nx[n] = b->ny[n] = b->nz[n] = 0;
             b->d[n] = -1e30f;
             b->side[n] = 1;
-            b->lox[n] = b->loy[n] = b->loz[n] = 0;
-            b->hix[n] = b->hiy[n] = b->hiz[n] = 0;
             b->c0x[n] = b->c0y[n] = b->c0z[n] = b->c1x[n] = b->c1y[n] = b->c1z[n] = 0;
             b->c2x[n] = b->c2y[n] = b->c2z[n] = b->m0[n] = b->m1[n] = b->m2[n] = 0;
         }
@@ -449,51 +502,17 @@ class LightMesh final : public LightMeshShadows {
     }
     // Whether the segment from node x to P's origin o is unblocked, decided without a ray
     // where the answer is certain: it misses a blocker if its two ends lie clearly on one
-    // side of the blocker's plane, or its box is apart from the blocker's, or the line
-    // passes clearly outside one of its edges (the triple products d·c_k, d = x - o, have
+    // side of the blocker's plane, or the line passes clearly outside one of its edges (the triple products d·c_k, d = x - o, have
     // both signs); it hits one if the ends lie clearly on both sides of its plane and d·c_k
     // have one sign clearly (it crosses the inside). Any exact test agrees on such segments,
     // so when every blocker is missed the answer is "sees", when one is hit "blocked", and
     // otherwise the back-end decides, as for ОТ. The image is ОТ's either way.
     bool SeesPointCulled(const Vec3& x, const ShadingPoint& sp, const Blockers& b, RenderCounters& counters) const {
         if (b.known) {
-            const float m = cullMargin_;
-            const Vec3 lo = Min(x, sp.origin), hi = Max(x, sp.origin);
-            // Four blockers at a time (GCC/clang vector extensions: SSE on any x86-64).
-            typedef float V4 __attribute__((vector_size(16)));
-            typedef int I4 __attribute__((vector_size(16)));
-            const V4 zero = {0, 0, 0, 0};
-            const V4 xx = zero + x.x, xy = zero + x.y, xz = zero + x.z, mm = zero + m;
-            const V4 lx = zero + lo.x, ly = zero + lo.y, lz = zero + lo.z;
-            const V4 hx = zero + hi.x, hy = zero + hi.y, hz = zero + hi.z;
-            const Vec3 dv = x - sp.origin;
-            const V4 dx = zero + dv.x, dy = zero + dv.y, dz = zero + dv.z;
-            I4 maybe = {0, 0, 0, 0}, hit = {0, 0, 0, 0};
-            for (uint32_t i = 0; i < b.count; i += 4) {
-                auto at = [&](const float* a) { return *reinterpret_cast<const V4*>(a + i); };
-                const V4 sx = at(b.nx) * xx + at(b.ny) * xy + at(b.nz) * xz - at(b.d);
-                const V4 sideX = sx * at(b.side);
-                const I4 sameSide = sideX > mm, across = sideX < -mm;
-                const I4 apart = (hx < at(b.lox)) | (lx > at(b.hix)) | (hy < at(b.loy)) | (ly > at(b.hiy)) |
-                                 (hz < at(b.loz)) | (lz > at(b.hiz));
-                const V4 t0 = at(b.c0x) * dx + at(b.c0y) * dy + at(b.c0z) * dz;
-                const V4 t1 = at(b.c1x) * dx + at(b.c1y) * dy + at(b.c1z) * dz;
-                const V4 t2 = at(b.c2x) * dx + at(b.c2y) * dy + at(b.c2z) * dz;
-                const V4 m0 = at(b.m0), m1 = at(b.m1), m2 = at(b.m2);
-                const I4 pos0 = t0 > m0, pos1 = t1 > m1, pos2 = t2 > m2;
-                const I4 neg0 = t0 < -m0, neg1 = t1 < -m1, neg2 = t2 < -m2;
-                const I4 outside = (pos0 | pos1 | pos2) & (neg0 | neg1 | neg2);
-                const I4 inside = (pos0 & pos1 & pos2) | (neg0 & neg1 & neg2);
-                maybe |= ~(sameSide | apart | outside);
-                hit |= inside & across;
-            }
-            if (hit[0] | hit[1] | hit[2] | hit[3]) {
+            const int decided = cull_(b, x, sp.origin, cullMargin_);
+            if (decided >= 0) {
                 ++counters.culledSegments;
-                return false;
-            }
-            if (!(maybe[0] | maybe[1] | maybe[2] | maybe[3])) {
-                ++counters.culledSegments;
-                return true;
+                return decided == 0;
             }
         }
         return SeesPoint(x, sp, counters);
@@ -605,7 +624,7 @@ class LightMesh final : public LightMeshShadows {
             if (meets(pl, cellBox)) tris.push_back(t);
         }
         if (variant_.local == LocalVisibility::Consensus) {
-            if (reach.size() > kMaxReach) {
+            if (reach.size() > kMaxBlockers) {
                 c.reachCount = kTooMany;
             } else {
                 c.reachCount = static_cast<uint32_t>(reach.size());
@@ -1075,6 +1094,7 @@ class LightMesh final : public LightMeshShadows {
     float invH_ = 0;
     Bounds3 sceneBox_;
     float planeDelta_ = 0, frontEps_ = 0, reachMargin_ = 0, cullMargin_ = 0, pointReach_ = 0;
+    const CullFunction cull_ = ChooseCullFunction();
     const uint64_t serial_ = NextSerial();  // tells this mesh's thread-local caches from others'
     static uint64_t NextSerial() {
         static std::atomic<uint64_t> next{1};
