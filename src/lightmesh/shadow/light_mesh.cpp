@@ -114,6 +114,7 @@ ZeroedPtr<std::atomic<T>> ZeroedArray(uint64_t count) {
 constexpr uint32_t kMaxBlockers = 256;
 constexpr uint32_t kCullWidth = 8;
 struct Blockers {
+    bool tried = false;  // FindBlockers ran for this point
     bool known = false;  // false: test every segment with the back-end
     uint32_t count = 0;
     static constexpr size_t N = kMaxBlockers + kCullWidth;
@@ -447,6 +448,7 @@ class LightMesh final : public LightMeshShadows {
         return list;
     }
     void FindBlockers(const CellSummary& c, int64_t base, const ShadingPoint& sp, Blockers* b) const {
+        b->tried = true;
         b->known = false;
         if (c.reachCount == kTooMany || !(Dot(sp.origin - sp.p, sp.n) > 4 * planeDelta_)) return;
         const FrontList& front = FrontTriangles(c, base, sp);
@@ -896,11 +898,14 @@ class LightMesh final : public LightMeshShadows {
                 } else if (variant_.local != LocalVisibility::Consensus || planar) {
                     for (uint32_t t = begin; t < end && !some; ++t) some = front(entries_[t]);
                 } else {
-                    FindBlockers(c, base, sp, &blockers);
+                    // Usually the first candidate sees P: one ray is cheaper than finding
+                    // the blockers, which pay only when more segments follow.
+                    int tested = 0;
                     for (uint32_t t = begin; t < end && !some; ++t) {
                         const TemplateEntry& e = entries_[t];
                         if (!front(e)) continue;
                         ++counters.candidates;
+                        if (tested++ == 1) FindBlockers(c, base, sp, &blockers);
                         some = SeesPointCulled(node(e), sp, blockers, counters);
                     }
                 }
@@ -910,8 +915,7 @@ class LightMesh final : public LightMeshShadows {
         }
 
         if (variant_.local == LocalVisibility::Consensus) {
-            if (summary && !planar && !blockers.known) FindBlockers(*summary, base, sp, &blockers);
-            ConsensusWalk(sp, neededMask, begin, end, base, ci, cj, ck, frac, planar, blockers, acc, counters);
+            ConsensusWalk(sp, neededMask, begin, end, base, ci, cj, ck, frac, planar, summary, blockers, acc, counters);
             return true;
         }
         if (variant_.local != LocalVisibility::Reduced) {
@@ -952,8 +956,8 @@ class LightMesh final : public LightMeshShadows {
     //
     // In a planar cell (cell summaries) no segment is traced at all: every candidate sees P.
     void ConsensusWalk(const ShadingPoint& sp, Word neededMask, uint32_t begin, uint32_t end, int64_t base, int ci, int cj,
-                       int ck, const Vec3& frac, bool planar, const Blockers& blockers, Accumulator& acc,
-                       RenderCounters& counters) const {
+                       int ck, const Vec3& frac, bool planar, const CellSummary* summary, Blockers& blockers,
+                       Accumulator& acc, RenderCounters& counters) const {
         const float nfrac = Dot(sp.n, frac);
         struct Candidate {
             uint32_t entry;
@@ -982,7 +986,10 @@ class LightMesh final : public LightMeshShadows {
             if (n > 0 && ((w ^ list[0].word) & neededMask)) agree = false;
             list[n++] = {t, w};
         }
+        // The blockers (cell summaries) pay when many segments are to be decided; when
+        // the candidates agree one segment usually settles it, and a ray is cheaper.
         for (uint32_t c = 0; c < n; ++c) {
+            if (summary && !blockers.tried && (!agree || c == 1)) FindBlockers(*summary, base, sp, &blockers);
             const TemplateEntry& e = entries_[list[c].entry];
             if (!SeesPointCulled(L.Node(ci + e.di, cj + e.dj, ck + e.dk), sp, blockers, counters)) continue;
             Use(acc, list[c].word);
