@@ -179,46 +179,35 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
             base.height = height;
             // With --quality, the last image of each cell (indexed like `results`).
             std::map<size_t, Image> images;
-            auto run = [&](BenchResult r, const Accelerator& accel, RenderOptions options) {
+            // The cells of this scene and size, run round-robin: a warm-up pass, then
+            // m.repeat passes over all of them, so that a change in the machine's load
+            // (it is shared) reaches every cell alike and the ratios of medians stay fair.
+            struct Cell {
+                BenchResult r;
+                const Accelerator* accel;
+                RenderOptions options;
+            };
+            std::vector<Cell> cells;
+            auto add = [&](BenchResult r, const Accelerator& accel, RenderOptions options) {
                 r.scene = spec;
                 r.width = width;
                 r.height = height;
                 r.accel = std::string(accel.Name());
                 options.shadows = r.method;
-                for (int i = -1; i < m.repeat; ++i) {  // i = -1: the warm-up run
-                    std::unique_ptr<ShadowMethod> shadows;
-                    const ShadowMethod* sm = nullptr;
-                    RenderResult rr = render(scene, accel, options, &r.setupSeconds, &sm, &shadows);
-                    if (i < 0) continue;
-                    r.seconds.push_back(rr.seconds);
-                    r.counters = rr.counters;
-                    if (auto* lmm = dynamic_cast<const LightMeshShadows*>(sm)) r.nodesEvaluated = lmm->NodesEvaluated();
-                    if (i == m.repeat - 1 && !m.imageDir.empty()) {
-                        std::string name = SceneStem(spec) + StringPrintf("-%dx%d-", width, height) +
-                                           (r.method == "lmm" ? StringPrintf("cc%d-ki%g-%s", r.cc, r.ki, r.variant.c_str())
-                                                              : r.method + "-" + r.accel) + ".png";
-                        r.image = (std::filesystem::path(m.imageDir) / name).string();
-                        WriteImage(r.image, rr.image);
-                    }
-                    if (i == m.repeat - 1 && m.quality) images[results.size()] = std::move(rr.image);
-                }
-                r.median = Median(r.seconds);
-                r.peakMemoryBytes = PeakMemoryBytes();
-                results.push_back(r);
-                if (progress) progress(++done, total, results.back());
+                cells.push_back({std::move(r), &accel, std::move(options)});
             };
             const size_t first = results.size();
             if (m.noShadows) {
                 BenchResult r;
                 r.method = "none";
                 r.paperName = "none";
-                run(r, lmmAccel, base);
+                add(r, lmmAccel, base);
             }
             for (const std::string& a : m.accels) {
                 BenchResult r;
                 r.method = "rt";
                 r.paperName = "RT";
-                run(r, *accels[a], base);
+                add(r, *accels[a], base);
             }
             for (int cc : m.cc)
                 for (float ki : m.ki)
@@ -235,8 +224,34 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                         options.lightMesh.ki = ki;
                         options.lightMesh.variant = v;
                         options.lightMesh.cellSummaries = m.cellSummaries;
-                        run(r, lmmAccel, options);
+                        add(r, lmmAccel, options);
                     }
+            for (int i = -1; i < m.repeat; ++i) {  // i = -1: the warm-up pass
+                for (size_t c = 0; c < cells.size(); ++c) {
+                    BenchResult& r = cells[c].r;
+                    std::unique_ptr<ShadowMethod> shadows;
+                    const ShadowMethod* sm = nullptr;
+                    RenderResult rr = render(scene, *cells[c].accel, cells[c].options, &r.setupSeconds, &sm, &shadows);
+                    if (i < 0) continue;
+                    r.seconds.push_back(rr.seconds);
+                    r.counters = rr.counters;
+                    if (auto* lmm = dynamic_cast<const LightMeshShadows*>(sm)) r.nodesEvaluated = lmm->NodesEvaluated();
+                    if (i < m.repeat - 1) continue;
+                    // The last pass: the cell is done.
+                    if (!m.imageDir.empty()) {
+                        std::string name = SceneStem(spec) + StringPrintf("-%dx%d-", width, height) +
+                                           (r.method == "lmm" ? StringPrintf("cc%d-ki%g-%s", r.cc, r.ki, r.variant.c_str())
+                                                              : r.method + "-" + r.accel) + ".png";
+                        r.image = (std::filesystem::path(m.imageDir) / name).string();
+                        WriteImage(r.image, rr.image);
+                    }
+                    if (m.quality) images[first + c] = std::move(rr.image);
+                    r.median = Median(r.seconds);
+                    r.peakMemoryBytes = PeakMemoryBytes();
+                    results.push_back(r);
+                    if (progress) progress(++done, total, results.back());
+                }
+            }
             if (!m.quality) continue;
 
             // --quality: references, naive soft shadows, PSNR/SSIM and leaks.
