@@ -131,11 +131,12 @@ void InterruptRender(int signal) {
 
 TEST(Robustness, SigintDuringARenderLeavesThePreviousImage) { InterruptRender(SIGINT); }
 TEST(Robustness, SigtermDuringARenderLeavesThePreviousImage) { InterruptRender(SIGTERM); }
+TEST(Robustness, SighupDuringARenderLeavesThePreviousImage) { InterruptRender(SIGHUP); }
 
 // A signal while the temporary file is being written (the moment that matters): the
 // handler removes it, the target keeps its old content.
 TEST(Robustness, SignalDuringTheWriteRemovesTheTemporaryFile) {
-    for (int signal : {SIGINT, SIGTERM}) {
+    for (int signal : {SIGINT, SIGTERM, SIGHUP}) {
         SCOPED_TRACE(signal);
         const Scratch scratch("lm_robust");
         const std::string& dir = scratch.path;
@@ -157,6 +158,52 @@ TEST(Robustness, SignalDuringTheWriteRemovesTheTemporaryFile) {
         EXPECT_EQ(Bytes(path), "old");
         EXPECT_EQ(FilesIn(dir), std::vector<std::string>{"image.png"});
     }
+}
+
+// A write killed by SIGKILL (no handler runs) leaves its temporary file; the next write of
+// the same file removes it, as the process that made it no longer exists, and leaves the
+// temporary files of live processes alone.
+TEST(Robustness, StaleTemporaryFilesOfDeadProcessesAreRemoved) {
+    const Scratch scratch("lm_robust");
+    const std::string& dir = scratch.path;
+    const std::string path = dir + "/image.png";
+    std::ofstream(path) << "old";
+    const pid_t pid = fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+        lm::WriteFileAtomically(path, [&](const std::string& tmp) {
+            std::ofstream(tmp) << "half of the new";
+            raise(SIGKILL);
+        });
+        _exit(0);  // not reached
+    }
+    int status = 0;
+    waitpid(pid, &status, 0);
+    ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) << "status " << status;
+    const std::string stale = lm::TemporaryPathFor(path, pid);
+    ASSERT_TRUE(fs::exists(stale)) << stale;
+    // A live process's temporary (our parent's PID stands in for one) is not touched.
+    const std::string live = lm::TemporaryPathFor(path, getppid());
+    std::ofstream(live) << "being written";
+    lm::WriteFileAtomically(path, [](const std::string& tmp) { std::ofstream(tmp) << "new"; });
+    EXPECT_EQ(Bytes(path), "new");
+    EXPECT_FALSE(fs::exists(stale));
+    EXPECT_TRUE(fs::exists(live));
+}
+
+// A legal file name of 252 bytes (NAME_MAX is 255) gets a temporary name that fits; two
+// long names sharing their first 240 bytes get different ones.
+TEST(Robustness, TemporaryNamesFitNameMax) {
+    const std::string a = "/tmp/x/" + std::string(240, 'a') + "-one.png";
+    const std::string b = "/tmp/x/" + std::string(240, 'a') + "-two.png";
+    for (const std::string& p : {a, b}) {
+        const std::string name = fs::path(lm::TemporaryPathFor(p, 4194304)).filename().string();
+        EXPECT_LE(name.size(), 255u) << name;
+        EXPECT_EQ(name.front(), '.');
+    }
+    EXPECT_NE(lm::TemporaryPathFor(a, 1), lm::TemporaryPathFor(b, 1));
+    EXPECT_EQ(fs::path(lm::TemporaryPathFor("/tmp/x/short.png", 42)).filename().string(),
+              ".short.png.tmp42");
 }
 
 TEST(Robustness, FailedWriteLeavesTheOldFileAndNoTemporary) {

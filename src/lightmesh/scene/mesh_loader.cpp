@@ -24,9 +24,11 @@
 #include <csignal>
 #include <cstdlib>
 #include <cstring>
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <string_view>
 #include <unordered_map>
 
 #include "lightmesh/util/log.h"
@@ -765,45 +767,75 @@ namespace {
 // ---------------------------------------------------------------------------------------
 // The child process: its result, serialised into a memfd
 
+/// The child's result: small fields are copied, large arrays are written in place
+/// (writev), so the triangles are copied once on the way to the parent.
 class ResultWriter {
   public:
     template <typename T>
     void Pod(const T& v) {
-        bytes_.append(reinterpret_cast<const char*>(&v), sizeof(T));
+        Bytes(&v, sizeof(T), true);
     }
     void Str(const std::string& s) {
         Pod<uint64_t>(s.size());
-        bytes_.append(s);
+        Bytes(s.data(), s.size(), true);
     }
+    /// `v` must outlive WriteTo.
     template <typename T>
     void Vec(const std::vector<T>& v) {
         Pod<uint64_t>(v.size());
-        bytes_.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+        Bytes(v.data(), v.size() * sizeof(T), false);
     }
     void Bools(const std::vector<bool>& v) {
         Pod<uint64_t>(v.size());
-        for (bool b : v) bytes_.push_back(b ? 1 : 0);
+        std::string b;
+        for (bool x : v) b.push_back(x ? 1 : 0);
+        Bytes(b.data(), b.size(), true);
     }
     /// Writes everything at offset 0 of `fd`; false on failure.
     bool WriteTo(int fd) const {
         if (ftruncate(fd, 0) != 0 || lseek(fd, 0, SEEK_SET) != 0) return false;
-        size_t done = 0;
-        while (done < bytes_.size()) {
-            const ssize_t n = write(fd, bytes_.data() + done, bytes_.size() - done);
-            if (n < 0 && errno == EINTR) continue;
-            if (n <= 0) return false;
-            done += static_cast<size_t>(n);
+        for (const Piece& p : pieces_) {
+            const char* data = p.copied ? copies_[p.index].data() : p.data;
+            size_t done = 0;
+            while (done < p.size) {
+                const ssize_t n = write(fd, data + done, p.size - done);
+                if (n < 0 && errno == EINTR) continue;
+                if (n <= 0) return false;
+                done += static_cast<size_t>(n);
+            }
         }
         return true;
     }
 
   private:
-    std::string bytes_;
+    struct Piece {
+        const char* data;
+        size_t size;
+        bool copied;
+        size_t index;
+    };
+    void Bytes(const void* data, size_t size, bool copy) {
+        if (size == 0) return;
+        if (copy) {
+            // Small fields go into one buffer, extended while no large array comes between.
+            if (!pieces_.empty() && pieces_.back().copied) {
+                copies_.back().append(static_cast<const char*>(data), size);
+                pieces_.back().size += size;
+                return;
+            }
+            copies_.emplace_back(static_cast<const char*>(data), size);
+            pieces_.push_back({nullptr, size, true, copies_.size() - 1});
+        } else {
+            pieces_.push_back({static_cast<const char*>(data), size, false, 0});
+        }
+    }
+    std::vector<Piece> pieces_;
+    std::deque<std::string> copies_;
 };
 
 class ResultReader {
   public:
-    explicit ResultReader(std::string bytes) : bytes_(std::move(bytes)) {}
+    explicit ResultReader(std::string_view bytes) : bytes_(bytes) {}
     template <typename T>
     T Pod() {
         T v{};
@@ -815,7 +847,7 @@ class ResultReader {
     std::string Str() {
         const uint64_t n = Pod<uint64_t>();
         Need(n);
-        std::string s = bytes_.substr(at_, n);
+        std::string s(bytes_.substr(at_, n));
         at_ += n;
         return s;
     }
@@ -824,7 +856,7 @@ class ResultReader {
         const uint64_t n = Pod<uint64_t>();
         if (n > (bytes_.size() - at_) / sizeof(T)) Need(SIZE_MAX);
         std::vector<T> v(n);
-        std::memcpy(v.data(), bytes_.data() + at_, n * sizeof(T));
+        if (n) std::memcpy(v.data(), bytes_.data() + at_, n * sizeof(T));
         at_ += n * sizeof(T);
         return v;
     }
@@ -841,7 +873,7 @@ class ResultReader {
     void Need(uint64_t n) const {
         if (n > bytes_.size() - at_) throw std::runtime_error("truncated result");
     }
-    std::string bytes_;
+    std::string_view bytes_;
     size_t at_ = 0;
 };
 
@@ -879,8 +911,8 @@ void WriteMeshResult(int fd, const LoadedMesh& m) {
     if (!w.WriteTo(fd)) _exit(3);
 }
 
-LoadedMesh ReadResult(const std::string& path, std::string bytes) {
-    ResultReader r(std::move(bytes));
+LoadedMesh ReadResult(const std::string& path, std::string_view bytes) {
+    ResultReader r(bytes);
     const uint8_t kind = r.Pod<uint8_t>();
     if (kind == kResultMeshError) {
         std::string reason = r.Str();
@@ -943,7 +975,7 @@ LoadedMesh ImportIsolated(const std::string& path, const MeshLoadOptions& option
     static std::mutex forkMutex;
     std::unique_lock<std::mutex> lock(forkMutex);
     std::fflush(nullptr);
-    const uint64_t mapped = MappedBytes();
+    const uint64_t mappedNow = MappedBytes();
     const pid_t pid = fork();
     if (pid < 0) {
         lock.unlock();
@@ -957,8 +989,10 @@ LoadedMesh ImportIsolated(const std::string& path, const MeshLoadOptions& option
         for (int sig : {SIGINT, SIGTERM, SIGHUP}) std::signal(sig, SIG_DFL);
 #ifndef LIGHTMESH_SANITIZED
         // The sanitizers reserve terabytes of shadow address space: no limit under them.
-        if (budget.memory && mapped) {
-            const rlim_t limit = static_cast<rlim_t>(mapped + budget.memory);
+        if (budget.memory && mappedNow) {
+            // At least 64 MiB, for the importer's own working set under a tiny budget.
+            const rlim_t limit = static_cast<rlim_t>(
+                mappedNow + std::max<uint64_t>(budget.memory, uint64_t(64) << 20));
             struct rlimit rl {limit, limit};
             setrlimit(RLIMIT_AS, &rl);
         }
@@ -979,21 +1013,25 @@ LoadedMesh ImportIsolated(const std::string& path, const MeshLoadOptions& option
     while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
     }
     lock.unlock();
-    std::string bytes;
+    // The result, mapped rather than read: one copy, into the vectors.
+    void* mapped = MAP_FAILED;
+    size_t mappedSize = 0;
     struct stat st {};
     if (fstat(fd, &st) == 0 && st.st_size > 0) {
-        bytes.resize(static_cast<size_t>(st.st_size));
-        size_t done = 0;
-        while (done < bytes.size()) {
-            const ssize_t n = pread(fd, bytes.data() + done, bytes.size() - done,
-                                    static_cast<off_t>(done));
-            if (n < 0 && errno == EINTR) continue;
-            if (n <= 0) break;
-            done += static_cast<size_t>(n);
-        }
-        bytes.resize(done);
+        mappedSize = static_cast<size_t>(st.st_size);
+        mapped = mmap(nullptr, mappedSize, PROT_READ, MAP_PRIVATE, fd, 0);
     }
     close(fd);
+    struct Unmap {
+        void* p;
+        size_t n;
+        ~Unmap() {
+            if (p != MAP_FAILED) munmap(p, n);
+        }
+    } unmap{mapped, mappedSize};
+    const std::string_view bytes =
+        mapped == MAP_FAILED ? std::string_view()
+                             : std::string_view(static_cast<const char*>(mapped), mappedSize);
     if (WIFSIGNALED(status)) {
         const int sig = WTERMSIG(status);
         const char* name = SignalName(sig);
@@ -1008,7 +1046,7 @@ LoadedMesh ImportIsolated(const std::string& path, const MeshLoadOptions& option
                                          WIFEXITED(status) ? WEXITSTATUS(status) : -1),
                             true);
     try {
-        return ReadResult(path, std::move(bytes));
+        return ReadResult(path, bytes);
     } catch (const MeshFileError&) {
         throw;
     } catch (const std::exception&) {

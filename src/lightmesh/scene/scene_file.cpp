@@ -1138,9 +1138,9 @@ Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options,
         StringPrintf("camera at %s looking at the model's centre %s, %g° vertical field of view",
                      FormatVec(cam.position).c_str(), FormatVec(center).c_str(), cam.fovY));
 
-    if (std::string p = CoordinateProblem(cam.position, "the automatic framing puts the camera at");
-        !p.empty())
-        r.Fail("", p + " (the model is too large to frame: scale it down or write a .json scene)");
+    if (std::string p = CoordinateProblem(cam.position, "the camera position"); !p.empty())
+        r.Fail("", "automatic framing: " + p +
+                       " (the model is too large to frame: scale it down or write a .json scene)");
 
     // Ground: under the model's lowest point, three times its horizontal size -- unless the
     // model has its own floor there (a playground's lawn), which a slab would meet exactly
@@ -1171,7 +1171,7 @@ Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options,
         }
         const Bounds3 all = scene.mesh.Bounds();
         if (!(std::max(Reach(all.lo), Reach(all.hi)) <= kMaxCoordinate))
-            r.Fail("", StringPrintf("the automatic ground slab reaches %g, beyond the ±%g that "
+            r.Fail("", StringPrintf("automatic framing: the ground slab reaches %g, beyond the ±%g that "
                                     "single-precision rendering allows (scale the model down or "
                                     "write a .json scene)",
                                     double(std::max(Reach(all.lo), Reach(all.hi))),
@@ -1190,9 +1190,9 @@ Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options,
     notes.push_back(StringPrintf("key light at %s and fill light at %s, inverse-square falloff",
                                  FormatVec(keyPosition).c_str(), FormatVec(fillPosition).c_str()));
     for (const PointLight& l : scene.lights)
-        if (std::string p = CoordinateProblem(l.position, "the automatic framing puts a light at");
-            !p.empty())
-            r.Fail("", p + " (the model is too large to frame: scale it down or write a .json scene)");
+        if (std::string p = CoordinateProblem(l.position, "a light"); !p.empty())
+            r.Fail("", "automatic framing: " + p +
+                           " (the model is too large to frame: scale it down or write a .json scene)");
     if (std::string p = SpanProblem(scene); !p.empty()) r.Fail("", p);
     return scene;
 }
