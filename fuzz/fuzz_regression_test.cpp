@@ -47,4 +47,15 @@ TEST(FuzzRegression, TemplateFileCorpusAndCrashes) {
     Replay("regressions", "fuzz_template_file", lm::fuzz::FuzzTemplateFile);
 }
 
+// Assimp's importers: the kept corpus in-process (none of it crashes Assimp), the crashes
+// through the child process, as the renderer imports them.
+TEST(FuzzRegression, MeshImportCorpusAndCrashes) {
+    EXPECT_GT(Replay("corpus", "fuzz_mesh_import",
+                     [](const uint8_t* d, size_t n) { return lm::fuzz::FuzzMeshImport(d, n); }),
+              0u);
+    EXPECT_GT(Replay("regressions", "fuzz_mesh_import",
+                     [](const uint8_t* d, size_t n) { return lm::fuzz::FuzzMeshImport(d, n, true); }),
+              0u);
+}
+
 }  // namespace
