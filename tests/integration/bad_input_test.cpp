@@ -601,6 +601,16 @@ std::vector<Case> Corpus() {
                      "pMesh->mNumFaces at TriangulateProcess.cpp:238): the file is malformed or "
                      "its counts lie\n",
          .files = {{"lie.ply", kLyingPly}}},
+        // Found by fuzz_mesh_import: a PLY header without end_header makes Assimp read on at
+        // the end of the file forever; the child process has a deadline.
+        {.name = "ply_endless_loop_in_assimp",
+         .args = "info $D/loop.ply",
+         .expected = "lightmesh: error: $D/loop.ply: the importer did not finish within 1 s and "
+                     "was stopped (Assimp loops forever on some malformed files; "
+                     "LIGHTMESH_IMPORT_TIMEOUT sets the limit in seconds)\n",
+         .files = {{"loop.ply", "ply\nformat ascii 1.0\nelement vertes\":[{\"mep\nendfacet\n"
+                                "endsolid\asolid t\n_header\n0 0 0\n"}},
+         .env = "LIGHTMESH_IMPORT_TIMEOUT=1"},
         // --- Issue 16: values beyond what Embree takes -----------------------------------------
         {.name = "ground_size_beyond_range",
          .args = kRender + " --accel embree",
@@ -633,6 +643,13 @@ std::vector<Case> Corpus() {
                      "queries allow\n",
          .files = {{"scene.json", SceneJson({.lights = R"([{"position": [0, 9.5e17, 0]}, {"position": [0, -9.5e17, 0]}])",
                                              .extra = ""})}}},
+        // Every command maps every exception to one line: bench's image folder cannot be
+        // made (std::filesystem_error, which bench used to let through).
+        {.name = "bench_filesystem_error",
+         .args = "bench --scene builtin:gazebo --size 8x6 --repeat 1 -q --html $OUT",
+         .expected = "lightmesh: error: $D/out/r-images: Not a directory\n",
+         .files = {{"out/r-images", "a file where the images' folder should be"}},
+         .output = "$D/out/r.html"},
         // --- Issue 16: hangs on FIFOs and special files ---------------------------------------
         {.name = "mesh_is_a_fifo",
          .args = kRender,

@@ -107,6 +107,32 @@ TEST(Robustness, EveryShadowMethodIsByteIdenticalForAnyThreadCountAndRun) {
     }
 }
 
+// Issue 16: a bare model with its own floor at its base (a playground's lawn) gets no
+// coplanar ground slab, so Embree and brute force agree on every pixel (with the slab they
+// differed at 35 dB PSNR).
+TEST(Robustness, ModelWithItsOwnFloorRendersTheSameOnEveryBackEnd) {
+    const Scratch scratch("lm_robust");
+    const std::string& dir = scratch.path;
+    std::ofstream(dir + "/playground.obj")
+        << "v -10 0 -10\nv 10 0 -10\nv 10 0 10\nv -10 0 10\nf 1 4 3 2\n"
+           "v -1 0 -1\nv 1 0 -1\nv 1 2 -1\nv -1 2 -1\nv -1 0 1\nv 1 0 1\nv 1 2 1\nv -1 2 1\n"
+           "f 5 8 7 6\nf 9 10 11 12\nf 5 6 10 9\nf 8 12 11 7\nf 5 9 12 8\nf 6 7 11 10\n";
+    std::string reference;
+    for (const char* accel : {"brute", "grid", "embree"}) {
+        SCOPED_TRACE(accel);
+        const std::string out = dir + "/" + accel + ".png";
+        const CliResult r = Lightmesh("render " + dir + "/playground.obj --width 96 --height 72 --accel " +
+                                      accel + " -o " + out);
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        EXPECT_NE(r.output.find("no ground plane added: the model has its own floor"), std::string::npos)
+            << r.output;
+        if (reference.empty())
+            reference = Bytes(out);
+        else
+            EXPECT_TRUE(Bytes(out) == reference) << out << " differs from brute force's image";
+    }
+}
+
 // ---------------------------------------------------------------------------------------
 // Atomic outputs
 

@@ -9,7 +9,9 @@
 #include <assimp/scene.h>
 
 #include <fcntl.h>
+#include <poll.h>
 #include <signal.h>
+#include <sys/syscall.h>
 #include <sys/mman.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
@@ -966,6 +968,19 @@ const char* SignalName(int sig) {
     }
 }
 
+/// LIGHTMESH_IMPORT_TIMEOUT (seconds) if set, else 60 s + 2 s per MB of the file (Assimp
+/// parses tens of MB per second).
+double ImportTimeoutSeconds(const std::string& path) {
+    if (const char* env = std::getenv("LIGHTMESH_IMPORT_TIMEOUT"); env && *env) {
+        char* end = nullptr;
+        const double v = std::strtod(env, &end);
+        if (end != env && *end == 0 && v > 0 && v < 1e7) return v;
+    }
+    struct stat st {};
+    const double mb = stat(path.c_str(), &st) == 0 ? static_cast<double>(st.st_size) / 1e6 : 0;
+    return 60.0 + 2.0 * mb;
+}
+
 LoadedMesh ImportIsolated(const std::string& path, const MeshLoadOptions& options,
                           const ImportBudget& budget) {
     const int fd = memfd_create("lightmesh-import", MFD_CLOEXEC);
@@ -1009,10 +1024,48 @@ LoadedMesh ImportIsolated(const std::string& path, const MeshLoadOptions& option
         }
         _exit(0);
     }
+    // Some malformed files make Assimp loop forever (a PLY header without end_header, found
+    // by fuzz_mesh_import): the child gets a deadline, generous next to any real parse.
+    const double timeout = ImportTimeoutSeconds(path);
     int status = 0;
-    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    bool timedOut = false;
+    {
+        const auto deadline = std::chrono::steady_clock::now() +
+                              std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                  std::chrono::duration<double>(timeout));
+        const int pidfd = static_cast<int>(syscall(SYS_pidfd_open, pid, 0));
+        for (;;) {
+            const pid_t done = waitpid(pid, &status, WNOHANG);
+            if (done == pid || (done < 0 && errno != EINTR)) break;
+            const auto now = std::chrono::steady_clock::now();
+            if (now >= deadline) {
+                kill(pid, SIGKILL);
+                while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+                }
+                timedOut = true;
+                break;
+            }
+            const double left = std::chrono::duration<double>(deadline - now).count();
+            if (pidfd >= 0) {
+                // Readable when the child exits: no polling latency.
+                struct pollfd p {pidfd, POLLIN, 0};
+                poll(&p, 1, static_cast<int>(std::min(left * 1000.0 + 1, 1e9)));
+            } else {
+                usleep(static_cast<useconds_t>(std::min(left, 0.002) * 1e6));
+            }
+        }
+        if (pidfd >= 0) close(pidfd);
     }
     lock.unlock();
+    if (timedOut) {
+        close(fd);
+        throw MeshFileError(path,
+                            StringPrintf("the importer did not finish within %.0f s and was "
+                                         "stopped (Assimp loops forever on some malformed files; "
+                                         "LIGHTMESH_IMPORT_TIMEOUT sets the limit in seconds)",
+                                         timeout),
+                            true);
+    }
     // The result, mapped rather than read: one copy, into the vectors.
     void* mapped = MAP_FAILED;
     size_t mappedSize = 0;
