@@ -1263,8 +1263,16 @@ Scene LoadScene(const std::string& spec, const SceneLoadOptions& options,
         return scene;
     } catch (const Error&) {
         throw;
+    } catch (const std::bad_alloc&) {
+        const uint64_t budget = PhysicalMemoryBytes();
+        throw Error(spec + ": out of memory while loading the scene (peak " +
+                    FormatBytes(PeakMemoryBytes()) + ", budget " +
+                    (budget ? FormatBytes(budget) : std::string("unknown")) +
+                    "; LIGHTMESH_MEMORY_LIMIT lowers it)");
+    } catch (const std::filesystem::filesystem_error& e) {
+        throw Error(spec + ": " + e.path1().string() + ": " + e.code().message());
     } catch (const std::exception& e) {
-        // Nothing but an Error may leave the loader (bad_alloc, filesystem errors, ...).
+        // Nothing but an Error may leave the loader.
         throw Error(spec + ": " + e.what());
     }
 }
