@@ -66,7 +66,7 @@ for t in "${targets[@]}"; do
     grep -E "^#[0-9]+: .*oom/timeout/crash" "$log" | tail -n 1 >&2 || true
     # Whose code is at fault: the first frame of the replayed report in libassimp or in lm::.
     # (At most 30 are replayed: a timeout costs 5 s to reproduce.)
-    n=0; inside=0; untriaged=0
+    n=0; inside=0; memory=0; untriaged=0
     for f in "$findings"/*; do
       [ -f "$f" ] || continue
       if [ "$n" -ge 30 ]; then untriaged=$((untriaged + 1)); continue; fi
@@ -75,6 +75,9 @@ for t in "${targets[@]}"; do
       first="$(printf '%s\n' "$report" | grep -E '^ +#[0-9]+ ' | grep -E 'libassimp|lm::' | head -n 1 || true)"
       if printf '%s' "$first" | grep -q libassimp; then
         inside=$((inside + 1))
+      elif [ -z "$first" ] && printf '%s' "$report" | grep -q "libFuzzer: out-of-memory"; then
+        # Over the RSS limit with no allocation to blame: counted, not attributed.
+        memory=$((memory + 1))
       else
         status=1
         cp "$f" "$crashes/"
@@ -82,6 +85,7 @@ for t in "${targets[@]}"; do
       fi
     done
     echo "fuzz: $t: $n findings replayed, $inside of them inside Assimp's own code (contained by the child process; in $findings)" >&2
+    [ "$memory" -eq 0 ] || echo "fuzz: $t: $memory of them over the RSS limit without a stack (unattributed)" >&2
     [ "$untriaged" -eq 0 ] || echo "fuzz: $t: $untriaged more findings not replayed" >&2
   fi
   rm -f "$log" fuzz-*.log
