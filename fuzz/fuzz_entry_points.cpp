@@ -213,6 +213,46 @@ int FuzzSceneFile(const uint8_t* data, size_t size) {
     return 0;
 }
 
+int FuzzMeshImport(const uint8_t* data, size_t size, bool isolated) {
+    static const TemplateFolder folder;  // a private folder, removed at exit
+    static const char* const kExtensions[] = {".obj", ".ply", ".off", ".gltf", ".glb",
+                                              ".dae", ".ac",  ".stl", ".nff",  ".3ds"};
+    if (size < 1) return 0;
+    const std::string path = folder.path + "/mesh" + kExtensions[data[0] % 10];
+    {
+        FILE* f = std::fopen(path.c_str(), "wb");
+        if (!f) return 0;
+        std::fwrite(data + 1, 1, size - 1, f);
+        std::fclose(f);
+    }
+    // Small enough that one input stays fast and within the fuzzer's memory limit.
+    ImportBudget budget;
+    budget.memory = 256u << 20;
+    budget.triangles = 200000;
+    budget.instances = 10000;
+    budget.nodes = 10000;
+    budget.depth = 128;
+    LoadedMesh m;
+    try {
+        m = isolated ? LoadMeshFile(path) : ImportMeshInProcess(path, {}, budget);
+    } catch (const MeshFileError& e) {
+        if (Verbose()) std::fprintf(stderr, "fuzz_mesh_import: %s\n", e.what());
+        return 0;
+    }
+    const TriangleMesh& mesh = m.mesh;
+    FUZZ_CHECK(mesh.materialIds.size() == mesh.triangles.size());
+    FUZZ_CHECK(mesh.normals.empty() || mesh.normals.size() == mesh.positions.size());
+    for (const auto& t : mesh.triangles)
+        for (uint32_t v : t) FUZZ_CHECK(v < mesh.positions.size());
+    for (uint32_t id : mesh.materialIds) FUZZ_CHECK(id < m.materials.size());
+    for (const Vec3& p : mesh.positions) FUZZ_CHECK(IsFinite(p));
+    FUZZ_CHECK(isolated || mesh.TriangleCount() <= budget.triangles);
+    FUZZ_CHECK(mesh.TriangleCount() > 0 || m.meshesExcluded > 0);
+    if (Verbose())
+        std::fprintf(stderr, "fuzz_mesh_import: %zu triangles\n", mesh.TriangleCount());
+    return 0;
+}
+
 int FuzzTemplateFile(const uint8_t* data, size_t size) {
     if (size < 1) return 0;
     const bool fixChecksum = data[0] & 1;

@@ -3,6 +3,7 @@
 // suite -- and its sanitizer builds -- keep covering them.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -45,6 +46,20 @@ TEST(FuzzRegression, SceneFileCorpusAndCrashes) {
 TEST(FuzzRegression, TemplateFileCorpusAndCrashes) {
     EXPECT_GT(Replay("corpus", "fuzz_template_file", lm::fuzz::FuzzTemplateFile), 0u);
     Replay("regressions", "fuzz_template_file", lm::fuzz::FuzzTemplateFile);
+}
+
+// Assimp's importers: the kept corpus in-process (none of it crashes Assimp), the crashes
+// through the child process, as the renderer imports them.
+TEST(FuzzRegression, MeshImportCorpusAndCrashes) {
+    EXPECT_GT(Replay("corpus", "fuzz_mesh_import",
+                     [](const uint8_t* d, size_t n) { return lm::fuzz::FuzzMeshImport(d, n); }),
+              0u);
+    // One of them makes Assimp loop forever: the child's deadline, shortened here, stops it.
+    setenv("LIGHTMESH_IMPORT_TIMEOUT", "2", 1);
+    EXPECT_GT(Replay("regressions", "fuzz_mesh_import",
+                     [](const uint8_t* d, size_t n) { return lm::fuzz::FuzzMeshImport(d, n, true); }),
+              0u);
+    unsetenv("LIGHTMESH_IMPORT_TIMEOUT");
 }
 
 }  // namespace

@@ -11,4 +11,4 @@ cd "$root"
 scripts/fetch-scenes.sh
 scripts/build.sh
 cd build
-ctest --output-on-failure -L real -j"$(nproc)" "$@"
+LIGHTMESH_REQUIRE_REAL_SCENES=1 ctest --output-on-failure -L real -j"$(nproc)" "$@"

@@ -41,6 +41,33 @@ std::string Count(uint64_t n) {
     return s;
 }
 
+/// Runs a command so that every exception becomes one line and exit code 1: the project's
+/// errors as they are, allocation failures and file-system errors with what failed.
+template <typename F>
+int Guarded(F&& run) {
+    try {
+        return run();
+    } catch (const lm::Error& e) {
+        std::fprintf(stderr, "lightmesh: error: %s\n", e.what());
+    } catch (const std::bad_alloc&) {
+        const uint64_t budget = lm::PhysicalMemoryBytes();
+        std::fprintf(stderr,
+                     "lightmesh: error: out of memory: an allocation failed (peak %s; this machine's "
+                     "budget %s, LIGHTMESH_MEMORY_LIMIT lowers it)\n",
+                     lm::FormatBytes(lm::PeakMemoryBytes()).c_str(),
+                     budget ? lm::FormatBytes(budget).c_str() : "unknown");
+    } catch (const std::filesystem::filesystem_error& e) {
+        std::string what = e.code().message();
+        std::fprintf(stderr, "lightmesh: error: %s: %s\n", lm::Printable(e.path1().string()).c_str(),
+                     lm::Printable(what).c_str());
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "lightmesh: error: %s\n", lm::Printable(e.what()).c_str());
+    } catch (...) {
+        std::fprintf(stderr, "lightmesh: error: unknown failure\n");
+    }
+    return 1;
+}
+
 /// Options shared by the commands that load a scene.
 struct CommonOptions {
     std::string scene;
@@ -121,6 +148,29 @@ int RunRender(const RenderCommand& cmd) {
     if (cmd.lightRadius) options.areaLight.radius = *cmd.lightRadius;
     if (cmd.samples) options.areaLight.samples = *cmd.samples;
 
+    if (cmd.variant && cmd.variant->empty())
+        lm::ThrowError("--variant: must not be empty (leave it out for the default)");
+    // Options the chosen method does not use: a warning each, as pbrt reports unused
+    // parameters.
+    auto unused = [&](bool given, const char* option, const char* usedBy) {
+        if (given)
+            lm::LogWarning(lm::StringPrintf("%s is not used by --shadows %s (only by %s); ignored",
+                                            option, options.shadows.c_str(), usedBy));
+    };
+    if (options.shadows != "lmm") {
+        unused(cmd.cc.has_value(), "--cc", "lmm");
+        unused(cmd.ki.has_value(), "--ki", "lmm");
+        unused(cmd.variant.has_value(), "--variant", "lmm");
+        unused(cmd.ns.has_value(), "--ns", "lmm");
+        unused(cmd.templateDir.has_value(), "--template-dir", "lmm");
+    }
+    if (options.shadows != "area") {
+        unused(cmd.lightRadius.has_value(), "--light-radius", "area");
+        unused(cmd.samples.has_value(), "--samples", "area");
+    }
+    if (cmd.grid && options.accel != "grid")
+        lm::LogWarning(lm::StringPrintf("--grid is not used by --accel %s (only by grid); ignored",
+                                        options.accel.c_str()));
     if (options.shadows == "lmm") lm::ParseLightMeshVariant(options.lightMesh.variant);
     if (options.shadows == "area" || cmd.lightRadius || cmd.samples)
         lm::ValidateAreaLightOptions(options.areaLight);
@@ -425,6 +475,10 @@ struct CompareCommand {
 
 /// Exit codes: 0 compared (and PSNR >= --threshold-psnr), 1 error, 3 below the threshold.
 int RunCompare(const CompareCommand& cmd) {
+    if (cmd.thresholdPsnr && !std::isfinite(*cmd.thresholdPsnr))
+        lm::ThrowError("--threshold-psnr: must be a finite number of dB, got %g", *cmd.thresholdPsnr);
+    if (!(cmd.diffScale >= 0) || !std::isfinite(cmd.diffScale))
+        lm::ThrowError("--diff-scale: must be a finite number >= 0, got %g", double(cmd.diffScale));
     const lm::Image a = lm::ReadImage(cmd.a), b = lm::ReadImage(cmd.b);
     std::optional<lm::Image> mask;
     if (!cmd.mask.empty()) mask = lm::ReadImage(cmd.mask);
@@ -602,45 +656,18 @@ int main(int argc, char** argv) {
         if (render.common.threads > 0)
             limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                           static_cast<size_t>(render.common.threads));
-        try {
-            return RunBench(bench);
-        } catch (const lm::Error& e) {
-            std::fprintf(stderr, "lightmesh: error: %s\n", e.what());
-            return 1;
-        }
+        return Guarded([&] { return RunBench(bench); });
     }
-    if (compareCmd->parsed()) {
-        try {
-            return RunCompare(compare);
-        } catch (const std::exception& e) {
-            std::fprintf(stderr, "lightmesh: error: %s\n", e.what());
-            return 1;
-        }
-    }
-    if (templatesCmd->parsed()) {
-        try {
-            return RunTemplates(templatesNs, templatesKi, templatesDir, templatesMeasure);
-        } catch (const lm::Error& e) {
-            std::fprintf(stderr, "lightmesh: error: %s\n", e.what());
-            return 1;
-        }
-    }
+    if (compareCmd->parsed()) return Guarded([&] { return RunCompare(compare); });
+    if (templatesCmd->parsed())
+        return Guarded([&] { return RunTemplates(templatesNs, templatesKi, templatesDir, templatesMeasure); });
     const CommonOptions& common = renderCmd->parsed() ? render.common : info;
     std::unique_ptr<tbb::global_control> threadLimit;
     if (common.threads > 0)
         threadLimit = std::make_unique<tbb::global_control>(
             tbb::global_control::max_allowed_parallelism, static_cast<size_t>(common.threads));
-    try {
+    return Guarded([&] {
         if (renderCmd->parsed()) return RunRender(render);
         return RunInfo(info, infoAccel, infoGrid);
-    } catch (const lm::Error& e) {
-        std::fprintf(stderr, "lightmesh: error: %s\n", e.what());
-        return 1;
-    } catch (const std::bad_alloc&) {
-        std::fprintf(stderr, "lightmesh: error: out of memory\n");
-        return 1;
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "lightmesh: internal error: %s\n", e.what());
-        return 2;
-    }
+    });
 }

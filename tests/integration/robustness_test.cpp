@@ -107,6 +107,32 @@ TEST(Robustness, EveryShadowMethodIsByteIdenticalForAnyThreadCountAndRun) {
     }
 }
 
+// Issue 16: a bare model with its own floor at its base (a playground's lawn) gets no
+// coplanar ground slab, so Embree and brute force agree on every pixel (with the slab they
+// differed at 35 dB PSNR).
+TEST(Robustness, ModelWithItsOwnFloorRendersTheSameOnEveryBackEnd) {
+    const Scratch scratch("lm_robust");
+    const std::string& dir = scratch.path;
+    std::ofstream(dir + "/playground.obj")
+        << "v -10 0 -10\nv 10 0 -10\nv 10 0 10\nv -10 0 10\nf 1 4 3 2\n"
+           "v -1 0 -1\nv 1 0 -1\nv 1 2 -1\nv -1 2 -1\nv -1 0 1\nv 1 0 1\nv 1 2 1\nv -1 2 1\n"
+           "f 5 8 7 6\nf 9 10 11 12\nf 5 6 10 9\nf 8 12 11 7\nf 5 9 12 8\nf 6 7 11 10\n";
+    std::string reference;
+    for (const char* accel : {"brute", "grid", "embree"}) {
+        SCOPED_TRACE(accel);
+        const std::string out = dir + "/" + accel + ".png";
+        const CliResult r = Lightmesh("render " + dir + "/playground.obj --width 96 --height 72 --accel " +
+                                      accel + " -o " + out);
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        EXPECT_NE(r.output.find("no ground plane added: the model has its own floor"), std::string::npos)
+            << r.output;
+        if (reference.empty())
+            reference = Bytes(out);
+        else
+            EXPECT_TRUE(Bytes(out) == reference) << out << " differs from brute force's image";
+    }
+}
+
 // ---------------------------------------------------------------------------------------
 // Atomic outputs
 
@@ -131,11 +157,12 @@ void InterruptRender(int signal) {
 
 TEST(Robustness, SigintDuringARenderLeavesThePreviousImage) { InterruptRender(SIGINT); }
 TEST(Robustness, SigtermDuringARenderLeavesThePreviousImage) { InterruptRender(SIGTERM); }
+TEST(Robustness, SighupDuringARenderLeavesThePreviousImage) { InterruptRender(SIGHUP); }
 
 // A signal while the temporary file is being written (the moment that matters): the
 // handler removes it, the target keeps its old content.
 TEST(Robustness, SignalDuringTheWriteRemovesTheTemporaryFile) {
-    for (int signal : {SIGINT, SIGTERM}) {
+    for (int signal : {SIGINT, SIGTERM, SIGHUP}) {
         SCOPED_TRACE(signal);
         const Scratch scratch("lm_robust");
         const std::string& dir = scratch.path;
@@ -157,6 +184,52 @@ TEST(Robustness, SignalDuringTheWriteRemovesTheTemporaryFile) {
         EXPECT_EQ(Bytes(path), "old");
         EXPECT_EQ(FilesIn(dir), std::vector<std::string>{"image.png"});
     }
+}
+
+// A write killed by SIGKILL (no handler runs) leaves its temporary file; the next write of
+// the same file removes it, as the process that made it no longer exists, and leaves the
+// temporary files of live processes alone.
+TEST(Robustness, StaleTemporaryFilesOfDeadProcessesAreRemoved) {
+    const Scratch scratch("lm_robust");
+    const std::string& dir = scratch.path;
+    const std::string path = dir + "/image.png";
+    std::ofstream(path) << "old";
+    const pid_t pid = fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+        lm::WriteFileAtomically(path, [&](const std::string& tmp) {
+            std::ofstream(tmp) << "half of the new";
+            raise(SIGKILL);
+        });
+        _exit(0);  // not reached
+    }
+    int status = 0;
+    waitpid(pid, &status, 0);
+    ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) << "status " << status;
+    const std::string stale = lm::TemporaryPathFor(path, pid);
+    ASSERT_TRUE(fs::exists(stale)) << stale;
+    // A live process's temporary (our parent's PID stands in for one) is not touched.
+    const std::string live = lm::TemporaryPathFor(path, getppid());
+    std::ofstream(live) << "being written";
+    lm::WriteFileAtomically(path, [](const std::string& tmp) { std::ofstream(tmp) << "new"; });
+    EXPECT_EQ(Bytes(path), "new");
+    EXPECT_FALSE(fs::exists(stale));
+    EXPECT_TRUE(fs::exists(live));
+}
+
+// A legal file name of 252 bytes (NAME_MAX is 255) gets a temporary name that fits; two
+// long names sharing their first 240 bytes get different ones.
+TEST(Robustness, TemporaryNamesFitNameMax) {
+    const std::string a = "/tmp/x/" + std::string(240, 'a') + "-one.png";
+    const std::string b = "/tmp/x/" + std::string(240, 'a') + "-two.png";
+    for (const std::string& p : {a, b}) {
+        const std::string name = fs::path(lm::TemporaryPathFor(p, 4194304)).filename().string();
+        EXPECT_LE(name.size(), 255u) << name;
+        EXPECT_EQ(name.front(), '.');
+    }
+    EXPECT_NE(lm::TemporaryPathFor(a, 1), lm::TemporaryPathFor(b, 1));
+    EXPECT_EQ(fs::path(lm::TemporaryPathFor("/tmp/x/short.png", 42)).filename().string(),
+              ".short.png.tmp42");
 }
 
 TEST(Robustness, FailedWriteLeavesTheOldFileAndNoTemporary) {

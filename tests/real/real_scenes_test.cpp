@@ -1,8 +1,10 @@
 // The real scenes' checks (issue 6): the four scene files of scenes/real/ with the models
 // scripts/fetch-scenes.sh takes from Debian packages. Not part of the unit tests, which need
 // no downloads: this binary carries the ctest label "real" and runs by
-// scripts/test-real-scenes.sh (which fetches the models first). A missing model fails here,
-// naming the script to run, rather than skipping.
+// scripts/test-real-scenes.sh (which fetches the models first). A model that was never
+// fetched skips its scene's tests with a message naming scripts/fetch-scenes.sh, so plain
+// `ctest` is green on a fresh machine; scripts/test-real-scenes.sh sets
+// LIGHTMESH_REQUIRE_REAL_SCENES=1, which makes a missing model a failure.
 //
 // What it checks, per scene: the documented triangle, light, duplicate and exclusion
 // figures (scenes/real/SOURCES.md); every back-end against brute force on the real
@@ -15,6 +17,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -69,6 +72,9 @@ std::string ScenePath(const std::string& file) {
 }
 
 /// Each scene is loaded once (the garden takes over a second).
+/// Why a scene's model is missing (it was never fetched), per scene file; "" if it loaded.
+std::map<std::string, std::string> g_notFetched;
+
 const Scene& Loaded(const std::string& file) {
     static std::mutex mutex;
     static std::map<std::string, std::unique_ptr<Scene>> cache;
@@ -79,7 +85,12 @@ const Scene& Loaded(const std::string& file) {
         try {
             slot = std::make_unique<Scene>(LoadScene(ScenePath(file), SceneLoadOptions{}, &warnings));
         } catch (const Error& e) {
-            ADD_FAILURE() << e.what() << "\n(run scripts/fetch-scenes.sh first)";
+            const std::string what = e.what();
+            const char* require = std::getenv("LIGHTMESH_REQUIRE_REAL_SCENES");
+            if (what.find("scripts/fetch-scenes.sh") != std::string::npos && !(require && *require == '1'))
+                g_notFetched[file] = what;
+            else
+                ADD_FAILURE() << what << "\n(run scripts/fetch-scenes.sh first)";
             slot = std::make_unique<Scene>();
         }
     }
@@ -107,7 +118,10 @@ Image Render(const Scene& scene, const std::string& shadows, const std::string& 
 class RealSceneTest : public ::testing::TestWithParam<RealScene> {
   protected:
     void SetUp() override {
-        if (Loaded(GetParam().file).mesh.TriangleCount() == 0) GTEST_FAIL() << "scene not loaded";
+        if (Loaded(GetParam().file).mesh.TriangleCount() > 0) return;
+        if (auto it = g_notFetched.find(GetParam().file); it != g_notFetched.end())
+            GTEST_SKIP() << "the model is not fetched: run scripts/fetch-scenes.sh (" << it->second << ")";
+        GTEST_FAIL() << "scene not loaded";
     }
     const Scene& scene() const { return Loaded(GetParam().file); }
 };

@@ -427,6 +427,7 @@ void WriteImage(const std::string& path, const Image& image) {
 
 Image ReadImage(const std::string& path) {
     const ImageFormat format = ImageFormatFor(path);
+    CheckRegularFile(path, "image");  // never blocks on a FIFO
     std::FILE* f = std::fopen(path.c_str(), "rb");
     if (!f) ThrowError("%s: cannot open: %s", path.c_str(), std::strerror(errno));
     std::fclose(f);

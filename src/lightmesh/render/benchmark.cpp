@@ -538,13 +538,10 @@ std::string JsonType(const Json& j) {
 }  // namespace
 
 BenchMatrix LoadBenchMatrix(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) ThrowError("%s: cannot read the matrix file", path.c_str());
-    std::stringstream ss;
-    ss << in.rdbuf();
+    const std::string text = ReadRegularFile(path, "matrix file");  // never blocks on a FIFO
     Json j;
     try {
-        j = Json::parse(ss.str());
+        j = Json::parse(text);
     } catch (const Json::exception& e) {
         std::string what = e.what();
         const size_t p = what.find("] ");

@@ -63,6 +63,23 @@ struct MeshLoadOptions {
     std::vector<std::string> excludeNames;
 };
 
+/// What one import may produce; beyond it the file is refused with the figure (a small
+/// file can expand enormously: shared children, lying counts).
+struct ImportBudget {
+    /// Bytes a triangle costs through the pipeline (mesh, vertices, back-end), for the
+    /// triangle budget.
+    static constexpr uint64_t kBytesPerTriangle = 128;
+    uint64_t memory = 0;        ///< bytes the importer may use (0: no limit)
+    size_t triangles = 0;       ///< triangles after instances are expanded
+    size_t instances = 0;       ///< mesh instances placed (node × mesh pairs)
+    size_t nodes = 0;           ///< node instances visited (a shared subtree counts each time)
+    unsigned depth = 0;         ///< levels of the node hierarchy
+
+    /// Half of PhysicalMemoryBytes() (LIGHTMESH_MEMORY_LIMIT lowers it) for the importer;
+    /// triangles = that / kBytesPerTriangle; 4,194,304 instances and nodes; 1,024 levels.
+    static ImportBudget ForThisMachine();
+};
+
 struct LoadedMesh {
     /// The file's triangles with the node hierarchy's transforms applied, in the file's
     /// units. Every instance of a shared mesh is expanded. Normals are kept only if every
@@ -84,7 +101,21 @@ struct LoadedMesh {
 /// MeshFileError for a missing, unreadable, empty or malformed file, a file with no
 /// triangles, or non-finite coordinates. A file whose every mesh is excluded is not an
 /// error: the result is empty and meshesExcluded says why.
+///
+/// Hardening (issue 16): the import runs in a child process (fork; the triangles come back
+/// through a memfd) whose address space is limited to the ImportBudget's memory, so that
+/// an importer crash, assertion or allocation bomb becomes a MeshFileError ("the importer
+/// crashed (signal 11)") instead of taking the renderer down. Assimp opens regular files
+/// only (a FIFO named by an mtllib or a glTF buffer is refused, not waited on), its
+/// assertions become errors, glTF node graphs are checked for cycles, depth and expansion
+/// before Assimp sees them, and the budget is checked while instances are expanded.
+/// LIGHTMESH_IMPORT_IN_PROCESS=1 imports in this process (for debugging and fuzzing).
 LoadedMesh LoadMeshFile(const std::string& path, const MeshLoadOptions& options = {});
+
+/// LoadMeshFile in this process, without the child: what the fuzzer drives (its coverage
+/// is only seen in-process) and what the child runs.
+LoadedMesh ImportMeshInProcess(const std::string& path, const MeshLoadOptions& options,
+                               const ImportBudget& budget);
 
 /// Glob match of the whole `text` against `pattern` with `*` and `?` (no escapes).
 bool GlobMatch(std::string_view pattern, std::string_view text);

@@ -316,3 +316,96 @@ TEST(MeshLoader, TransformMeshUsesInverseTransposeForNormals) {
 
 }  // namespace
 }  // namespace lm
+
+namespace lm {
+namespace {
+
+/// COLLADA: a triangle geometry placed by `instances` nodes, each nested `depth` levels deep.
+std::string ColladaInstances(int instances, int depth) {
+    std::string s =
+        "<?xml version=\"1.0\"?>\n<COLLADA xmlns=\"http://www.collada.org/2005/11/COLLADASchema\" "
+        "version=\"1.4.1\"><library_geometries><geometry id=\"g\"><mesh><source id=\"p\">"
+        "<float_array id=\"pa\" count=\"9\">0 0 0 1 0 0 0 1 0</float_array><technique_common>"
+        "<accessor source=\"#pa\" count=\"3\" stride=\"3\"><param name=\"X\" type=\"float\"/>"
+        "<param name=\"Y\" type=\"float\"/><param name=\"Z\" type=\"float\"/></accessor>"
+        "</technique_common></source><vertices id=\"v\"><input semantic=\"POSITION\" "
+        "source=\"#p\"/></vertices><triangles count=\"1\"><input semantic=\"VERTEX\" source=\"#v\" "
+        "offset=\"0\"/><p>0 1 2</p></triangles></mesh></geometry></library_geometries>"
+        "<library_visual_scenes><visual_scene id=\"s\">";
+    for (int i = 0; i < instances; ++i) {
+        for (int d = 0; d < depth; ++d) s += "<node>";
+        s += "<instance_geometry url=\"#g\"/>";
+        for (int d = 0; d < depth; ++d) s += "</node>";
+    }
+    return s + "</visual_scene></library_visual_scenes><scene><instance_visual_scene url=\"#s\"/>"
+               "</scene></COLLADA>\n";
+}
+
+std::string BudgetError(const std::string& path, const ImportBudget& budget) {
+    try {
+        ImportMeshInProcess(path, {}, budget);
+    } catch (const MeshFileError& e) {
+        return e.Reason();
+    }
+    return "<no error>";
+}
+
+// Issue 16: the walk checks its budgets while it expands instances, and says which.
+TEST(MeshLoader, ImportBudgetsAreCheckedWhileInstancesAreExpanded) {
+    const std::string folder = TempFolder();
+    const std::string path = WriteFile(folder, "many.dae", ColladaInstances(50, 3));
+    ImportBudget roomy = ImportBudget::ForThisMachine();
+    EXPECT_EQ(ImportMeshInProcess(path, {}, roomy).mesh.TriangleCount(), 50u);
+
+    ImportBudget b = roomy;
+    b.instances = 20;
+    EXPECT_EQ(BudgetError(path, b),
+              "expanding its instances places more than 20 meshes (the importer's budget)");
+    b = roomy;
+    b.triangles = 10;
+    b.memory = 1280;
+    EXPECT_EQ(BudgetError(path, b),
+              "expanding its instances gives more than 10 triangles, the budget for 1.2 KiB of "
+              "memory (128 B per triangle; LIGHTMESH_MEMORY_LIMIT)");
+    b = roomy;
+    b.nodes = 100;
+    EXPECT_EQ(BudgetError(path, b),
+              "the node hierarchy has more than 100 node instances (the importer's budget)");
+    b = roomy;
+    b.depth = 3;
+    EXPECT_EQ(BudgetError(path, b), "the node hierarchy is more than 3 levels deep (the limit)");
+    // The child process gives the same errors as the walk in this process.
+    EXPECT_EQ(LoadMeshFile(path).mesh.TriangleCount(), 50u);
+}
+
+// The child process returns everything the walk produced, byte for byte.
+TEST(MeshLoader, ChildProcessImportEqualsInProcessImport) {
+    const std::string folder = TempFolder();
+    WriteFile(folder, "m.mtl", "newmtl red\nKd 0.8 0.1 0.1\nKs 0.2 0.2 0.2\nNs 40\n");
+    const std::string path = WriteFile(
+        folder, "m.obj",
+        "mtllib m.mtl\no a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvn 0 0 1\nusemtl red\n"
+        "f 1//1 2//1 3//1\nf 1//1 3//1 4//1\no hidden\nv 5 5 5\nv 6 5 5\nv 5 6 5\nf 5 6 7\n");
+    MeshLoadOptions options;
+    options.excludeNames = {"hid*", "nothing"};
+    const LoadedMesh child = LoadMeshFile(path, options);
+    const LoadedMesh local = ImportMeshInProcess(path, options, ImportBudget::ForThisMachine());
+    EXPECT_EQ(child.mesh.positions.size(), local.mesh.positions.size());
+    EXPECT_TRUE(child.mesh.positions == local.mesh.positions);
+    EXPECT_TRUE(child.mesh.normals == local.mesh.normals);
+    EXPECT_TRUE(child.mesh.triangles == local.mesh.triangles);
+    EXPECT_TRUE(child.mesh.materialIds == local.mesh.materialIds);
+    ASSERT_EQ(child.materials.size(), local.materials.size());
+    for (size_t i = 0; i < child.materials.size(); ++i) {
+        EXPECT_EQ(child.materials[i].name, local.materials[i].name);
+        EXPECT_EQ(child.materials[i].phong, local.materials[i].phong);
+        EXPECT_EQ(child.materials[i].kd.r, local.materials[i].kd.r);
+    }
+    EXPECT_EQ(child.meshesExcluded, 1u);
+    EXPECT_EQ(child.meshesPlaced, local.meshesPlaced);
+    EXPECT_EQ(child.excludeNamesMatched, (std::vector<bool>{true, false}));
+    EXPECT_EQ(child.warnings, local.warnings);
+}
+
+}  // namespace
+}  // namespace lm

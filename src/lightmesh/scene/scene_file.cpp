@@ -53,6 +53,7 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <unordered_map>
 #include <unordered_set>
 
 #include "lightmesh/accel/accelerator.h"
@@ -61,12 +62,19 @@
 #include "lightmesh/scene/shapes.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/log.h"
+#include "lightmesh/util/system.h"
 
 namespace lm {
 namespace {
 
 namespace fs = std::filesystem;
-using Json = nlohmann::ordered_json;  // keeps the file's key order for messages
+// A std::map-backed json: key lookup is O(log n) (ordered_json looks keys up linearly, so a
+// 300,000-key object took a minute to parse). The file's key order, which messages and the
+// "materials" list follow, is recorded by the parser callback (KeyOrder).
+using Json = nlohmann::json;
+
+/// The keys of every object of the file in file order, by the object's JSON pointer.
+using KeyOrder = std::unordered_map<std::string, std::vector<std::string>>;
 
 // ---------------------------------------------------------------------------------------
 // Small text helpers
@@ -156,6 +164,20 @@ class Reader {
         : file_(std::move(file)), strict_(options.strict), warnings_(warnings) {}
 
     const std::string& File() const { return file_; }
+    void SetKeyOrder(KeyOrder order) { order_ = std::move(order); }
+    /// The keys of object `j` at `path` in the file's order (sorted if unknown), each once.
+    std::vector<std::string> KeysInOrder(const std::string& path, const Json& j) const {
+        std::vector<std::string> keys;
+        if (auto it = order_.find(path); it != order_.end()) {
+            std::unordered_set<std::string> seen;
+            for (const std::string& k : it->second)
+                if (j.contains(k) && seen.insert(k).second) keys.push_back(k);
+            if (keys.size() == j.size()) return keys;
+            keys.clear();
+        }
+        for (const auto& item : j.items()) keys.push_back(item.key());
+        return keys;
+    }
     /// "scene.json /lights/0/position" (or just the file for the root).
     std::string Where(const std::string& path) const {
         return path.empty() ? file_ : file_ + " " + path;
@@ -181,6 +203,7 @@ class Reader {
     std::string file_;
     bool strict_;
     std::vector<std::string>* warnings_;
+    KeyOrder order_;
 };
 
 /// A JSON object being read: remembers which keys were asked for, so the ones never asked
@@ -207,10 +230,15 @@ class Object {
                 why ? StringPrintf("missing required key (%s)", why) : "missing required key");
     }
 
-    /// Reports every key that was never asked for.
+    /// Reports every key that was never asked for (the first ten one by one).
     void Finish() const {
-        for (const auto& [key, value] : j_.items()) {
+        constexpr size_t kMaxReported = 10;
+        size_t unknown = 0;
+        std::string first;
+        for (const std::string& key : r_.KeysInOrder(path_, j_)) {
             if (asked_.count(key)) continue;
+            if (++unknown > kMaxReported) continue;
+            if (unknown == 1) first = key;
             std::string hint;
             size_t best = 3;
             for (const auto& known : asked_) {
@@ -222,6 +250,9 @@ class Object {
             }
             r_.Lenient(Child(key), "unknown key" + hint, "unknown key (ignored" + hint + ")");
         }
+        if (unknown > kMaxReported)
+            r_.Warn(r_.Where(path_) +
+                    StringPrintf(": ... and %zu more unknown keys (ignored)", unknown - kMaxReported));
     }
 
   private:
@@ -315,13 +346,21 @@ class PathTracker {
     bool OnEvent(Json::parse_event_t event, const Json& parsed) {
         using E = Json::parse_event_t;
         switch (event) {
-            case E::object_start: frames_.emplace_back(false); break;
+            case E::object_start: {
+                std::vector<std::string>* keys = &order_[Path()];
+                frames_.emplace_back(false);
+                frames_.back().order = keys;
+                break;
+            }
             case E::array_start: frames_.emplace_back(true); break;
             case E::key: {
                 Frame& f = frames_.back();
                 f.key = parsed.get<std::string>();
                 f.hasKey = true;
-                if (!f.keys.insert(f.key).second) duplicates_.push_back(Path());
+                if (!f.keys.insert(f.key).second)
+                    duplicates_.push_back(Path());
+                else if (f.order)
+                    f.order->push_back(f.key);
                 break;
             }
             case E::object_end:
@@ -345,6 +384,7 @@ class PathTracker {
         return p;
     }
     const std::vector<std::string>& Duplicates() const { return duplicates_; }
+    KeyOrder TakeKeyOrder() { return std::move(order_); }
 
   private:
     struct Frame {
@@ -354,12 +394,14 @@ class PathTracker {
         bool hasKey = false;
         std::string key;
         std::unordered_set<std::string> keys;
+        std::vector<std::string>* order = nullptr;  ///< in order_ (its nodes do not move)
     };
     void ElementDone() {
         if (!frames_.empty() && frames_.back().array) ++frames_.back().index;
     }
     std::vector<Frame> frames_;
     std::vector<std::string> duplicates_;
+    KeyOrder order_;
 };
 
 /// Line and column (1-based) of byte offset `pos` of `text`.
@@ -376,7 +418,7 @@ std::pair<size_t, size_t> LineColumn(const std::string& text, size_t pos) {
     return {line, column};
 }
 
-Json ParseJson(const Reader& r, const std::string& text) {
+Json ParseJson(Reader& r, const std::string& text) {
     if (text.find_first_not_of(" \t\r\n") == std::string::npos) r.Fail("", "the file is empty");
     PathTracker tracker;
     Json root;
@@ -420,25 +462,40 @@ Json ParseJson(const Reader& r, const std::string& text) {
     }
     for (const std::string& path : tracker.Duplicates())
         r.Lenient(path, "duplicate key", "duplicate key (the last value is used)");
+    r.SetKeyOrder(tracker.TakeKeyOrder());
     return root;
 }
 
 std::string ReadTextFile(const Reader& r, const std::string& path) {
-    std::error_code ec;
-    const fs::file_status status = fs::status(path, ec);
-    if (!fs::exists(status)) r.Fail("", "no such file");
-    if (fs::is_directory(status)) r.Fail("", "is a directory, not a scene file");
-    if (!fs::is_regular_file(status)) r.Fail("", "is not a regular file");
-    std::ifstream in(path, std::ios::binary);
-    if (!in) r.Fail("", StringPrintf("cannot open: %s", std::strerror(errno)));
-    std::ostringstream s;
-    s << in.rdbuf();
-    if (in.bad()) r.Fail("", "read error");
-    return s.str();
+    if (std::string problem = RegularFileProblem(path, "scene file"); !problem.empty())
+        r.Fail("", problem);
+    try {
+        return ReadRegularFile(path, "scene file");
+    } catch (const Error& e) {
+        throw;
+    }
 }
 
 // ---------------------------------------------------------------------------------------
 // Scene pieces
+
+// Squared distances between points must stay finite in float (max 3.4e38), and Embree
+// asserts on ray origins and directions beyond ±1.844e18: every coordinate that reaches a
+// ray (mesh, ground, camera, lights, automatic framing) stays within ±1e18.
+constexpr float kMaxCoordinate = 1e18f;
+
+float Reach(const Vec3& p) {
+    return MaxComponent(Abs(p));
+}
+
+/// "" when p can be used in a ray, else why not.
+std::string CoordinateProblem(const Vec3& p, const char* what) {
+    if (!IsFinite(p)) return StringPrintf("%s %s is not finite", what, FormatVec(p).c_str());
+    if (!(Reach(p) <= kMaxCoordinate))
+        return StringPrintf("%s %s is beyond the ±%g that single-precision rendering allows",
+                            what, FormatVec(p).c_str(), double(kMaxCoordinate));
+    return "";
+}
 
 /// Why the camera cannot form an image, or "" if it can; `*key` is the key to blame.
 /// The same criteria as CameraRays.
@@ -470,6 +527,10 @@ Camera ReadCamera(const Reader& r, const Json& j) {
         c.fovY = static_cast<float>(fov);
     }
     o.Finish();
+    if (std::string p = CoordinateProblem(c.position, "the camera position"); !p.empty())
+        r.Fail(o.Child("position"), p);
+    if (std::string p = CoordinateProblem(c.lookAt, "the point looked at"); !p.empty())
+        r.Fail(o.Child("look_at"), p);
     std::string key;
     if (std::string problem = CameraProblem(c, &key); !problem.empty())
         r.Fail(o.Child(key), problem);
@@ -502,6 +563,8 @@ PointLight ReadLight(const Reader& r, const Json& j, const std::string& path) {
     }
     if (const Json* v = o.Find("name")) String(r, *v, o.Child("name"));
     o.Finish();
+    if (std::string p = CoordinateProblem(light.position, "the light"); !p.empty())
+        r.Fail(o.Child("position"), p);
     return light;
 }
 
@@ -608,11 +671,18 @@ void ReadRender(const Reader& r, const Json& j, RenderOptions* ro) {
             r.Fail(o.Child("ki"), StringPrintf("must be in (0, 16], got %g", ki));
         ro->lightMesh.ki = ki;
     }
-    if (const Json* v = o.Find("variant"))
+    if (const Json* v = o.Find("variant")) {
         ro->lightMesh.variant = String(r, *v, o.Child("variant"));
+        if (ro->lightMesh.variant.empty())
+            r.Fail(o.Child("variant"), "must not be empty (leave the key out for the default)");
+    }
     if (const Json* v = o.Find("ns")) ro->lightMesh.ns = Int(r, *v, o.Child("ns"), 0, 64);
     if (const Json* v = o.Find("template_dir"))
+    {
         ro->lightMesh.templateDir = String(r, *v, o.Child("template_dir"));
+        if (ro->lightMesh.templateDir.find('\0') != std::string::npos)
+            r.Fail(o.Child("template_dir"), "contains a NUL byte (\\u0000), which no file name can hold");
+    }
     if (const Json* v = o.Find("cell_summaries"))
         ro->lightMesh.cellSummaries = Enum(r, *v, o.Child("cell_summaries"), {"auto", "on", "off"});
     if (const Json* v = o.Find("light_radius"))
@@ -689,14 +759,62 @@ Material GroundMaterial() {
     return m;
 }
 
+/// Segments between the mesh and the lights have directions up to the span of both: it
+/// must stay below Embree's limit too (1.8e18).
+std::string SpanProblem(const Scene& scene) {
+    Bounds3 b = scene.mesh.Bounds();
+    for (const PointLight& l : scene.lights) b.Extend(l.position);
+    b.Extend(scene.camera.position);
+    const float span = MaxComponent(b.Diagonal());
+    if (!(span <= 1.8e18f))
+        return StringPrintf("the scene (meshes, ground, camera and lights) spans %g, more than the "
+                            "1.8e+18 that single-precision ray queries allow",
+                            double(span));
+    return "";
+}
+
+/// The area of the triangles lying in the plane y = box.lo.y (within 1e-5 of the model's
+/// size) and facing up (+y by their winding): a floor the model brings along.
+float UpwardAreaAtBase(const TriangleMesh& mesh, const Bounds3& box) {
+    const float eps = 1e-5f * box.MaxExtent();
+    double area = 0;
+    for (const auto& t : mesh.triangles) {
+        const Vec3 &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
+        if (std::abs(a.y - box.lo.y) > eps || std::abs(b.y - box.lo.y) > eps ||
+            std::abs(c.y - box.lo.y) > eps)
+            continue;
+        const Vec3 n = Cross(b - a, c - a);
+        if (n.y > 0) area += 0.5 * static_cast<double>(n.y);
+    }
+    return static_cast<float>(area);
+}
+
+/// Why every triangle is degenerate, when single precision is to blame.
+std::string PrecisionHint(const TriangleMesh& mesh) {
+    Bounds3 b;
+    for (const Vec3& p : mesh.positions)
+        if (IsFinite(p)) b.Extend(p);
+    if (mesh.positions.empty() || !IsFinite(b.lo) || !IsFinite(b.hi)) return "";
+    const float reach = std::max(Reach(b.lo), Reach(b.hi));
+    const float extent = b.MaxExtent();
+    if (reach > 0 && reach < 1e-30f)
+        return StringPrintf(": its coordinates are at most %g, below what single precision "
+                            "resolves (scale the model up)",
+                            double(reach));
+    // All vertices equal far from the origin, or a span below float's resolution there.
+    if ((extent == 0 && reach >= 1e6f) || (extent > 0 && extent < reach * 1e-6f))
+        return StringPrintf(": at coordinates around %g single precision cannot tell its "
+                            "vertices apart (they span %g; move the model nearer the origin)",
+                            double(reach), double(extent));
+    return "";
+}
+
 void CheckExtent(const Reader& r, const std::string& path, const Scene& scene) {
     const Bounds3 b = scene.mesh.Bounds();
     if (!IsFinite(b.lo) || !IsFinite(b.hi) || !IsFinite(b.Diagonal()))
         r.Fail(path, "the scene's bounding box is not finite (coordinates too large?)");
     if (!(b.MaxExtent() > 0)) r.Fail(path, "the scene has zero extent");
-    // Squared distances between points must stay finite in float (max 3.4e38): beyond
-    // ±1e18, ray set-up, light-mesh node positions and shading overflow to inf or NaN.
-    constexpr float kMaxCoordinate = 1e18f;
+    // Beyond ±1e18, ray set-up, light-mesh node positions and shading overflow to inf or NaN.
     const float reach = std::max(MaxComponent(Abs(b.lo)), MaxComponent(Abs(b.hi)));
     if (reach > kMaxCoordinate)
         r.Fail(path, StringPrintf("the scene's coordinates reach %g, beyond the ±%g that "
@@ -738,11 +856,15 @@ void CheckLightsOutsideSolids(const Reader& r, const Scene& scene) {
 }
 
 /// "no triangles", with the reason when one is known.
-std::string NoTrianglesMessage(const SceneReport& report) {
-    if (report.degenerateRemoved > 0)
+std::string NoTrianglesMessage(const SceneReport& report, const TriangleMesh& mesh) {
+    if (report.degenerateRemoved > 0) {
+        if (std::string hint = PrecisionHint(mesh); !hint.empty())
+            return StringPrintf("all %zu triangles have zero area in single precision%s",
+                                report.degenerateRemoved, hint.c_str());
         return StringPrintf(
             "the scene has zero extent: all %zu triangles are degenerate (zero area)",
             report.degenerateRemoved);
+    }
     if (report.meshesExcluded > 0)
         return StringPrintf("the scene has no triangles: all %zu meshes were excluded",
                             report.meshesExcluded);
@@ -754,7 +876,7 @@ std::string NoTrianglesMessage(const SceneReport& report) {
 
 Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
                     std::vector<std::string>* warnings) {
-    const Reader r(spec, options, warnings);
+    Reader r(spec, options, warnings);
     const Json root = ParseJson(r, options.text ? *options.text : ReadTextFile(r, spec));
     if (!root.is_object())
         r.Fail("", "expected a JSON object {...} at the top level, got " + Describe(root));
@@ -772,8 +894,8 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
     std::vector<std::string> materialNames;
     if (const Json* mj = top.Find("materials")) {
         Object mats(r, *mj, "/materials");
-        for (const auto& [name, value] : mj->items()) {
-            mats.Find(name);
+        for (const std::string& name : r.KeysInOrder("/materials", *mj)) {
+            const Json& value = *mats.Find(name);
             scene.materials.push_back(ReadMaterial(r, value, mats.Child(name), name));
             materialNames.push_back(name);
         }
@@ -797,6 +919,8 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
         Object o(r, mj[i], e.path);
         e.file = String(r, o.Require("file"), o.Child("file"));
         if (e.file.empty()) r.Fail(o.Child("file"), "must not be empty");
+        if (e.file.find('\0') != std::string::npos)
+            r.Fail(o.Child("file"), "contains a NUL byte (\\u0000), which no file name can hold");
         if (e.file.rfind("cache:", 0) == 0) {
             // Models fetched from Debian packages by scripts/fetch-scenes.sh live in the
             // user's cache, outside the source tree.
@@ -925,7 +1049,7 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
         r.Warn(spec +
                StringPrintf(": dropped %zu triangles that duplicate triangles of another mesh",
                             across.duplicate));
-    if (scene.mesh.TriangleCount() == 0) r.Fail("/meshes", NoTrianglesMessage(scene.report));
+    if (scene.mesh.TriangleCount() == 0) r.Fail("/meshes", NoTrianglesMessage(scene.report, scene.mesh));
     CheckExtent(r, "/meshes", scene);
 
     if (ground.present) {
@@ -942,7 +1066,19 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
             scene.report.notes.push_back(StringPrintf(
                 "ground plane at %c = %g, the scene's lowest point", 'x' + ground.axis, height));
         AddGround(&scene, box, ground.axis, height, ground.size, material);
+        // The slab's size and height were each checked as numbers; what reaches the rays
+        // is the slab, so it is checked as coordinates (the check above saw the meshes).
+        const Bounds3 all = scene.mesh.Bounds();
+        const float reach = std::max(Reach(all.lo), Reach(all.hi));
+        if (!(reach <= kMaxCoordinate)) {
+            const bool byHeight = !(std::abs(height) <= kMaxCoordinate);
+            r.Fail(byHeight ? "/ground/height" : "/ground/size",
+                   StringPrintf("the ground slab reaches %g, beyond the ±%g that single-precision "
+                                "rendering allows",
+                                double(reach), double(kMaxCoordinate)));
+        }
     }
+    if (std::string p = SpanProblem(scene); !p.empty()) r.Fail("", p);
     CheckLightsOutsideSolids(r, scene);
     return scene;
 }
@@ -963,7 +1099,7 @@ Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options,
     scene.report.degenerateRemoved = clean.degenerate;
     scene.report.duplicatesRemoved = clean.duplicate;
     if (clean.degenerate || clean.duplicate) r.Warn(spec + ": " + DroppedMessage(clean));
-    if (scene.mesh.TriangleCount() == 0) r.Fail("", NoTrianglesMessage(scene.report));
+    if (scene.mesh.TriangleCount() == 0) r.Fail("", NoTrianglesMessage(scene.report, scene.mesh));
     CheckExtent(r, "", scene);
 
     const Bounds3 box = scene.mesh.Bounds();
@@ -1005,12 +1141,45 @@ Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options,
         StringPrintf("camera at %s looking at the model's centre %s, %g° vertical field of view",
                      FormatVec(cam.position).c_str(), FormatVec(center).c_str(), cam.fovY));
 
-    // Ground: under the model's lowest point, three times its horizontal size.
-    const uint32_t groundMaterial = static_cast<uint32_t>(scene.materials.size());
-    scene.materials.push_back(GroundMaterial());
-    AddGround(&scene, box, 1, box.lo.y, 3.0f, groundMaterial);
-    notes.push_back(StringPrintf(
-        "ground plane at y = %g (the model's lowest point), 3x the model's width", box.lo.y));
+    if (std::string p = CoordinateProblem(cam.position, "the camera position"); !p.empty())
+        r.Fail("", "automatic framing: " + p +
+                       " (the model is too large to frame: scale it down or write a .json scene)");
+
+    // Ground: under the model's lowest point, three times its horizontal size -- unless the
+    // model has its own floor there (a playground's lawn), which a slab would meet exactly
+    // coplanar: z-fighting, and back-ends disagreeing on which of the two is hit.
+    const float floorShare = UpwardAreaAtBase(scene.mesh, box) /
+                             std::max(box.Diagonal().x * box.Diagonal().z, 1e-30f);
+    if (floorShare >= 0.5f) {
+        notes.push_back(StringPrintf(
+            "no ground plane added: the model has its own floor at y = %g (%.0f%% of its "
+            "footprint faces up there)",
+            box.lo.y, std::min(100.0f, 100.0f * floorShare)));
+    } else {
+        const uint32_t groundMaterial = static_cast<uint32_t>(scene.materials.size());
+        scene.materials.push_back(GroundMaterial());
+        if (floorShare > 0) {
+            // Some of the model's base faces up: sink the slab a little below it.
+            const float height = box.lo.y - 0.002f * box.MaxExtent();
+            AddGround(&scene, box, 1, height, 3.0f, groundMaterial);
+            notes.push_back(StringPrintf(
+                "ground plane at y = %g, just below the model's lowest point (part of its base "
+                "faces up there), 3x the model's width",
+                height));
+        } else {
+            AddGround(&scene, box, 1, box.lo.y, 3.0f, groundMaterial);
+            notes.push_back(StringPrintf(
+                "ground plane at y = %g (the model's lowest point), 3x the model's width",
+                box.lo.y));
+        }
+        const Bounds3 all = scene.mesh.Bounds();
+        if (!(std::max(Reach(all.lo), Reach(all.hi)) <= kMaxCoordinate))
+            r.Fail("", StringPrintf("automatic framing: the ground slab reaches %g, beyond the ±%g that "
+                                    "single-precision rendering allows (scale the model down or "
+                                    "write a .json scene)",
+                                    double(std::max(Reach(all.lo), Reach(all.hi))),
+                                    double(kMaxCoordinate)));
+    }
 
     // Two lights above the model: a key light front-left, a weaker fill light right.
     // With inverse-square falloff, intensities scale with distance² so the model receives
@@ -1023,6 +1192,11 @@ Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options,
         {fillPosition, Color(0.3f * LengthSquared(fillPosition - center)), Falloff::InverseSquare});
     notes.push_back(StringPrintf("key light at %s and fill light at %s, inverse-square falloff",
                                  FormatVec(keyPosition).c_str(), FormatVec(fillPosition).c_str()));
+    for (const PointLight& l : scene.lights)
+        if (std::string p = CoordinateProblem(l.position, "a light"); !p.empty())
+            r.Fail("", "automatic framing: " + p +
+                           " (the model is too large to frame: scale it down or write a .json scene)");
+    if (std::string p = SpanProblem(scene); !p.empty()) r.Fail("", p);
     return scene;
 }
 
@@ -1035,7 +1209,7 @@ Scene LoadBuiltin(const std::string& spec, std::vector<std::string>* warnings) {
     scene.report.degenerateRemoved += clean.degenerate;
     scene.report.duplicatesRemoved += clean.duplicate;
     if (clean.degenerate || clean.duplicate) r.Warn(spec + ": " + DroppedMessage(clean));
-    if (scene.mesh.TriangleCount() == 0) r.Fail("", NoTrianglesMessage(scene.report));
+    if (scene.mesh.TriangleCount() == 0) r.Fail("", NoTrianglesMessage(scene.report, scene.mesh));
     CheckExtent(r, "", scene);
     return scene;
 }
@@ -1092,8 +1266,16 @@ Scene LoadScene(const std::string& spec, const SceneLoadOptions& options,
         return scene;
     } catch (const Error&) {
         throw;
+    } catch (const std::bad_alloc&) {
+        const uint64_t budget = PhysicalMemoryBytes();
+        throw Error(spec + ": out of memory while loading the scene (peak " +
+                    FormatBytes(PeakMemoryBytes()) + ", budget " +
+                    (budget ? FormatBytes(budget) : std::string("unknown")) +
+                    "; LIGHTMESH_MEMORY_LIMIT lowers it)");
+    } catch (const std::filesystem::filesystem_error& e) {
+        throw Error(spec + ": " + e.path1().string() + ": " + e.code().message());
     } catch (const std::exception& e) {
-        // Nothing but an Error may leave the loader (bad_alloc, filesystem errors, ...).
+        // Nothing but an Error may leave the loader.
         throw Error(spec + ": " + e.what());
     }
 }

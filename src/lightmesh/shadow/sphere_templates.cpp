@@ -127,6 +127,9 @@ SphereTemplates ReadSphereTemplates(const std::string& path, int ns, float ki) {
     return ParseSphereTemplates(bytes, path, ns, ki);
 }
 
+// sphere_templates_check.cpp: every invariant of the geometry (issue 16).
+void CheckSphereTemplateGeometry(const SphereTemplates& t, const std::string& path);
+
 SphereTemplates ParseSphereTemplates(std::string_view bytes, const std::string& path, int ns,
                                      float ki) {
     if (ns < 1 || ns > 64 || !(ki > 0 && ki <= 16))
@@ -177,6 +180,7 @@ SphereTemplates ParseSphereTemplates(std::string_view bytes, const std::string& 
     for (const auto& o : t.offsets)
         for (int8_t v : o)
             if (v < -reach || v > reach) ThrowError("%s: offset out of range (corrupt)", path.c_str());
+    CheckSphereTemplateGeometry(t, path);
     return t;
 }
 

@@ -153,6 +153,60 @@ TEST_F(TemplateFiles, DamagedFilesAreDetectedRebuiltAndReplaced) {
     EXPECT_THROW(ReadSphereTemplates(Path(), 4, 2.0f), Error);
 }
 
+// Issue 16: a forged file whose checksum was recomputed (WriteSphereTemplates writes any
+// templates with a valid checksum) is refused for each invariant the light mesh relies on,
+// and rebuilt.
+TEST_F(TemplateFiles, ForgedFilesWithAValidChecksumAreRefused) {
+    const SphereTemplates fresh = SphereTemplates::Build(4, 2.0f);
+    const int s = fresh.SubPosition(1, 2, 3);
+    const uint32_t first = fresh.begin[s], inner = first + fresh.boundaryCount[s];
+    struct Forgery {
+        const char* name;
+        SphereTemplates t;
+        const char* reason;
+    };
+    std::vector<Forgery> cases;
+    {
+        SphereTemplates t = fresh;  // a node outside the sphere, still within the cube's reach
+        t.offsets[first] = {3, 3, 3};
+        cases.push_back({"outside the sphere", t, "outside the interpolation sphere"});
+    }
+    {
+        SphereTemplates t = fresh;  // two boundary nodes swapped
+        std::swap(t.offsets[first], t.offsets[first + 1]);
+        cases.push_back({"unsorted", t, "out of order or repeated"});
+    }
+    {
+        SphereTemplates t = fresh;  // a node listed twice, its neighbour missing
+        t.offsets[first + 1] = t.offsets[first];
+        cases.push_back({"repeated", t, "out of order or repeated"});
+    }
+    {
+        SphereTemplates t = fresh;  // an inner node counted as boundary
+        t.boundaryCount[s] += 1;
+        cases.push_back({"boundary not the shell", t, "not the sphere's shell"});
+    }
+    {
+        SphereTemplates t = fresh;  // the last inner node dropped (indices kept consistent)
+        t.offsets.erase(t.offsets.begin() + (fresh.begin[s + 1] - 1));
+        for (size_t k = static_cast<size_t>(s) + 1; k < t.begin.size(); ++k) --t.begin[k];
+        cases.push_back({"a node missing", t, "whose sphere holds"});
+    }
+    ASSERT_LT(first + 1, inner);
+    for (const Forgery& f : cases) {
+        WriteSphereTemplates(Path(), f.t);
+        try {
+            ReadSphereTemplates(Path(), 4, 2.0f);
+            ADD_FAILURE() << f.name << ": no error";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find(f.reason), std::string::npos) << f.name << ": " << e.what();
+        }
+        const TemplateLoad load = LoadOrBuildSphereTemplates(4, 2.0f, dir_.string());
+        EXPECT_FALSE(load.loaded) << f.name;
+        EXPECT_EQ(load.templates, fresh) << f.name;
+    }
+}
+
 TEST_F(TemplateFiles, UnwritableCacheStillGivesTemplates) {
     const TemplateLoad load = LoadOrBuildSphereTemplates(4, 2.0f, "/proc/no-such-folder/lightmesh");
     EXPECT_FALSE(load.written);

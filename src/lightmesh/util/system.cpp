@@ -1,7 +1,9 @@
 #include "lightmesh/util/system.h"
 
+#include <dirent.h>
 #include <fcntl.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -11,6 +13,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <string_view>
 
 #include "lightmesh/util/error.h"
 
@@ -61,26 +64,145 @@ void InstallInterruptCleanup() {
     sigemptyset(&sa.sa_mask);
     sigaction(SIGINT, &sa, nullptr);
     sigaction(SIGTERM, &sa, nullptr);
+    sigaction(SIGHUP, &sa, nullptr);  // the terminal closed: the same clean-up
+}
+
+std::string RegularFileProblem(const std::string& path, const char* kind) {
+    if (path.find('\0') != std::string::npos) return "the name contains a NUL byte";
+    // O_NONBLOCK: opening a FIFO with no writer returns at once instead of waiting.
+    const int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
+        const int err = errno;
+        if (err == ENOENT) {
+            struct stat ls {};
+            if (lstat(path.c_str(), &ls) == 0 && S_ISLNK(ls.st_mode))
+                return "is a symbolic link to a file that does not exist";
+            return "no such file";
+        }
+        if (err == ENOTDIR) return "cannot open: a folder on its path is a file (Not a directory)";
+        return StringPrintf("cannot open: %s", std::strerror(err));
+    }
+    struct stat st {};
+    const int statResult = fstat(fd, &st);
+    const int err = errno;
+    close(fd);
+    if (statResult != 0) return StringPrintf("cannot open: %s", std::strerror(err));
+    if (S_ISDIR(st.st_mode)) return StringPrintf("is a directory, not a %s", kind);
+    if (!S_ISREG(st.st_mode)) return "is not a regular file";
+    return "";
+}
+
+void CheckRegularFile(const std::string& path, const char* kind) {
+    if (std::string problem = RegularFileProblem(path, kind); !problem.empty())
+        throw Error(path + ": " + problem);
+}
+
+std::string ReadRegularFile(const std::string& path, const char* kind) {
+    CheckRegularFile(path, kind);
+    const int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) ThrowError("%s: cannot open: %s", path.c_str(), std::strerror(errno));
+    struct stat st {};
+    // Re-checked on the descriptor read from: the name may have changed meanwhile.
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        close(fd);
+        ThrowError("%s: is not a regular file", path.c_str());
+    }
+    std::string out;
+    if (st.st_size > 0) out.reserve(static_cast<size_t>(st.st_size));
+    char buf[65536];
+    for (;;) {
+        const ssize_t n = read(fd, buf, sizeof buf);
+        if (n == 0) break;
+        if (n < 0) {
+            if (errno == EINTR) continue;
+            const int err = errno;
+            close(fd);
+            ThrowError("%s: read error: %s", path.c_str(), std::strerror(err));
+        }
+        out.append(buf, static_cast<size_t>(n));
+    }
+    close(fd);
+    return out;
 }
 
 void CheckWritableFolder(const std::string& path) {
+    if (path.find('\0') != std::string::npos)
+        ThrowError("%s: the name contains a NUL byte", path.c_str());
     const std::string dir = FolderOf(path);
     std::error_code ec;
-    if (!std::filesystem::is_directory(dir, ec))
-        ThrowError("%s: folder \"%s\" does not exist", path.c_str(), dir.c_str());
+    struct stat st {};
+    if (stat(dir.c_str(), &st) != 0) {
+        const int err = errno;
+        if (err == ENOENT)
+            ThrowError("%s: folder \"%s\" does not exist", path.c_str(), dir.c_str());
+        if (err == ENOTDIR)
+            ThrowError("%s: folder \"%s\" cannot exist: a folder on its path is a file",
+                       path.c_str(), dir.c_str());
+        ThrowError("%s: folder \"%s\": %s", path.c_str(), dir.c_str(), std::strerror(err));
+    }
+    if (!S_ISDIR(st.st_mode))
+        ThrowError("%s: \"%s\" is a file, not a folder", path.c_str(), dir.c_str());
     if (access(dir.c_str(), W_OK) != 0)
         ThrowError("%s: folder \"%s\" is not writable", path.c_str(), dir.c_str());
     if (std::filesystem::is_directory(path, ec))
         ThrowError("%s: is a folder, not a file", path.c_str());
 }
 
+namespace {
+
+constexpr size_t kNameMax = 255;  // NAME_MAX of Linux file systems
+
+/// ".NAME.tmp", shortened so that ".NAME.tmp" + a PID fits in NAME_MAX.
+std::string TemporaryPrefix(const std::string& name) {
+    std::string prefix = "." + name + ".tmp";
+    constexpr size_t kPidDigits = 10;
+    if (prefix.size() + kPidDigits <= kNameMax) return prefix;
+    // FNV-1a of the whole name keeps two long names with a common start apart.
+    uint64_t h = 0xcbf29ce484222325ull;
+    for (unsigned char c : name) h = (h ^ c) * 0x100000001b3ull;
+    const std::string tail = StringPrintf("~%016llx.tmp", static_cast<unsigned long long>(h));
+    std::string head = name.substr(0, kNameMax - kPidDigits - tail.size() - 1);
+    // Do not cut a UTF-8 sequence in half.
+    while (!head.empty() && (static_cast<unsigned char>(head.back()) & 0xC0) == 0x80) head.pop_back();
+    if (!head.empty() && (static_cast<unsigned char>(head.back()) & 0x80)) head.pop_back();
+    return "." + head + tail;
+}
+
+/// Removes the temporary files of `path` left by processes that no longer exist (killed
+/// by SIGKILL, or the machine stopped, during a write).
+void RemoveStaleTemporaries(const std::string& folder, const std::string& prefix) {
+    DIR* d = opendir(folder.c_str());
+    if (!d) return;
+    while (const dirent* e = readdir(d)) {
+        const std::string_view name(e->d_name);
+        if (name.size() <= prefix.size() || name.substr(0, prefix.size()) != prefix) continue;
+        const std::string_view digits = name.substr(prefix.size());
+        if (digits.size() > 10 ||
+            digits.find_first_not_of("0123456789") != std::string_view::npos)
+            continue;
+        const long pid = std::strtol(std::string(digits).c_str(), nullptr, 10);
+        if (pid <= 0 || pid == getpid()) continue;
+        if (kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;  // alive
+        unlinkat(dirfd(d), e->d_name, 0);
+    }
+    closedir(d);
+}
+
+}  // namespace
+
+std::string TemporaryPathFor(const std::string& path, long pid) {
+    const std::filesystem::path p(path);
+    return (std::filesystem::path(FolderOf(path)) /
+            (TemporaryPrefix(p.filename().string()) + std::to_string(pid)))
+        .string();
+}
+
 void WriteFileAtomically(const std::string& path,
                          const std::function<void(const std::string& tmpPath)>& write) {
     CheckWritableFolder(path);
     const std::filesystem::path p(path);
-    const std::string tmp = (std::filesystem::path(FolderOf(path)) /
-                             ("." + p.filename().string() + StringPrintf(".tmp%d", getpid())))
-                                .string();
+    RemoveStaleTemporaries(FolderOf(path), TemporaryPrefix(p.filename().string()));
+    const std::string tmp = TemporaryPathFor(path, getpid());
     const int slot = RegisterPending(tmp);
     try {
         write(tmp);

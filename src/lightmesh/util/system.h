@@ -15,13 +15,32 @@ namespace lm {
 void WriteFileAtomically(const std::string& path,
                          const std::function<void(const std::string& tmpPath)>& write);
 
-/// Installs SIGINT and SIGTERM handlers that delete the temporary files of writes in
+/// Installs SIGINT, SIGTERM and SIGHUP handlers that delete the temporary files of writes in
 /// progress before the process dies with the signal.
 void InstallInterruptCleanup();
 
 /// Throws Error unless `path`'s folder exists and is writable (checked before a long
 /// render, so a typo does not cost the render).
 void CheckWritableFolder(const std::string& path);
+
+/// Why `path` cannot be read as a regular file, or "" when it can: "no such file", "is a
+/// directory, not a KIND", "is not a regular file" (a FIFO, socket or device), "cannot
+/// open: <strerror(errno)>" (a symlink loop, a name too long, a parent that is a file,
+/// permissions). Opens without blocking (O_NONBLOCK), so a FIFO with no writer is
+/// reported rather than waited on; every reader of user-named files checks this first.
+std::string RegularFileProblem(const std::string& path, const char* kind);
+
+/// RegularFileProblem, thrown as Error("PATH: reason").
+void CheckRegularFile(const std::string& path, const char* kind);
+
+/// The whole content of a regular file (checked as above), read until end of file, so
+/// files that report a size of 0 (/proc) are read too. Throws Error naming `path`.
+std::string ReadRegularFile(const std::string& path, const char* kind);
+
+/// The name of the temporary file WriteFileAtomically uses for `path` in process `pid`:
+/// ".NAME.tmpPID" in the same folder, with NAME shortened (and a hash of the full name
+/// added) when the result would be longer than NAME_MAX (255 bytes).
+std::string TemporaryPathFor(const std::string& path, long pid);
 
 /// Peak resident memory of this process so far, in bytes (0 if unknown).
 uint64_t PeakMemoryBytes();
