@@ -1,6 +1,7 @@
 // sphere_templates_check.cpp -- what a template file read from disk must satisfy beyond its
 // checksum (issue 16: a forged cache with a recomputed checksum changed the image). Kept
 // apart from sphere_templates.cpp, which only calls it.
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -54,10 +55,24 @@ void CheckSphereTemplateGeometry(const SphereTemplates& t, const std::string& pa
                         ThrowError("%s: offsets out of order or repeated (corrupt)", path.c_str());
                     previous = k;
                 }
+                // The nodes in the sphere, row by row: along di the inside ones are one run
+                // around a/ns, found from the square root and settled by the exact test.
                 uint32_t count = 0;
-                for (int dk = -reach; dk <= reach; ++dk)
-                    for (int dj = -reach; dj <= reach; ++dj)
-                        for (int di = -reach; di <= reach; ++di) count += inside(a, b, c, di, dj, dk);
+                for (int dk = -reach; dk <= reach; ++dk) {
+                    for (int dj = -reach; dj <= reach; ++dj) {
+                        const double y = dj * ns - b, z = dk * ns - c;
+                        const double rest = limit2 - y * y - z * z;
+                        if (rest < 0) continue;
+                        const double r = std::sqrt(rest);
+                        int lo = std::max(-reach, static_cast<int>(std::ceil((a - r) / ns)));
+                        int hi = std::min(reach, static_cast<int>(std::floor((a + r) / ns)));
+                        while (lo > -reach && inside(a, b, c, lo - 1, dj, dk)) --lo;
+                        while (lo <= hi && !inside(a, b, c, lo, dj, dk)) ++lo;
+                        while (hi < reach && inside(a, b, c, hi + 1, dj, dk)) ++hi;
+                        while (hi >= lo && !inside(a, b, c, hi, dj, dk)) --hi;
+                        if (hi >= lo) count += static_cast<uint32_t>(hi - lo + 1);
+                    }
+                }
                 if (count != last - first)
                     ThrowError("%s: %u nodes for a sub-position whose sphere holds %u (corrupt)",
                                path.c_str(), last - first, count);
