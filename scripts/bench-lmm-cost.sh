@@ -6,8 +6,8 @@
 #   2. Нет and СТ with cell summaries (--cell-summaries on), kI 2, on Embree;
 #   3. the garden at 3072x1536, kI 2, on Embree.
 # Needs the real scenes (scripts/fetch-scenes.sh) and a Release build (scripts/build.sh).
-# Writes Markdown and CSV into FOLDER (default docs/bench). About 15 minutes on 2 cores.
-# Usage: scripts/bench-lmm-cost.sh [FOLDER] [extra bench options, e.g. --repeat 5]
+# Writes Markdown and CSV into FOLDER (default docs/bench). About 8 minutes on 2 cores (REPEAT timed runs per cell, default 5).
+# Usage: [REPEAT=N] scripts/bench-lmm-cost.sh [FOLDER] [extra bench options, e.g. --threads 2]
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
@@ -19,13 +19,13 @@ scenes=(--scene builtin:gazebo --scene scenes/real/castle.json --scene scenes/re
         --scene scenes/real/garden.json)
 for accel in embree grid; do
   "$exe" bench "${scenes[@]}" --size 1024x768 --cc 100,200 --ki 1.2,2,3 --variants none,consensus \
-    --accels "$accel" --repeat 3 --markdown "$out/lmm-cost-1024x768-$accel.md" \
+    --accels "$accel" --repeat "${REPEAT:-5}" --markdown "$out/lmm-cost-1024x768-$accel.md" \
     --csv "$out/lmm-cost-1024x768-$accel.csv" -q "$@"
 done
 "$exe" bench "${scenes[@]}" --size 1024x768 --cc 100 --ki 2 --variants none,inside --cell-summaries on \
-  --accels embree --repeat 3 --markdown "$out/lmm-cost-summaries-on.md" \
+  --accels embree --repeat "${REPEAT:-5}" --markdown "$out/lmm-cost-summaries-on.md" \
   --csv "$out/lmm-cost-summaries-on.csv" -q "$@"
 "$exe" bench --scene scenes/real/garden.json --size 3072x1536 --cc 100 --ki 2 --variants none,consensus \
-  --accels embree --repeat 3 --markdown "$out/lmm-cost-3072x1536-garden.md" \
+  --accels embree --repeat "${REPEAT:-5}" --markdown "$out/lmm-cost-3072x1536-garden.md" \
   --csv "$out/lmm-cost-3072x1536-garden.csv" -q "$@"
 echo "bench-lmm-cost: tables in $out/lmm-cost-*.md"

@@ -393,20 +393,25 @@ std::string BenchMarkdown(const std::vector<BenchResult>& rs) {
         out += StringPrintf("### %s, %dx%d\n\n", g->scene.c_str(), g->width, g->height);
         if (none) out += StringPrintf("No shadows %.3f s; ", none->median);
         out += rtLine + StringPrintf(" (median of %zu runs after a warm-up).\n\n", g->seconds.size());
-        // Seconds.
-        out += "| CC | kI |";
-        for (const std::string& v : variants) out += " " + ParseLightMeshVariant(v).paperName + " (" + v + ") |";
-        out += "\n|---|---|";
-        for (size_t i = 0; i < variants.size(); ++i) out += "---|";
-        out += "\n";
-        for (auto [cc, ki] : rows) {
-            out += StringPrintf("| %d | %g |", cc, ki);
-            for (const std::string& v : variants) {
-                const BenchResult* r = Find(rs, *g, v, cc, ki);
-                out += r ? StringPrintf(" %.3f |", r->median) : " – |";
-            }
+        // A (CC, kI) × variant table of one figure per cell.
+        auto variantTable = [&](bool longNames, const char* format, auto&& value) {
+            out += "| CC | kI |";
+            for (const std::string& v : variants)
+                out += " " + ParseLightMeshVariant(v).paperName + (longNames ? " (" + v + ")" : "") + " |";
+            out += "\n|---|---|";
+            for (size_t i = 0; i < variants.size(); ++i) out += "---|";
             out += "\n";
-        }
+            for (auto [cc, ki] : rows) {
+                out += StringPrintf("| %d | %g |", cc, ki);
+                for (const std::string& v : variants) {
+                    const BenchResult* r = Find(rs, *g, v, cc, ki);
+                    out += r ? StringPrintf(format, value(*r)) : " – |";
+                }
+                out += "\n";
+            }
+        };
+        // Seconds.
+        variantTable(true, " %.3f |", [](const BenchResult& r) { return r.median; });
         // Ratios.
         out += "\nRatios (same run):\n\n| CC | kI |";
         for (const std::string& v : variants) out += " " + ParseLightMeshVariant(v).paperName + "/RT |";
@@ -424,19 +429,10 @@ std::string BenchMarkdown(const std::vector<BenchResult>& rs) {
         }
         // The shadow work alone: what each method adds to the render without shadows.
         if (none && rt && rt->median > none->median) {
-            out += "\nShadow part, (method - no shadows) / (RT - no shadows), same run:\n\n| CC | kI |";
-            for (const std::string& v : variants) out += " " + ParseLightMeshVariant(v).paperName + " |";
-            out += "\n|---|---|";
-            for (size_t i = 0; i < variants.size(); ++i) out += "---|";
-            out += "\n";
-            for (auto [cc, ki] : rows) {
-                out += StringPrintf("| %d | %g |", cc, ki);
-                for (const std::string& v : variants) {
-                    const BenchResult* r = Find(rs, *g, v, cc, ki);
-                    out += r ? StringPrintf(" %.2f |", (r->median - none->median) / (rt->median - none->median)) : " – |";
-                }
-                out += "\n";
-            }
+            out += "\nShadow part, (method - no shadows) / (RT - no shadows), same run:\n\n";
+            variantTable(false, " %.2f |", [&](const BenchResult& r) {
+                return (r.median - none->median) / (rt->median - none->median);
+            });
         }
         out += "\n";
     }
@@ -446,12 +442,13 @@ std::string BenchMarkdown(const std::vector<BenchResult>& rs) {
 std::string BenchCsv(const std::vector<BenchResult>& rs) {
     std::string out =
         "scene,width,height,method,variant,paper_name,accel,cc,ki,median_s,runs_s,setup_s,camera_rays,shadow_rays,"
-        "reflection_rays,local_segments,interpolations,mean_m,fallbacks,nodes_evaluated,peak_memory_bytes,image\n";
+        "reflection_rays,local_segments,interpolations,mean_m,fallbacks,nodes_evaluated,peak_memory_bytes,image,"
+        "uniform_cell_points,culled_segments\n";
     for (const BenchResult& r : rs) {
         std::string runs;
         for (double s : r.seconds) runs += StringPrintf("%s%.4f", runs.empty() ? "" : " ", s);
         const RenderCounters& c = r.counters;
-        out += StringPrintf("%s,%d,%d,%s,%s,%s,%s,%d,%g,%.4f,%s,%.4f,%llu,%llu,%llu,%llu,%llu,%.2f,%llu,%llu,%llu,%s\n",
+        out += StringPrintf("%s,%d,%d,%s,%s,%s,%s,%d,%g,%.4f,%s,%.4f,%llu,%llu,%llu,%llu,%llu,%.2f,%llu,%llu,%llu,%s,%llu,%llu\n",
                             r.scene.c_str(), r.width, r.height, r.method.c_str(), r.variant.c_str(),
                             r.paperName.c_str(), r.accel.c_str(), r.cc, r.ki, r.median, runs.c_str(), r.setupSeconds,
                             static_cast<unsigned long long>(c.cameraRays), static_cast<unsigned long long>(c.shadowRays),
@@ -461,7 +458,9 @@ std::string BenchCsv(const std::vector<BenchResult>& rs) {
                             c.interpolations ? static_cast<double>(c.nodesUsed) / static_cast<double>(c.interpolations) : 0.0,
                             static_cast<unsigned long long>(c.fallbacks),
                             static_cast<unsigned long long>(r.nodesEvaluated),
-                            static_cast<unsigned long long>(r.peakMemoryBytes), r.image.c_str());
+                            static_cast<unsigned long long>(r.peakMemoryBytes), r.image.c_str(),
+                            static_cast<unsigned long long>(c.uniformCellPoints),
+                            static_cast<unsigned long long>(c.culledSegments));
     }
     return out;
 }
