@@ -159,6 +159,24 @@ TEST(Robustness, SigintDuringARenderLeavesThePreviousImage) { InterruptRender(SI
 TEST(Robustness, SigtermDuringARenderLeavesThePreviousImage) { InterruptRender(SIGTERM); }
 TEST(Robustness, SighupDuringARenderLeavesThePreviousImage) { InterruptRender(SIGHUP); }
 
+// A child process that writes `path` atomically and raises `signal` halfway through the
+// temporary file (with or without the interrupt clean-up installed); its wait status.
+int SignalDuringTheWrite(const std::string& path, int signal, bool cleanup, pid_t* child) {
+    const pid_t pid = fork();
+    if (pid == 0) {
+        if (cleanup) lm::InstallInterruptCleanup();
+        lm::WriteFileAtomically(path, [&](const std::string& tmp) {
+            std::ofstream(tmp) << "half of the new";
+            raise(signal);
+        });
+        _exit(0);  // not reached
+    }
+    *child = pid;
+    int status = 0;
+    if (pid > 0) waitpid(pid, &status, 0);
+    return status;
+}
+
 // A signal while the temporary file is being written (the moment that matters): the
 // handler removes it, the target keeps its old content.
 TEST(Robustness, SignalDuringTheWriteRemovesTheTemporaryFile) {
@@ -168,18 +186,8 @@ TEST(Robustness, SignalDuringTheWriteRemovesTheTemporaryFile) {
         const std::string& dir = scratch.path;
         const std::string path = dir + "/image.png";
         std::ofstream(path) << "old";
-        const pid_t pid = fork();
-        ASSERT_GE(pid, 0);
-        if (pid == 0) {
-            lm::InstallInterruptCleanup();
-            lm::WriteFileAtomically(path, [&](const std::string& tmp) {
-                std::ofstream(tmp) << "half of the new";
-                raise(signal);
-            });
-            _exit(0);  // not reached
-        }
-        int status = 0;
-        waitpid(pid, &status, 0);
+        pid_t pid = 0;
+        const int status = SignalDuringTheWrite(path, signal, /*cleanup=*/true, &pid);
         EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == signal) << "status " << status;
         EXPECT_EQ(Bytes(path), "old");
         EXPECT_EQ(FilesIn(dir), std::vector<std::string>{"image.png"});
@@ -194,17 +202,8 @@ TEST(Robustness, StaleTemporaryFilesOfDeadProcessesAreRemoved) {
     const std::string& dir = scratch.path;
     const std::string path = dir + "/image.png";
     std::ofstream(path) << "old";
-    const pid_t pid = fork();
-    ASSERT_GE(pid, 0);
-    if (pid == 0) {
-        lm::WriteFileAtomically(path, [&](const std::string& tmp) {
-            std::ofstream(tmp) << "half of the new";
-            raise(SIGKILL);
-        });
-        _exit(0);  // not reached
-    }
-    int status = 0;
-    waitpid(pid, &status, 0);
+    pid_t pid = 0;
+    const int status = SignalDuringTheWrite(path, SIGKILL, /*cleanup=*/false, &pid);
     ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) << "status " << status;
     const std::string stale = lm::TemporaryPathFor(path, pid);
     ASSERT_TRUE(fs::exists(stale)) << stale;
