@@ -542,7 +542,7 @@ class LightMesh final : public LightMeshShadows {
         const uint64_t brick = (static_cast<uint64_t>(ck / kBrick) * bricksY_ + static_cast<uint64_t>(cj / kBrick)) * bricksX_ +
                                static_cast<uint64_t>(ci / kBrick);
         SummaryBrick* b = bricks_[brick].load(std::memory_order_acquire);
-        if (!b) b = AllocateBrick(brick, ci / kBrick * kBrick, cj / kBrick * kBrick, ck / kBrick * kBrick);
+        if (!b) b = AllocateBrick(brick);
         const int slot = ((ck % kBrick) * kBrick + (cj % kBrick)) * kBrick + (ci % kBrick);
         *brickOut = b;
         *slotOut = slot;
@@ -573,18 +573,18 @@ class LightMesh final : public LightMeshShadows {
         return out;
     }
 
-    // The box of everything a cell's summary looks at: the reach of cells (ci..ci+n-1, ...).
-    Bounds3 ReachBox(int ci, int cj, int ck, int n) const {
+    // The box of everything cell (ci, cj, ck)'s summary looks at: every node any of its
+    // points may use, so every segment of theirs.
+    Bounds3 ReachBox(int ci, int cj, int ck) const {
         const LightMeshLattice& L = lattice_;
         return Bounds3(L.Node(ci + minOffset_, cj + minOffset_, ck + minOffset_) - Vec3(reachMargin_),
-                       L.Node(ci + n - 1 + maxOffset_, cj + n - 1 + maxOffset_, ck + n - 1 + maxOffset_) + Vec3(reachMargin_));
+                       L.Node(ci + maxOffset_, cj + maxOffset_, ck + maxOffset_) + Vec3(reachMargin_));
     }
 
-    SummaryBrick* AllocateBrick(uint64_t brick, int bi, int bj, int bk) const {
+    SummaryBrick* AllocateBrick(uint64_t brick) const {
         auto fresh = std::make_unique<SummaryBrick>();
         for (auto& st : fresh->state) st.store(0, std::memory_order_relaxed);
         for (auto& st : fresh->sideState) st[0].store(0, std::memory_order_relaxed), st[1].store(0, std::memory_order_relaxed);
-        (void)bi, (void)bj, (void)bk;
         const uint64_t begin = brickStart_[brick], end = brickStart_[brick + 1];
         fresh->nearCount = end - begin > kMaxBrickNear ? kTooMany : static_cast<uint32_t>(end - begin);
         fresh->near = brickTris_.data() + begin;
@@ -606,7 +606,7 @@ class LightMesh final : public LightMeshShadows {
         reach.clear();
         tris.clear();
         const Bounds3 cellBox(L.Node(ci, cj, ck) - Vec3(reachMargin_), L.Node(ci + 1, cj + 1, ck + 1) + Vec3(reachMargin_));
-        const Bounds3 reachBox = ReachBox(ci, cj, ck, 1);
+        const Bounds3 reachBox = ReachBox(ci, cj, ck);
         // Too crowded a brick (dense foliage): no summary; such points walk and trace.
         if (brick.nearCount == kTooMany) {
             c.reachCount = kTooMany;
