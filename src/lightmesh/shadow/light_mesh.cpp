@@ -240,7 +240,7 @@ class LightMesh final : public LightMeshShadows {
                     const uint32_t id = static_cast<uint32_t>(t);
                     const Vec3 &a = mesh.Vertex(id, 0), &b = mesh.Vertex(id, 1), &c = mesh.Vertex(id, 2);
                     double n[3];
-                    TriangleNormal(mesh, id, n);  // zero for a degenerate triangle: never culled
+                    UnitNormal(mesh, id, n);  // zero for a degenerate triangle: never culled
                     TrianglePlane& pl = planes_[t];
                     pl.n = Vec3(static_cast<float>(n[0]), static_cast<float>(n[1]), static_cast<float>(n[2]));
                     pl.d = Dot(pl.n, a);
@@ -383,7 +383,7 @@ class LightMesh final : public LightMeshShadows {
     //
     // A summary belongs to a mesh cell (the cell whose lower corner is node (ci, cj, ck))
     // and to its main plane Π: the plane of the largest triangle meeting the cell (ties:
-    // the lower id, so it does not depend on the back-end). It is used by the points of
+    // the lower id, so it does not depend on the lists' order). It is used by the points of
     // the cell that lie on Π (within planeDelta_, normal within kPlaneEps), which is most
     // points of floors, walls and other flat faces. For each side s of Π:
     //  - uniform_s: every node a point of the cell may use (cellNodes_) that lies on side
@@ -403,7 +403,7 @@ class LightMesh final : public LightMeshShadows {
         double d = 0;
         uint8_t flags = 0;
         // Consensus: the triangles whose bounding box meets the reach box (kTooMany: more
-        // than kMaxBlockers, the back-end tests every segment), in an arena of the mesh.
+        // than kMaxBlockers; the back-end tests every segment), in an arena of the mesh.
         const uint32_t* reach = nullptr;
         uint32_t reachCount = 0;
     };
@@ -412,8 +412,8 @@ class LightMesh final : public LightMeshShadows {
     // Consensus with cell summaries: the triangles that could block a segment from a node
     // to this P. Every such segment lies in the cell's reach box, so only the reach list's
     // triangles can block it; of those, one whose vertices all lie on or behind P's plane
-    // cannot (the segment runs clearly in front of it, like the planar argument).
-    // The reach triangles with a vertex in front of P's triangle's plane (by more than
+    // cannot (the segment runs clearly in front of it, like the planar argument). So:
+    // the reach triangles with a vertex in front of P's triangle's plane (by more than
     // planeDelta_ / 2, measured with the triangle's own plane so the list depends on the
     // cell, the triangle and the side only): points of one triangle in one cell, which a
     // tile shades one after another, share it, so each thread keeps the last one.
@@ -504,9 +504,10 @@ class LightMesh final : public LightMeshShadows {
     }
     // Whether the segment from node x to P's origin o is unblocked, decided without a ray
     // where the answer is certain: it misses a blocker if its two ends lie clearly on one
-    // side of the blocker's plane, or the line passes clearly outside one of its edges (the triple products d·c_k, d = x - o, have
-    // both signs); it hits one if the ends lie clearly on both sides of its plane and d·c_k
-    // have one sign clearly (it crosses the inside). Any exact test agrees on such segments,
+    // side of the blocker's plane, or the line passes clearly outside one of its edges
+    // (the triple products d·c_k, d = x - o, have both signs); it hits one if the ends lie
+    // clearly on both sides of its plane and d·c_k have one sign clearly (it crosses the
+    // inside). Any exact test agrees on such segments,
     // so when every blocker is missed the answer is "sees", when one is hit "blocked", and
     // otherwise the back-end decides, as for ОТ. The image is ОТ's either way.
     bool SeesPointCulled(const Vec3& x, const ShadingPoint& sp, const Blockers& b, RenderCounters& counters) const {
@@ -527,8 +528,8 @@ class LightMesh final : public LightMeshShadows {
     struct SummaryBrick {
         std::atomic<uint8_t> state[kBrick * kBrick * kBrick];  // 0 empty, 1 being written, 2 ready
         CellSummary cell[kBrick * kBrick * kBrick];
-        // The back-end's candidates for every box the brick's cells ask about (one query per
-        // brick instead of two per cell); kTooMany if more than kMaxBrickNear.
+        // The brick's list from BinTrianglesByBrick: every triangle whose box meets the
+        // reach of one of its cells; kTooMany if more than kMaxBrickNear.
         const uint32_t* near = nullptr;
         uint32_t nearCount = 0;
         std::atomic<uint8_t> sideState[kBrick * kBrick * kBrick][2];  // like state, per side of Π
@@ -639,7 +640,7 @@ class LightMesh final : public LightMeshShadows {
         uint32_t plane = UINT32_MAX;
         for (const uint32_t t : tris) {
             double m[3];
-            const double area = TriangleNormal(mesh, t, m);
+            const double area = UnitNormal(mesh, t, m);
             if (area > best || (area == best && area > 0 && t < plane)) {
                 best = area;
                 plane = t;
@@ -648,14 +649,12 @@ class LightMesh final : public LightMeshShadows {
         }
         if (plane == UINT32_MAX) return c;
         const Vec3& v0 = mesh.Vertex(plane, 0);
-        const double d = n[0] * v0.x + n[1] * v0.y + n[2] * v0.z;
         c.n[0] = static_cast<float>(n[0]);
         c.n[1] = static_cast<float>(n[1]);
         c.n[2] = static_cast<float>(n[2]);
         // Heights are measured with the stored (float) normal, as the points are tested.
         const double nf[3] = {c.n[0], c.n[1], c.n[2]};
         c.d = nf[0] * v0.x + nf[1] * v0.y + nf[2] * v0.z;
-        (void)d;
         c.flags = kHasPlane;
 
         if (variant_.local == LocalVisibility::Consensus) {
@@ -711,7 +710,7 @@ class LightMesh final : public LightMeshShadows {
     }
 
     // Unit normal of triangle t in double into n; returns twice its area (0 if degenerate).
-    static double TriangleNormal(const TriangleMesh& mesh, uint32_t t, double n[3]) {
+    static double UnitNormal(const TriangleMesh& mesh, uint32_t t, double n[3]) {
         const Vec3 &a = mesh.Vertex(t, 0), &b = mesh.Vertex(t, 1), &c = mesh.Vertex(t, 2);
         const double e1[3] = {double(b.x) - a.x, double(b.y) - a.y, double(b.z) - a.z};
         const double e2[3] = {double(c.x) - a.x, double(c.y) - a.y, double(c.z) - a.z};
@@ -780,6 +779,12 @@ class LightMesh final : public LightMeshShadows {
     bool SeesPoint(const Vec3& x, const ShadingPoint& sp, RenderCounters& counters) const {
         ++counters.localSegments;
         return !accel_.Occluded(Segment(x, sp.origin));
+    }
+
+    // The templates' front test, (n(P), x - P) > frontEps_·h with x - P = (offset - frac)·h,
+    // written offset·n - frac·n; nfrac = frac·n, once per point.
+    bool InFront(const ShadingPoint& sp, const TemplateEntry& e, float nfrac) const {
+        return Dot(sp.n, e.offset) - nfrac > frontEps_;
     }
 
     // A candidate that passed the sphere and surface tests, for the variants that decide
@@ -857,7 +862,7 @@ class LightMesh final : public LightMeshShadows {
         // (n(P), x - P) with x - P = (offset - frac)·h, over the tolerance of frontEps_.
         // (offset - frac)·n = offset·n - frac·n: the second term once per point.
         const float nfrac = Dot(sp.n, frac);
-        auto front = [&](const TemplateEntry& e) { return Dot(sp.n, e.offset) - nfrac > frontEps_; };
+        auto front = [&](const TemplateEntry& e) { return InFront(sp, e, nfrac); };
         auto node = [&](const TemplateEntry& e) { return L.Node(ci + e.di, cj + e.dj, ck + e.dk); };
 
         bool planar = false;
@@ -975,7 +980,7 @@ class LightMesh final : public LightMeshShadows {
         const LightMeshLattice& L = lattice_;
         for (uint32_t t = begin; t < end; ++t) {
             const TemplateEntry& e = entries_[t];
-            if (!(Dot(sp.n, e.offset) - nfrac > frontEps_)) continue;  // as TemplateWalk's front()
+            if (!InFront(sp, e, nfrac)) continue;
             ++counters.candidates;
             const Word w = Evaluate(static_cast<uint64_t>(base + e.linear));
             if (planar) {
@@ -1113,8 +1118,8 @@ class LightMesh final : public LightMeshShadows {
     static constexpr size_t kReachChunk = 1 << 18;
     mutable std::vector<std::unique_ptr<uint32_t[]>> reachArena_;
     mutable size_t reachUsed_ = 0, reachBytes_ = 0;
-    // Consensus: each triangle's plane (unit normal, offset) and bounding box, for the
-    // segment culling of Blockers.
+    // Cell summaries: each triangle's plane (unit normal, offset) and bounding box (grown
+    // by cullMargin_), for the binning, the reach lists and the segment culling.
     struct TrianglePlane {
         Vec3 n;
         float d;
