@@ -248,15 +248,30 @@ class LightMesh final : public LightMeshShadows {
                     pl.hi = Max(a, Max(b, c)) + Vec3(cullMargin_);
                 });
             }
-            BinTrianglesByBrick(bricksZ);
+            if (!BinTrianglesByBrick(bricksZ)) {
+                // Images are the same without summaries; only the time differs.
+                summaries_ = false;
+                summariesOff_ = true;
+                planes_ = {};
+                LogWarning(StringPrintf("%s: light mesh: cell summaries off: the triangles' boxes reach %llu "
+                                        "(triangle, brick) pairs, more than the budget of %llu",
+                                        scene.name.c_str(), static_cast<unsigned long long>(binPairs_),
+                                        static_cast<unsigned long long>(BinBudget())));
+            }
         }
     }
+
+    // The most (triangle, brick) pairs the binning may store: far more than any scene of
+    // ordinary triangles needs (the garden: about 8 per triangle), far less than a file of
+    // huge overlapping triangles would ask for.
+    uint64_t BinBudget() const { return 64 * static_cast<uint64_t>(planes_.size()) + (uint64_t(1) << 22); }
 
     // Every brick's candidate list: the triangles whose bounding box meets the box of all
     // that its cells' summaries look at (their reach). Built once, in parallel, in two
     // passes (count, fill); the order within a list is the fill's, which nothing depends
     // on (the uses are order-free: a maximum, extreme heights, a filter).
-    void BinTrianglesByBrick(uint64_t bricksZ) {
+    // False, having stored nothing, when the lists would exceed BinBudget().
+    bool BinTrianglesByBrick(uint64_t bricksZ) {
         const LightMeshLattice& L = lattice_;
         const uint64_t nb[3] = {bricksX_, bricksY_, bricksZ};
         const float lo[3] = {static_cast<float>(minOffset_), static_cast<float>(minOffset_), static_cast<float>(minOffset_)};
@@ -272,6 +287,19 @@ class LightMesh final : public LightMeshShadows {
             *b1 = static_cast<int64_t>(std::clamp(f1, -1.0f, maxB));
         };
         const uint64_t bricks = bricksX_ * bricksY_ * bricksZ;
+        // The pairs first, without visiting them: a hostile file must not make this a hang.
+        std::atomic<uint64_t> pairs{0};
+        ParallelFor(size_t(0), planes_.size(), [&](size_t t) {
+            uint64_t product = 1;
+            for (int a = 0; a < 3; ++a) {
+                int64_t b0, b1;
+                range(planes_[t], a, &b0, &b1);
+                product *= static_cast<uint64_t>(std::max<int64_t>(b1 - b0 + 1, 0));
+            }
+            pairs.fetch_add(product, std::memory_order_relaxed);
+        });
+        binPairs_ = pairs.load();
+        if (binPairs_ > BinBudget()) return false;
         std::vector<std::atomic<uint32_t>> count(bricks);
         auto each = [&](size_t t, auto&& visit) {
             int64_t b0[3], b1[3];
@@ -292,6 +320,7 @@ class LightMesh final : public LightMeshShadows {
                 brickTris_[brickStart_[b] + count[b].fetch_add(1, std::memory_order_relaxed)] = static_cast<uint32_t>(t);
             });
         });
+        return true;
     }
 
     const LightMeshLattice& Lattice() const override { return lattice_; }
@@ -361,6 +390,9 @@ class LightMesh final : public LightMeshShadows {
                                              static_cast<unsigned long long>(total))},
             {"node segments", StringPrintf("%llu", static_cast<unsigned long long>(done * SegmentsPerNode()))},
         };
+        if (summariesOff_)
+            f.push_back({"cell summaries", StringPrintf("off (%llu triangle-brick pairs, over the budget)",
+                                                        static_cast<unsigned long long>(binPairs_))});
         if (summaries_)
             f.push_back({"cell summaries",
                          StringPrintf("%llu cells (%llu uniform, %llu planar), %s", static_cast<unsigned long long>(cellsDone),
@@ -1113,6 +1145,8 @@ class LightMesh final : public LightMeshShadows {
         return next.fetch_add(1, std::memory_order_relaxed);
     }
     bool summaries_ = false;
+    bool summariesOff_ = false;  // asked for, but the binning was over its budget
+    uint64_t binPairs_ = 0;      // (triangle, brick) pairs the binning counted
     std::vector<int64_t> cellNodes_;  // linear offsets of the union of the templates
     ZeroedPtr<std::atomic<Word>> nodes_;
     static constexpr size_t kReachChunk = 1 << 18;

@@ -356,6 +356,34 @@ TEST(LightMesh, CellSummariesKeepEveryImageExactly) {
     EXPECT_GT(culledSegments, 0u);  // the blockers' culling decided segments too
 }
 
+// A file of huge overlapping triangles would make the brick lists enormous (every
+// triangle's box covers every brick): the binning counts the pairs before storing any,
+// turns the summaries off over its budget, and the image is still ОТ's.
+TEST(LightMesh, CellSummariesTurnOffWhenTheBinningWouldBeHuge) {
+    Scene s = FloorScene(1.0f);
+    for (int t = 0; t < 40; ++t) {  // 40 thin diagonal triangles across the whole box
+        const float o = 0.01f * static_cast<float>(t);
+        const uint32_t v = static_cast<uint32_t>(s.mesh.positions.size());
+        s.mesh.positions.push_back({-1, 0.02f + o, -1});
+        s.mesh.positions.push_back({1, 2, 1 - o});
+        s.mesh.positions.push_back({1 - o, 2, 1});
+        s.mesh.triangles.push_back({v, v + 1, v + 2});
+        s.mesh.materialIds.push_back(0);
+    }
+    auto accel = CreateAccelerator("grid", s.mesh);
+    LightMeshOptions o;
+    o.cc = 200;
+    o.variant = "consensus";
+    auto lmm = CreateLightMeshShadows(s, *accel, o);
+    bool off = false;
+    for (const auto& [name, value] : lmm->Figures())
+        off |= name == "cell summaries" && value.rfind("off (", 0) == 0;
+    EXPECT_TRUE(off);
+    s.render.lightMesh.cc = 200;
+    EXPECT_EQ(RenderLmm(s, *accel, "consensus", "auto", 2.0f).image.pixels,
+              RenderLmm(s, *accel, "object", "auto", 2.0f).image.pixels);
+}
+
 // On an open floor far from any occluder every node sees every light: the summary answers
 // the point (no walk, no segment) with RT's exact 1; in an umbra with 0.
 TEST(LightMesh, CellSummaryAnswersOpenFloorWithoutSegments) {
