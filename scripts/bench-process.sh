@@ -18,7 +18,7 @@ methods=(none rt lmm)
 for ((i = 0; i < runs; ++i)); do
   for m in "${methods[@]}"; do
     start=$(date +%s.%N)
-    "$exe" render "$scene" --shadows "$m" -o "$out/$m.png" --stats -q "$@" >"$out/log" 2>/dev/null
+    "$exe" render "$scene" --shadows "$m" -o "$out/$m.png" --stats -q "$@" >"$out/log"
     end=$(date +%s.%N)
     render=$(sed -n 's/.*render \([0-9.]*\) s$/\1/p' "$out/log" | head -1)
     awk -v m="$m" -v r="$render" -v s="$start" -v e="$end" 'BEGIN { print m, r, e - s }' >>"$out/times"
