@@ -232,7 +232,13 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                     std::unique_ptr<ShadowMethod> shadows;
                     const ShadowMethod* sm = nullptr;
                     RenderResult rr = render(scene, *cells[c].accel, cells[c].options, &r.setupSeconds, &sm, &shadows);
-                    if (i < 0) continue;
+                    // The process's peak so far, as before the round-robin: read in the first
+                    // pass, which runs the cells in order (later passes would all read the
+                    // matrix's peak).
+                    if (i < 0) {
+                        r.peakMemoryBytes = PeakMemoryBytes();
+                        continue;
+                    }
                     r.seconds.push_back(rr.seconds);
                     r.counters = rr.counters;
                     if (auto* lmm = dynamic_cast<const LightMeshShadows*>(sm)) r.nodesEvaluated = lmm->NodesEvaluated();
@@ -247,7 +253,6 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                     }
                     if (m.quality) images[first + c] = std::move(rr.image);
                     r.median = Median(r.seconds);
-                    r.peakMemoryBytes = PeakMemoryBytes();
                     results.push_back(r);
                     if (progress) progress(++done, total, results.back());
                 }
