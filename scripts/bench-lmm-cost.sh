@@ -6,7 +6,7 @@
 #   2. Нет and СТ with cell summaries (--cell-summaries on), kI 2, on Embree;
 #   3. the garden at 3072x1536, kI 2, on Embree.
 # Needs the real scenes (scripts/fetch-scenes.sh) and a Release build (scripts/build.sh).
-# Writes Markdown and CSV into FOLDER (default docs/bench). About 8 minutes on 2 cores (REPEAT timed runs per cell, default 5).
+# Writes Markdown and CSV into FOLDER (default docs/bench). About 4 minutes on 2 cores (REPEAT timed runs per cell, default 5).
 # Usage: [REPEAT=N] scripts/bench-lmm-cost.sh [FOLDER] [extra bench options, e.g. --threads 2]
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
