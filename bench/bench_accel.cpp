@@ -161,7 +161,9 @@ const char* WorkloadName(Workload w) {
 std::unique_ptr<Accelerator> Create(const std::string& name, const TriangleMesh& mesh) {
     if (name == "grid16") {
         AccelOptions options;
-        options.gridMaxTrianglesPerCell = 16;
+        options.gridMaxTrianglesPerCell = getenv("GT") ? atoi(getenv("GT")) : 16;
+        if (getenv("GD")) options.gridMaxDepth = atoi(getenv("GD"));
+        if (getenv("GR")) options.gridResolution = atoi(getenv("GR"));
         return CreateAccelerator("grid", mesh, options);
     }
     return CreateAccelerator(name, mesh);

@@ -7,7 +7,10 @@
 #include <memory>
 #include <utility>
 
-#include "lightmesh/geometry/triangle.h"
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#endif
+
 #include "lightmesh/geometry/triangle.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/parallel.h"
@@ -15,7 +18,6 @@
 namespace lm {
 namespace {
 
-constexpr uint32_t kChild = 0x80000000u;  // an item that names a sub-grid node, not a triangle
 
 static_assert(sizeof(NestedGridAccel::Tri) == 9 * sizeof(float), "Tri must be 9 packed floats");
 inline const float* Floats(const NestedGridAccel::Tri& t) { return &t.p0.x; }
@@ -24,40 +26,152 @@ bool IsFiniteTri(const NestedGridAccel::Tri& t) {
     return IsFinite(t.p0) && IsFinite(t.p1) && IsFinite(t.p2);
 }
 
-// A direct-mapped cache of the triangles this query already tested (mailboxing, Amanatides
-// & Woo §4): a triangle spanning several cells is tested once, usually. It lives on the
-// query's stack, so concurrent queries share nothing. An evicted id is merely tested again;
-// correctness never depends on it (CountCrossings dedupes its hits exactly).
-struct Mailbox {
-    static constexpr uint32_t kSize = 16;
-    uint32_t ids[kSize];
-    Mailbox() { std::fill(ids, ids + kSize, UINT32_MAX); }
-    bool Seen(uint32_t id) const { return ids[id & (kSize - 1)] == id; }
-    void Mark(uint32_t id) { ids[id & (kSize - 1)] = id; }
+// ---- The leaf cells' triangle test, W triangles at a time ---------------------------
+//
+// A cell's triangles sit in blocks of 8 (TriBlock), coordinate by coordinate. The ray's
+// watertight-frame edge functions (IntersectPrepared: translate by the origin, shear,
+// three 2D cross products) are computed for a whole block with SIMD, with the very
+// operations and order of the scalar test, so lane k holds exactly the scalar values. A
+// lane is dropped only where the scalar test would return at its first rejection (signs
+// both ways and none zero), which most tested triangles do; the few others, and every
+// exact edge or vertex case, go through IntersectPrepared itself. So the answers, ties
+// included, are brute force's bit for bit, and a triangle tested in several cells gets the
+// same answer each time (no mailbox is needed: a repeat costs one SIMD lane).
+template <int W>
+struct GridVectors;
+template <>
+struct GridVectors<4> {
+    typedef float F __attribute__((vector_size(16)));
+    typedef int I __attribute__((vector_size(16)));
+};
+template <>
+struct GridVectors<8> {
+    typedef float F __attribute__((vector_size(32)));
+    typedef int I __attribute__((vector_size(32)));
 };
 
-// One leaf cell as the walk hands it to a query: its triangle ids, and where the part of
-// the ray inside the cell, [tCell, tCellExit], lies along the ray's dominant axis kz,
-// padded for rounding.
+// The ray's constants of the filter, broadcast to W lanes.
+template <int W>
+struct FilterRay {
+    using VF = typename GridVectors<W>::F;
+    VF ox, oy, oz, sx, sy, sz, tMin, tMax;
+    int kx, ky, kz;
+    [[gnu::always_inline]] explicit FilterRay(const detail::PreparedRay& r) : kx(r.kx), ky(r.ky), kz(r.kz) {
+        const VF zero = {};
+        ox = zero + r.o[r.kx];
+        oy = zero + r.o[r.ky];
+        oz = zero + r.o[r.kz];
+        sx = zero + r.sx;
+        sy = zero + r.sy;
+        sz = zero + r.sz;
+        tMin = zero + r.tMin;
+        tMax = zero + r.tMax;
+    }
+};
+
+// Lanes h … h+W-1 of a block: all ones where IntersectPrepared may report a hit. A lane
+// without an exactly zero edge function is decided here with the scalar test's own
+// operations (edge signs, det, t and its range), so it is set exactly when that test hits;
+// a lane with a zero edge function (the tie-breaks, in double) is always set.
+template <int W>
+[[gnu::always_inline]] inline void FilterLanes(const NestedGridAccel::TriBlock& block, int h, const FilterRay<W>& r,
+                                               typename GridVectors<W>::I* lanes) {
+    using VF = typename GridVectors<W>::F;
+    using VI = typename GridVectors<W>::I;
+    const VF zero = {};
+    auto at = [&](int row) -> const VF& { return *reinterpret_cast<const VF*>(&block.v[row][h]); };
+    const int kx = r.kx, ky = r.ky, kz = r.kz;
+    const VF aZ = at(kz) - r.oz, bZ = at(3 + kz) - r.oz, cZ = at(6 + kz) - r.oz;
+    const VF ax = (at(kx) - r.ox) - r.sx * aZ, ay = (at(ky) - r.oy) - r.sy * aZ;
+    const VF bx = (at(3 + kx) - r.ox) - r.sx * bZ, by = (at(3 + ky) - r.oy) - r.sy * bZ;
+    const VF cx = (at(6 + kx) - r.ox) - r.sx * cZ, cy = (at(6 + ky) - r.oy) - r.sy * cZ;
+    const VF cu = cx * by - cy * bx, cv = ax * cy - ay * cx, cw = bx * ay - by * ax;
+    const VI neg = (cu < zero) | (cv < zero) | (cw < zero);
+    const VI pos = (cu > zero) | (cv > zero) | (cw > zero);
+    const VI zeroEdge = (cu == zero) | (cv == zero) | (cw == zero);
+    // As IntersectPrepared without a zero edge: d0 = u + v + w, sign = d0 > 0 ? 1 : -1,
+    // (u, v, w) ·= sign, det = u + v + w > 0, t = (u·az + v·bz + w·cz) / det in range.
+    const VF d0 = cu + cv + cw;
+    const VI positive = d0 > zero;
+    const VF one = zero + 1.0f, minusOne = zero - 1.0f;
+    const VF sign = reinterpret_cast<VF>((positive & reinterpret_cast<VI>(one)) | (~positive & reinterpret_cast<VI>(minusOne)));
+    const VF u = cu * sign, v = cv * sign, w = cw * sign;
+    const VF det = u + v + w;
+    const VF az = r.sz * aZ, bz = r.sz * bZ, cz = r.sz * cZ;
+    const VF t = (u * az + v * bz + w * cz) / det;
+    const VI hit = ~(neg & pos) & (d0 != zero) & (det > zero) & (t > r.tMin) & (t < r.tMax);
+    *lanes = zeroEdge | hit;
+}
+
+uint64_t FilterBlocks4(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray) {
+    if (!ray.valid) return 0;
+    const FilterRay<4> r(ray);
+    uint64_t mask = 0;
+    for (uint32_t b = 0; b < count; ++b)
+        for (int h = 0; h < 8; h += 4) {
+            GridVectors<4>::I lanes;
+            FilterLanes<4>(blocks[b], h, r, &lanes);
+#if defined(__x86_64__) || defined(__i386__)
+            const uint64_t bits = static_cast<uint32_t>(_mm_movemask_ps(reinterpret_cast<__m128>(lanes)));
+#else
+            uint64_t bits = 0;
+            for (int k = 0; k < 4; ++k) bits |= uint64_t(lanes[k] != 0) << k;
+#endif
+            mask |= bits << (8 * b + h);
+        }
+    return mask;
+}
+#if defined(__x86_64__) || defined(__i386__)
+__attribute__((target("avx2"))) uint64_t FilterBlocks8(const NestedGridAccel::TriBlock* blocks, uint32_t count,
+                                                       const detail::PreparedRay& ray) {
+    if (!ray.valid) return 0;
+    const FilterRay<8> r(ray);
+    uint64_t mask = 0;
+    for (uint32_t b = 0; b < count; ++b) {
+        GridVectors<8>::I lanes;
+        FilterLanes<8>(blocks[b], 0, r, &lanes);
+        mask |= uint64_t(static_cast<uint32_t>(_mm256_movemask_ps(reinterpret_cast<__m256>(lanes)))) << (8 * b);
+    }
+    return mask;
+}
+bool HasAvx2() { return __builtin_cpu_supports("avx2"); }
+#else
+uint64_t FilterBlocks8(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray) {
+    return FilterBlocks4(blocks, count, ray);
+}
+bool HasAvx2() { return false; }
+#endif
+
+// One leaf cell as the walk hands it to a query: its blocks, and the cell's exit along
+// the ray.
 struct CellSpan {
-    const uint32_t* begin;
-    const uint32_t* end;
-    const NestedGridAccel::Tri* tris;  // by id
-    float lo, hi;                      // along kz
+    const NestedGridAccel::TriBlock* blocks;
+    uint32_t count;  // triangles
+    NestedGridAccel::BlockFilter filter;
     float tCellExit;
 };
 
-// Whether triangle v may be hit within the span: a cheap rejection before the exact test.
-// IntersectTriangle's t is a convex combination of the vertices' depths along the ray's
-// dominant axis kz (its weights u, v, w are >= 0), so a hit point lies within the
-// triangle's kz range, up to a few ulps the padding covers. (Sideways there is no such
-// tight bound: a ray grazing a triangle can round its hit point away from the triangle's
-// box.) A triangle that fails is not hit in this cell; if it is hit elsewhere it is tested
-// in that cell, since a skipped triangle is not marked in the mailbox. It halves the tests
-// of short segments and shadow rays, which pass by most triangles of the cells they cross.
-inline bool MayHit(const float* v, int kz, float lo, float hi) {
-    const float a = v[kz], b = v[3 + kz], c = v[6 + kz];
-    return !(std::min(a, std::min(b, c)) > hi || std::max(a, std::max(b, c)) < lo);
+// Calls test(id, hit) for each triangle of the cell the ray hits (IntersectPrepared's
+// answer on the block's copy of its vertices), in the cell's order, until test returns
+// true (then returns true).
+template <typename Test>
+[[gnu::always_inline]] inline bool ForEachHit(const CellSpan& c, const detail::PreparedRay& ray, Test&& test) {
+    for (uint32_t first = 0; first < c.count; first += 64) {
+        const uint32_t n = std::min<uint32_t>(64, c.count - first);
+        const NestedGridAccel::TriBlock* blocks = c.blocks + first / 8;
+        uint64_t mask = c.filter(blocks, (n + 7) / 8, ray);
+        if (n < 64) mask &= (uint64_t(1) << n) - 1;
+        while (mask) {
+            const uint32_t k = static_cast<uint32_t>(__builtin_ctzll(mask));
+            mask &= mask - 1;
+            const NestedGridAccel::TriBlock& block = blocks[k / 8];
+            float v[9];
+            for (int row = 0; row < 9; ++row) v[row] = block.v[row][k % 8];
+            TriangleHit th;
+            if (detail::IntersectPrepared(ray, v, &th) && test(block.id[k % 8], th)) return true;
+        }
+    }
+    return false;
 }
 
 // The three kinds of query the one traversal serves. Cell() tests a leaf cell's triangles
@@ -67,23 +181,17 @@ struct ClosestQuery {
     detail::PreparedRay ray;
     Hit best;
     bool found = false;
-    Mailbox mailbox;
 
     bool Cell(const CellSpan& c) {
-        for (const uint32_t* p = c.begin; p != c.end; ++p) {
-            const uint32_t id = *p;
-            const float* v = Floats(c.tris[id]);
-            if (mailbox.Seen(id) || !MayHit(v, ray.kz, c.lo, c.hi)) continue;
-            mailbox.Mark(id);
-            TriangleHit th;
-            if (!detail::IntersectPrepared(ray, v, &th)) continue;
+        ForEachHit(c, ray, [&](uint32_t id, const TriangleHit& th) {
             // ray.tMax is just above the best t, so equal-t hits arrive here too: brute
             // force keeps the lowest primitive id among them, and so do we.
-            if (found && th.t == best.t && id > best.prim) continue;
+            if (found && th.t == best.t && id > best.prim) return false;
             best = Hit{th.t, id, th.b1, th.b2};
             found = true;
             ray.tMax = std::nextafter(th.t, Infinity);
-        }
+            return false;
+        });
         // Every triangle that could be hit before the ray leaves this cell overlaps this
         // cell (or an earlier one), so a hit within the cell is final.
         return found && best.t <= c.tCellExit;
@@ -94,31 +202,19 @@ struct AnyQuery {
     explicit AnyQuery(const Ray& r) : ray(r) {}
     detail::PreparedRay ray;
     bool found = false;
-    Mailbox mailbox;
 
     bool Cell(const CellSpan& c) {
-        for (const uint32_t* p = c.begin; p != c.end; ++p) {
-            const uint32_t id = *p;
-            const float* v = Floats(c.tris[id]);
-            if (mailbox.Seen(id) || !MayHit(v, ray.kz, c.lo, c.hi)) continue;
-            mailbox.Mark(id);
-            TriangleHit th;
-            if (detail::IntersectPrepared(ray, v, &th)) {
-                found = true;
-                return true;
-            }
-        }
-        return false;
+        found = ForEachHit(c, ray, [](uint32_t, const TriangleHit&) { return true; });
+        return found;
     }
 };
 
 struct CountQuery {
     explicit CountQuery(const Ray& r) : ray(r) {}
     detail::PreparedRay ray;
-    Mailbox mailbox;
-    // The triangles hit so far: a triangle spanning cells must count once even when the
-    // mailbox has forgotten it. Hits are few (crossings along one ray), so a linear search
-    // of a small array is the cheapest exact set.
+    // The triangles hit so far: a triangle spanning cells is met in each of them and must
+    // count once. Hits are few (crossings along one ray), so a linear search of a small
+    // array is the cheapest exact set.
     static constexpr int kLocal = 64;
     uint32_t local[kLocal];
     int count = 0;
@@ -131,19 +227,15 @@ struct CountQuery {
         return std::find(overflow.begin(), overflow.end(), id) != overflow.end();
     }
     bool Cell(const CellSpan& c) {
-        for (const uint32_t* p = c.begin; p != c.end; ++p) {
-            const uint32_t id = *p;
-            const float* v = Floats(c.tris[id]);
-            if (mailbox.Seen(id) || !MayHit(v, ray.kz, c.lo, c.hi)) continue;
-            mailbox.Mark(id);
-            TriangleHit th;
-            if (!detail::IntersectPrepared(ray, v, &th) || Counted(id)) continue;
+        ForEachHit(c, ray, [&](uint32_t id, const TriangleHit&) {
+            if (Counted(id)) return false;
             if (count < kLocal)
                 local[count] = id;
             else
                 overflow.push_back(id);
             ++count;
-        }
+            return false;
+        });
         return false;
     }
 };
@@ -324,11 +416,11 @@ struct NestedGridAccel::Builder {
 NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& options)
     : mesh_(mesh), options_(options) {
     const auto startTime = std::chrono::steady_clock::now();
-    if (mesh.triangles.size() >= kChild)
-        ThrowError("the grid holds at most %u triangles, the scene has %zu", kChild - 1,
+    if (mesh.triangles.size() >= kChildBit)
+        ThrowError("the grid holds at most %u triangles, the scene has %zu", kChildBit - 1,
                    mesh.triangles.size());
 
-    tris_.resize(mesh.triangles.size());
+    std::vector<Tri> tris_(mesh.triangles.size());  // by primitive id, for the build only
     for (size_t i = 0; i < tris_.size(); ++i)
         tris_[i] = Tri{mesh.Vertex(uint32_t(i), 0), mesh.Vertex(uint32_t(i), 1),
                        mesh.Vertex(uint32_t(i), 2)};
@@ -368,7 +460,6 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
     box_ = b;
 
     epsAbs_ = 2e-7f * extent + 2.5e-7f * maxAbs;
-    boxMaxAbs_ = std::max(MaxComponent(Abs(box_.lo)), MaxComponent(Abs(box_.hi)));
     Builder builder{tris_, options_, double(epsAbs_)};
     Builder::Level top;
     const auto res = AutoResolution(ids.size(), box_, options_.gridResolution);
@@ -376,55 +467,74 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
     builder.Fill(top, ids.data(), ids.size(), true);
 
     // Flatten breadth-first: a node's index is its order in the queue, known when its
-    // parent's cells are written.
+    // parent's cells are written. A leaf's triangles go into blocks of 8 at once.
     std::vector<Builder::Level*> queue{&top};
     stats_ = Stats{};
     stats_.resolution = res;
     stats_.topCells = size_t(res[0]) * res[1] * res[2];
-    cellStart_.push_back(0);
+    uint64_t blockCount = 0;
     for (size_t q = 0; q < queue.size(); ++q) {
         Builder::Level& level = *queue[q];
         Node node = level.node;
-        node.firstCell = uint32_t(cellStart_.size() - 1);
+        node.firstCell = uint32_t(cells_.size());
         nodes_.push_back(node);
         stats_.depth = std::max(stats_.depth, level.depth);
         const size_t cells = level.start.size() - 1;
         size_t k = 0;  // next child, children are sorted by cell
         for (size_t c = 0; c < cells; ++c) {
+            CellRef ref{0, 0};
             if (k < level.children.size() && level.children[k].first == c) {
-                items_.push_back(kChild | uint32_t(queue.size()));
+                if (queue.size() >= kChildBit) ThrowError("the grid is too large (%zu sub-grids)", queue.size());
+                ref.count = kChildBit | uint32_t(queue.size());
                 queue.push_back(level.children[k].second.get());
                 ++k;
+            } else if (const uint32_t n = level.start[c + 1] - level.start[c]; n > 0) {
+                ref = {uint32_t(blockCount), n};
+                blockCount += (n + 7) / 8;
+                if (blockCount >= kChildBit) ThrowError("the grid is too large (%llu triangle blocks)",
+                                                        static_cast<unsigned long long>(blockCount));
+                ++stats_.leafCells;
+                stats_.references += n;
+                stats_.maxPerCell = std::max<size_t>(stats_.maxPerCell, n);
             } else {
-                const uint32_t n = level.start[c + 1] - level.start[c];
-                items_.insert(items_.end(), level.prims.begin() + level.start[c],
-                              level.prims.begin() + level.start[c + 1]);
-                if (n == 0)
-                    ++stats_.emptyCells;
-                else {
-                    ++stats_.leafCells;
-                    stats_.references += n;
-                    stats_.maxPerCell = std::max<size_t>(stats_.maxPerCell, n);
-                }
+                ++stats_.emptyCells;
             }
-            cellStart_.push_back(uint32_t(items_.size()));
+            cells_.push_back(ref);
         }
-        level.start = {};
-        level.prims = {};
     }
-    if (items_.size() >= kChild)
-        ThrowError("the grid is too large (%zu references)", items_.size());
-    stats_.totalCells = cellStart_.size() - 1;
+    stats_.totalCells = cells_.size();
     occupied_.assign((stats_.totalCells + 63) / 64, 0);
     for (size_t c = 0; c < stats_.totalCells; ++c)
-        if (cellStart_[c + 1] != cellStart_[c]) occupied_[c >> 6] |= uint64_t(1) << (c & 63);
+        if (cells_[c].count != 0) occupied_[c >> 6] |= uint64_t(1) << (c & 63);
     stats_.subGrids = nodes_.size() - 1;
     nodes_.shrink_to_fit();
-    cellStart_.shrink_to_fit();
-    items_.shrink_to_fit();
-    stats_.bytes = nodes_.size() * sizeof(Node) + cellStart_.size() * sizeof(uint32_t) +
-                   items_.size() * sizeof(uint32_t) + tris_.size() * sizeof(Tri) +
-                   occupied_.size() * sizeof(uint64_t);
+    cells_.shrink_to_fit();
+
+    ComputeEmptyReach();
+
+    // The blocks, node by node in parallel (each leaf cell writes its own).
+    blocks_.assign(blockCount, TriBlock{});
+    ParallelFor(size_t(0), queue.size(), [&](size_t q) {
+        const Builder::Level& level = *queue[q];
+        const size_t cells = level.start.size() - 1;
+        for (size_t c = 0; c < cells; ++c) {
+            const CellRef& ref = cells_[nodes_[q].firstCell + c];
+            if (ref.count == 0 || (ref.count & kChildBit)) continue;
+            for (uint32_t i = 0; i < ref.count; ++i) {
+                const uint32_t id = level.prims[level.start[c] + i];
+                const float* v = Floats(tris_[id]);
+                TriBlock& block = blocks_[ref.first + i / 8];
+                for (int row = 0; row < 9; ++row) block.v[row][i % 8] = v[row];
+                block.id[i % 8] = id;
+            }
+        }
+    });
+    simdWidth_ = options_.gridSimdWidth == 4 || !HasAvx2() ? 4 : 8;
+    filter_ = simdWidth_ == 8 ? FilterBlocks8 : FilterBlocks4;
+
+    stats_.bytes = nodes_.size() * sizeof(Node) + cells_.size() * sizeof(CellRef) +
+                   occupied_.size() * sizeof(uint64_t) + blocks_.size() * sizeof(TriBlock) + emptyReach_.size();
+    stats_.triangles = tris_.size();
     stats_.buildMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - startTime)
             .count();
@@ -432,10 +542,55 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
 
 NestedGridAccel::~NestedGridAccel() = default;
 
+// Empty-space skipping over the top level (ours; proximity clouds, Cohen & Sheffer 1994):
+// each top cell's Chebyshev distance in cells to the nearest non-empty top cell, capped at
+// kMaxEmptyReach (0 for a non-empty cell). A capped or clipped value is never more than the
+// true one, so the box it promises empty is. Separable: the distance along x per row, then
+// min over y' of max(|y - y'|, that), then the same along z.
+void NestedGridAccel::ComputeEmptyReach() {
+    const Node& top = nodes_[0];
+    const int nx = top.res[0], ny = top.res[1], nz = top.res[2];
+    const size_t cells = size_t(nx) * ny * nz;
+    if (cells > kMaxEmptyReachCells) return;
+    constexpr int K = kMaxEmptyReach;
+    std::vector<uint8_t> d(cells), e(cells);
+    auto at = [&](int x, int y, int z) { return (size_t(z) * ny + y) * nx + x; };
+    ParallelFor(0, ny * nz, [&](int row) {
+        const int y = row % ny, z = row / ny;
+        int last = -K - 1;
+        for (int x = 0; x < nx; ++x) {
+            if (cells_[at(x, y, z)].count != 0) last = x;
+            d[at(x, y, z)] = uint8_t(std::min(K, x - last));
+        }
+        last = nx + K;
+        for (int x = nx - 1; x >= 0; --x) {
+            if (cells_[at(x, y, z)].count != 0) last = x;
+            d[at(x, y, z)] = uint8_t(std::min<int>(d[at(x, y, z)], std::min(K, last - x)));
+        }
+    });
+    // min over |j| <= K of max(|j|, src(c + j·axis)), from src into dst along one axis.
+    auto pass = [&](const std::vector<uint8_t>& src, std::vector<uint8_t>& dst, int axis) {
+        const int n = axis == 1 ? ny : nz;
+        ParallelFor(size_t(0), cells, [&](size_t c) {
+            const int x = int(c % nx), y = int(c / nx % ny), z = int(c / (size_t(nx) * ny));
+            const int i = axis == 1 ? y : z;
+            int best = K;
+            for (int j = std::max(0, i - K); j <= std::min(n - 1, i + K) && best > 0; ++j) {
+                const int v = src[axis == 1 ? at(x, j, z) : at(x, y, j)];
+                best = std::min(best, std::max(std::abs(j - i), v));
+            }
+            dst[c] = uint8_t(best);
+        });
+    };
+    pass(d, e, 1);
+    pass(e, d, 2);
+    emptyReach_ = std::move(d);
+}
+
 AccelFigures NestedGridAccel::Figures() const {
     const Stats& s = stats_;
     const double nonEmpty = double(std::max<size_t>(s.leafCells, 1));
-    const double tris = double(std::max<size_t>(tris_.size(), 1));
+    const double tris = double(std::max<size_t>(s.triangles, 1));
     return {
         {"grid resolution",
          StringPrintf("%d x %d x %d", s.resolution[0], s.resolution[1], s.resolution[2])},
@@ -450,6 +605,7 @@ AccelFigures NestedGridAccel::Figures() const {
          StringPrintf("%zu, depth reached %d of %d", s.subGrids, s.depth, options_.gridMaxDepth)},
         {"grid bytes", StringPrintf("%zu (%.1f per triangle)", s.bytes, double(s.bytes) / tris)},
         {"grid build ms", StringPrintf("%.1f", s.buildMs)},
+        {"grid triangle tests", StringPrintf("%d at a time (%s), %zu blocks of 8 (%.0f%% full)", simdWidth_, simdWidth_ == 8 ? "AVX2" : "SSE", blocks_.size(), 100.0 * double(s.references) / double(std::max<size_t>(blocks_.size() * 8, 1)))},
     };
 }
 
@@ -458,64 +614,71 @@ AccelFigures NestedGridAccel::Figures() const {
 // Tracing", 1987) for all three query kinds.
 
 template <typename Query>
-bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD, float pad,
-                           float tEnter, float tExit, Query& query) const {
+bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD, float tEnter, float tExit, Query& query) const {
     const Node& g = nodes_[nodeIndex];
-    int cell[3], step[3], stop[3];
-    float nextT[3];
-    const int stride[3] = {1, g.res[0], g.res[0] * g.res[1]};
     // The plane crossings are recomputed from the plane's index at every step rather than
     // accumulated (nextT += deltaT), so their error does not grow along a long ray.
-    auto planeT = [&](int a, int k) {
-        return (g.lo[a] + float(k) * g.cellSize[a] - ray.o[a]) * invD[a];
+    auto planeT = [&](int a, int k) { return (g.lo[a] + float(k) * g.cellSize[a] - ray.o[a]) * invD[a]; };
+    // The cell of the ray's point at t along axis a, clamped: rounding may put the point a
+    // hair outside. (A truncating conversion is floor for f >= 0; std::floor would be a
+    // libm call.)
+    auto cellAt = [&](int a, float t) {
+        const float f = (ray.o[a] + ray.d[a] * t - g.lo[a]) * g.invCellSize[a];
+        return !(f > 0) ? 0 : (f >= float(g.res[a]) ? g.res[a] - 1 : int(f));
     };
-    for (int a = 0; a < 3; ++a) {
-        // The entry cell, clamped: rounding may put the entry point a hair outside. (A
-        // truncating conversion is floor for f >= 0; std::floor would be a libm call.)
-        const float p = ray.o[a] + ray.d[a] * tEnter;
-        const float f = (p - g.lo[a]) * g.invCellSize[a];
-        cell[a] = !(f > 0) ? 0 : (f >= float(g.res[a]) ? g.res[a] - 1 : int(f));
-        if (ray.d[a] > 0) {
-            step[a] = 1;
-            stop[a] = g.res[a];
-            nextT[a] = planeT(a, cell[a] + 1);
-        } else if (ray.d[a] < 0) {
-            step[a] = -1;
-            stop[a] = -1;
-            nextT[a] = planeT(a, cell[a]);
-        } else {
-            step[a] = 0;
-            stop[a] = -1;
-            nextT[a] = Infinity;
-        }
-    }
-    uint32_t idx = g.firstCell + uint32_t(cell[0] + cell[1] * stride[1] + cell[2] * stride[2]);
-    float tCell = tEnter;
+    const int sx = ray.d.x > 0 ? 1 : (ray.d.x < 0 ? -1 : 0), sy = ray.d.y > 0 ? 1 : (ray.d.y < 0 ? -1 : 0),
+              sz = ray.d.z > 0 ? 1 : (ray.d.z < 0 ? -1 : 0);
+    const int ox = sx > 0, oy = sy > 0, oz = sz > 0;  // the far plane of a cell
+    const int stopX = sx > 0 ? g.res[0] : -1, stopY = sy > 0 ? g.res[1] : -1, stopZ = sz > 0 ? g.res[2] : -1;
+    const uint32_t strideY = uint32_t(g.res[0]), strideZ = uint32_t(g.res[0] * g.res[1]);
+    const uint32_t dx = uint32_t(sx), dy = uint32_t(sy) * strideY, dz = uint32_t(sz) * strideZ;
     // The loop state in scalars, so it stays in registers (indexing small arrays by the
     // axis of each step goes through memory and serialises the steps).
-    float tx = nextT[0], ty = nextT[1], tz = nextT[2];
-    int cx = cell[0], cy = cell[1], cz = cell[2];
-    const int ox = step[0] > 0, oy = step[1] > 0, oz = step[2] > 0;  // far plane of a cell
-    const uint32_t dx = uint32_t(step[0]), dy = uint32_t(step[1] * stride[1]),
-                   dz = uint32_t(step[2] * stride[2]);
+    int cx, cy, cz;
+    float tx, ty, tz;
+    uint32_t idx;
+    auto enter = [&](float t) {
+        cx = cellAt(0, t);
+        cy = cellAt(1, t);
+        cz = cellAt(2, t);
+        tx = sx ? planeT(0, cx + ox) : Infinity;
+        ty = sy ? planeT(1, cy + oy) : Infinity;
+        tz = sz ? planeT(2, cz + oz) : Infinity;
+        idx = g.firstCell + uint32_t(cx) + uint32_t(cy) * strideY + uint32_t(cz) * strideZ;
+    };
+    enter(tEnter);
+    float tCell = tEnter;
     const uint64_t* occupied = occupied_.data();
+    // Empty space (top level): an empty cell knows how far the empty cells around it reach.
+    const uint8_t* empty = nodeIndex == 0 && !emptyReach_.empty() ? emptyReach_.data() : nullptr;
     for (;;) {
         const float tNext = std::min(tx, std::min(ty, tz));
         const float tCellExit = std::min(tNext, tExit);
         // Most cells are empty; their bit (a small array that stays in cache) spares the
-        // load from the much larger cellStart_.
+        // load from the much larger cells_.
         if ((occupied[idx >> 6] >> (idx & 63)) & 1) {
-            const uint32_t b = cellStart_[idx], e = cellStart_[idx + 1];
-            const uint32_t first = items_[b];
-            if (first & kChild) {
-                if (Walk(first & ~kChild, ray, invD, pad, tCell, tCellExit, query)) return true;
+            const CellRef ref = cells_[idx];
+            if (ref.count & kChildBit) {
+                if (Walk(ref.count & ~kChildBit, ray, invD, tCell, tCellExit, query)) return true;
             } else {
-                const int kz = query.ray.kz;
-                const float z0 = ray.o[kz] + ray.d[kz] * tCell,
-                            z1 = ray.o[kz] + ray.d[kz] * tCellExit;
-                const CellSpan span{items_.data() + b,      items_.data() + e,      tris_.data(),
-                                    std::min(z0, z1) - pad, std::max(z0, z1) + pad, tCellExit};
+                const CellSpan span{blocks_.data() + ref.first, ref.count, filter_, tCellExit};
                 if (query.Cell(span)) return true;
+            }
+        } else if (empty && empty[idx] > 1) {
+            // Every cell within empty[idx] - 1 steps of this one on each axis is empty: go
+            // to where the ray leaves that box and start there as at the entry. The cell of
+            // that point is rounded like the entry's, which the cells' growth covers; t
+            // only increases, so the walk ends.
+            const int k = empty[idx] - 1;
+            float tJump = tExit;
+            if (sx) tJump = std::min(tJump, planeT(0, sx > 0 ? std::min(cx + k, g.res[0] - 1) + 1 : std::max(cx - k, 0)));
+            if (sy) tJump = std::min(tJump, planeT(1, sy > 0 ? std::min(cy + k, g.res[1] - 1) + 1 : std::max(cy - k, 0)));
+            if (sz) tJump = std::min(tJump, planeT(2, sz > 0 ? std::min(cz + k, g.res[2] - 1) + 1 : std::max(cz - k, 0)));
+            if (tJump > tNext && tJump > tCell) {
+                if (!(tJump < tExit)) return false;
+                tCell = tJump;
+                enter(tJump);
+                continue;
             }
         }
         // Written so that a NaN (from a ray the caller built out of overflowed values)
@@ -524,18 +687,18 @@ bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD,
         tCell = tNext;
         // Step across the nearest plane (at a tie, either: the other follows at once).
         if (tx == tNext) {
-            cx += step[0];
-            if (cx == stop[0]) return false;
+            cx += sx;
+            if (cx == stopX) return false;
             idx += dx;
             tx = planeT(0, cx + ox);
         } else if (ty == tNext) {
-            cy += step[1];
-            if (cy == stop[1]) return false;
+            cy += sy;
+            if (cy == stopY) return false;
             idx += dy;
             ty = planeT(1, cy + oy);
         } else {
-            cz += step[2];
-            if (cz == stop[2]) return false;
+            cz += sz;
+            if (cz == stopZ) return false;
             idx += dz;
             tz = planeT(2, cz + oz);
         }
@@ -565,9 +728,7 @@ void NestedGridAccel::Traverse(const Ray& ray, Query& query) const {
         t1 = std::min(t1, tf);
     }
     if (!moves || !(t0 <= t1)) return;
-    // Rounding allowance of the span test (see MayHit): a few ulps of the coordinates in play.
-    const float pad = 4e-6f * (MaxComponent(Abs(ray.o)) + boxMaxAbs_) + epsAbs_;
-    Walk(0, ray, invD, pad, t0, t1, query);
+    Walk(0, ray, invD, t0, t1, query);
 }
 
 bool NestedGridAccel::Intersect(const Ray& ray, Hit* hit) const {

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "lightmesh/accel/accelerator.h"
+#include "lightmesh/geometry/triangle.h"
 #include "lightmesh/math/bounds.h"
 
 namespace lm {
@@ -77,12 +78,13 @@ class NestedGridAccel final : public Accelerator {
         size_t subGrids = 0;              ///< grids below the top level
         int depth = 1;                    ///< levels reached, top included
         size_t bytes = 0;                 ///< memory of the structure, triangles included
+        size_t triangles = 0;             ///< of the mesh
         double buildMs = 0;               ///< wall-clock build time
     };
     const Stats& GetStats() const { return stats_; }
 
     /// One grid level: `res` cells of size `cellSize` from `lo`, whose cells are
-    /// cellStart_[firstCell ...]. (Public only so grid.cpp's helpers can name it.)
+    /// cells_[firstCell ...]. (Public only so grid.cpp's helpers can name it.)
     struct Node {
         Vec3 lo;
         Vec3 cellSize;
@@ -94,25 +96,48 @@ class NestedGridAccel final : public Accelerator {
     struct Tri {
         Vec3 p0, p1, p2;
     };
+    /// Eight triangles of one leaf cell, coordinate by coordinate (v[3·vertex + axis][lane]),
+    /// so that one ray is tested against all eight with SIMD instructions (grid.cpp), and
+    /// their primitive ids: a cell's test reads its blocks and nothing else.
+    struct alignas(32) TriBlock {
+        float v[9][8];
+        uint32_t id[8];
+    };
+    /// A cell of any level: a leaf's `count` triangles in blocks_[first ...], or (count
+    /// with kChildBit) the sub-grid node count & ~kChildBit; count 0 when empty.
+    struct CellRef {
+        uint32_t first;
+        uint32_t count;
+    };
+    static constexpr uint32_t kChildBit = 0x80000000u;
+    /// Tests `count` (≤ 8) blocks against a prepared ray: bit 8·b + lane is set unless the
+    /// watertight test certainly rejects that triangle (the same arithmetic, lane by lane).
+    using BlockFilter = uint64_t (*)(const TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray);
 
   private:
     struct Builder;
     template <typename Query>
-    bool Walk(uint32_t node, const Ray& ray, const Vec3& invD, float pad, float tEnter, float tExit,
-              Query& query) const;
+    bool Walk(uint32_t node, const Ray& ray, const Vec3& invD, float tEnter, float tExit, Query& query) const;
     template <typename Query>
     void Traverse(const Ray& ray, Query& query) const;
 
     const TriangleMesh& mesh_;
     AccelOptions options_;
     Bounds3 box_;
-    float boxMaxAbs_ = 0;      // largest |coordinate| of the box
     float epsAbs_ = 0;         // least growth of a cell when assigning triangles (scene scale)
     std::vector<Node> nodes_;  // [0] is the top level
-    std::vector<uint32_t> cellStart_;  // CSR over all cells of all nodes, size cells + 1
-    std::vector<uint32_t> items_;      // per cell: triangle ids, or one kChild | node id
+    std::vector<CellRef> cells_;       // all cells of all nodes, node by node
     std::vector<uint64_t> occupied_;   // one bit per cell: not empty
-    std::vector<Tri> tris_;            // by primitive id
+    // The leaf cells' triangles in blocks of 8 (each cell's in id order, its last block
+    // padded), cell after cell.
+    std::vector<TriBlock> blocks_;
+    // Per top-level cell: how many cells around it are empty (ComputeEmptyReach).
+    std::vector<uint8_t> emptyReach_;
+    static constexpr int kMaxEmptyReach = 32;
+    static constexpr size_t kMaxEmptyReachCells = size_t(1) << 24;
+    void ComputeEmptyReach();
+    BlockFilter filter_ = nullptr;
+    int simdWidth_ = 0;
     Stats stats_;
 };
 

@@ -189,6 +189,23 @@ inline TriangleMesh TessellatedBox(int k, float h = 1.0f) {
 }
 
 /// Scales and moves a mesh (for the huge/small scene-scale tests).
+/// "A teapot in a stadium" (issue 12): a detailed closed model (a UV sphere of rings ×
+/// segments around (0, 1, 0), radius 1) standing on a thin ground slab `width` times its
+/// width, the case where a uniform grid's cells are either empty or crowded.
+inline TriangleMesh TeapotInStadium(int rings, int segments, float width = 4.0f) {
+    TriangleMesh m = Sphere(rings, segments);
+    for (Vec3& p : m.positions) p = Vec3(p.x, p.z + 1.0f, p.y);
+    const float w = width, y0 = -0.05f, y1 = 0.0f;
+    const Vec3 c[8] = {{-w, y0, -w}, {w, y0, -w}, {w, y0, w}, {-w, y0, w},
+                       {-w, y1, -w}, {w, y1, -w}, {w, y1, w}, {-w, y1, w}};
+    const int quads[6][4] = {{4, 5, 6, 7}, {0, 3, 2, 1}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    for (const auto& q : quads) {
+        AddTriangle(&m, c[q[0]], c[q[1]], c[q[2]]);
+        AddTriangle(&m, c[q[0]], c[q[2]], c[q[3]]);
+    }
+    return m;
+}
+
 inline TriangleMesh Transformed(TriangleMesh m, float scale, const Vec3& offset) {
     for (Vec3& p : m.positions) p = p * scale + offset;
     return m;
