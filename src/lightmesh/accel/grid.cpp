@@ -240,6 +240,17 @@ struct CountQuery {
     }
 };
 
+// body(i) for i in [0, n): in parallel when there is enough work for the threads' start-up
+// to pay (a small scene's build is a fraction of a millisecond).
+template <typename Body>
+void ForEachIndex(size_t n, size_t minParallel, const Body& body) {
+    if (n < minParallel) {
+        for (size_t i = 0; i < n; ++i) body(i);
+        return;
+    }
+    ParallelFor(size_t(0), n, body);
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------
@@ -323,13 +334,14 @@ struct NestedGridAccel::Builder {
         }
         double h[3], c[3];
         for (int a = 0; a < 3; ++a) h[a] = 0.5 * node.cellSize[a] + eps[a];
+        const TriangleBoxOverlap overlap(t.p0, t.p1, t.p2, h);
         for (int z = lo[2]; z <= hi[2]; ++z) {
             c[2] = node.lo[2] + (z + 0.5) * double(node.cellSize[2]);
             for (int y = lo[1]; y <= hi[1]; ++y) {
                 c[1] = node.lo[1] + (y + 0.5) * double(node.cellSize[1]);
                 for (int x = lo[0]; x <= hi[0]; ++x) {
                     c[0] = node.lo[0] + (x + 0.5) * double(node.cellSize[0]);
-                    if (TriangleOverlapsBox(t.p0, t.p1, t.p2, c, h)) emit(uint32_t((z * ny + y) * nx + x));
+                    if (overlap.Overlaps(c)) emit(uint32_t((z * ny + y) * nx + x));
                 }
             }
         }
@@ -512,19 +524,22 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
 
     ComputeEmptyReach();
 
-    // The blocks, node by node in parallel (each leaf cell writes its own).
-    blocks_.assign(blockCount, TriBlock{});
-    ParallelFor(size_t(0), queue.size(), [&](size_t q) {
+    // The blocks, node by node in parallel (each leaf cell writes its own, padding
+    // included: the storage is not cleared first, a pass over memory the size of the grid).
+    blockCount_ = blockCount;
+    blocks_.reset(new TriBlock[blockCount]);
+    ForEachIndex(queue.size(), blockCount > 4096 ? 2 : SIZE_MAX, [&](size_t q) {
         const Builder::Level& level = *queue[q];
         const size_t cells = level.start.size() - 1;
         for (size_t c = 0; c < cells; ++c) {
             const CellRef& ref = cells_[nodes_[q].firstCell + c];
             if (ref.count == 0 || (ref.count & kChildBit)) continue;
-            for (uint32_t i = 0; i < ref.count; ++i) {
-                const uint32_t id = level.prims[level.start[c] + i];
+            const uint32_t padded = (ref.count + 7) / 8 * 8;
+            for (uint32_t i = 0; i < padded; ++i) {
+                const uint32_t id = i < ref.count ? level.prims[level.start[c] + i] : 0;
                 const float* v = Floats(tris_[id]);
                 TriBlock& block = blocks_[ref.first + i / 8];
-                for (int row = 0; row < 9; ++row) block.v[row][i % 8] = v[row];
+                for (int row = 0; row < 9; ++row) block.v[row][i % 8] = i < ref.count ? v[row] : 0.0f;
                 block.id[i % 8] = id;
             }
         }
@@ -533,7 +548,7 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
     filter_ = simdWidth_ == 8 ? FilterBlocks8 : FilterBlocks4;
 
     stats_.bytes = nodes_.size() * sizeof(Node) + cells_.size() * sizeof(CellRef) +
-                   occupied_.size() * sizeof(uint64_t) + blocks_.size() * sizeof(TriBlock) + emptyReach_.size();
+                   occupied_.size() * sizeof(uint64_t) + blockCount_ * sizeof(TriBlock) + emptyReach_.size();
     stats_.triangles = tris_.size();
     stats_.buildMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - startTime)
@@ -555,8 +570,9 @@ void NestedGridAccel::ComputeEmptyReach() {
     constexpr int K = kMaxEmptyReach;
     std::vector<uint8_t> d(cells), e(cells);
     auto at = [&](int x, int y, int z) { return (size_t(z) * ny + y) * nx + x; };
-    ParallelFor(0, ny * nz, [&](int row) {
-        const int y = row % ny, z = row / ny;
+    const size_t minParallel = 1 << 15;  // cells
+    ForEachIndex(size_t(ny) * nz, cells < minParallel ? SIZE_MAX : 2, [&](size_t row) {
+        const int y = int(row % ny), z = int(row / ny);
         int last = -K - 1;
         for (int x = 0; x < nx; ++x) {
             if (cells_[at(x, y, z)].count != 0) last = x;
@@ -571,7 +587,7 @@ void NestedGridAccel::ComputeEmptyReach() {
     // min over |j| <= K of max(|j|, src(c + j·axis)), from src into dst along one axis.
     auto pass = [&](const std::vector<uint8_t>& src, std::vector<uint8_t>& dst, int axis) {
         const int n = axis == 1 ? ny : nz;
-        ParallelFor(size_t(0), cells, [&](size_t c) {
+        ForEachIndex(cells, minParallel, [&](size_t c) {
             const int x = int(c % nx), y = int(c / nx % ny), z = int(c / (size_t(nx) * ny));
             const int i = axis == 1 ? y : z;
             int best = K;
@@ -605,7 +621,7 @@ AccelFigures NestedGridAccel::Figures() const {
          StringPrintf("%zu, depth reached %d of %d", s.subGrids, s.depth, options_.gridMaxDepth)},
         {"grid bytes", StringPrintf("%zu (%.1f per triangle)", s.bytes, double(s.bytes) / tris)},
         {"grid build ms", StringPrintf("%.1f", s.buildMs)},
-        {"grid triangle tests", StringPrintf("%d at a time (%s), %zu blocks of 8 (%.0f%% full)", simdWidth_, simdWidth_ == 8 ? "AVX2" : "SSE", blocks_.size(), 100.0 * double(s.references) / double(std::max<size_t>(blocks_.size() * 8, 1)))},
+        {"grid triangle tests", StringPrintf("%d at a time (%s), %zu blocks of 8 (%.0f%% full)", simdWidth_, simdWidth_ == 8 ? "AVX2" : "SSE", blockCount_, 100.0 * double(s.references) / double(std::max<size_t>(blockCount_ * 8, 1)))},
     };
 }
 
@@ -661,7 +677,7 @@ bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD,
             if (ref.count & kChildBit) {
                 if (Walk(ref.count & ~kChildBit, ray, invD, tCell, tCellExit, query)) return true;
             } else {
-                const CellSpan span{blocks_.data() + ref.first, ref.count, filter_, tCellExit};
+                const CellSpan span{blocks_.get() + ref.first, ref.count, filter_, tCellExit};
                 if (query.Cell(span)) return true;
             }
         } else if (empty && empty[idx] > 1) {

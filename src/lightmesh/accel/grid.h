@@ -5,6 +5,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "lightmesh/accel/accelerator.h"
@@ -130,10 +131,11 @@ class NestedGridAccel final : public Accelerator {
     std::vector<uint64_t> occupied_;   // one bit per cell: not empty
     // The leaf cells' triangles in blocks of 8 (each cell's in id order, its last block
     // padded), cell after cell.
-    std::vector<TriBlock> blocks_;
+    std::unique_ptr<TriBlock[]> blocks_;
+    size_t blockCount_ = 0;
     // Per top-level cell: how many cells around it are empty (ComputeEmptyReach).
     std::vector<uint8_t> emptyReach_;
-    static constexpr int kMaxEmptyReach = 32;
+    static constexpr int kMaxEmptyReach = 8;
     static constexpr size_t kMaxEmptyReachCells = size_t(1) << 24;
     void ComputeEmptyReach();
     BlockFilter filter_ = nullptr;

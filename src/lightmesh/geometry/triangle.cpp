@@ -11,18 +11,12 @@ bool IntersectTriangle(const Ray& ray, const Vec3& p0, const Vec3& p1, const Vec
     return detail::IntersectPrepared(detail::PreparedRay(ray), p, hit);
 }
 
-bool TriangleOverlapsBox(const Vec3& p0, const Vec3& p1, const Vec3& p2, const double c[3], const double h[3]) {
-    double v[3][3];
+TriangleBoxOverlap::TriangleBoxOverlap(const Vec3& p0, const Vec3& p1, const Vec3& p2, const double h[3]) {
+    const double v[3][3] = {{p0.x, p0.y, p0.z}, {p1.x, p1.y, p1.z}, {p2.x, p2.y, p2.z}};
     for (int a = 0; a < 3; ++a) {
-        v[0][a] = double(p0[a]) - c[a];
-        v[1][a] = double(p1[a]) - c[a];
-        v[2][a] = double(p2[a]) - c[a];
-    }
-    // Box normals: the bounding boxes overlap.
-    for (int a = 0; a < 3; ++a) {
-        double lo = std::min({v[0][a], v[1][a], v[2][a]});
-        double hi = std::max({v[0][a], v[1][a], v[2][a]});
-        if (lo > h[a] || hi < -h[a]) return false;
+        lo_[a] = std::min({v[0][a], v[1][a], v[2][a]});
+        hi_[a] = std::max({v[0][a], v[1][a], v[2][a]});
+        h_[a] = h[a];
     }
     double e[3][3];
     for (int a = 0; a < 3; ++a) {
@@ -30,31 +24,45 @@ bool TriangleOverlapsBox(const Vec3& p0, const Vec3& p1, const Vec3& p2, const d
         e[1][a] = v[2][a] - v[1][a];
         e[2][a] = v[0][a] - v[2][a];
     }
-    // Triangle normal: the plane passes through the box.
-    {
-        double n[3] = {e[0][1] * e[1][2] - e[0][2] * e[1][1], e[0][2] * e[1][0] - e[0][0] * e[1][2],
-                       e[0][0] * e[1][1] - e[0][1] * e[1][0]};
-        double d = n[0] * v[0][0] + n[1] * v[0][1] + n[2] * v[0][2];
-        double r = h[0] * std::abs(n[0]) + h[1] * std::abs(n[1]) + h[2] * std::abs(n[2]);
-        if (std::abs(d) > r) return false;
-    }
-    // Edge × axis.
+    auto add = [&](double x, double y, double z) {
+        Axis& ax = axes_[count_++];
+        ax.a[0] = x;
+        ax.a[1] = y;
+        ax.a[2] = z;
+        const double q0 = x * v[0][0] + y * v[0][1] + z * v[0][2];
+        const double q1 = x * v[1][0] + y * v[1][1] + z * v[1][2];
+        const double q2 = x * v[2][0] + y * v[2][1] + z * v[2][2];
+        ax.lo = std::min({q0, q1, q2});
+        ax.hi = std::max({q0, q1, q2});
+        ax.r = h[0] * std::abs(x) + h[1] * std::abs(y) + h[2] * std::abs(z);
+    };
+    // The triangle's normal: the plane passes through the box.
+    add(e[0][1] * e[1][2] - e[0][2] * e[1][1], e[0][2] * e[1][0] - e[0][0] * e[1][2],
+        e[0][0] * e[1][1] - e[0][1] * e[1][0]);
+    // Edge × box axis a: (0, -e_z, e_y), (e_z, 0, -e_x), (-e_y, e_x, 0). A zero axis
+    // separates nothing and is left out.
     for (int i = 0; i < 3; ++i) {
-        for (int a = 0; a < 3; ++a) {
-            // axis = e_i × unit(a)
-            const int b = (a + 1) % 3, c2 = (a + 2) % 3;
-            double ax[3];
-            ax[a] = 0;
-            ax[b] = e[i][c2];
-            ax[c2] = -e[i][b];
-            double p0 = ax[b] * v[0][b] + ax[c2] * v[0][c2];
-            double p1 = ax[b] * v[1][b] + ax[c2] * v[1][c2];
-            double p2 = ax[b] * v[2][b] + ax[c2] * v[2][c2];
-            double r = h[b] * std::abs(ax[b]) + h[c2] * std::abs(ax[c2]);
-            if (std::min({p0, p1, p2}) > r || std::max({p0, p1, p2}) < -r) return false;
-        }
+        const double x = e[i][0], y = e[i][1], z = e[i][2];
+        if (y != 0 || z != 0) add(0, -z, y);
+        if (x != 0 || z != 0) add(z, 0, -x);
+        if (x != 0 || y != 0) add(-y, x, 0);
+    }
+}
+
+bool TriangleBoxOverlap::Overlaps(const double c[3]) const {
+    // Box normals: the bounding boxes overlap.
+    for (int a = 0; a < 3; ++a)
+        if (lo_[a] - c[a] > h_[a] || hi_[a] - c[a] < -h_[a]) return false;
+    for (int k = 0; k < count_; ++k) {
+        const Axis& ax = axes_[k];
+        const double pc = ax.a[0] * c[0] + ax.a[1] * c[1] + ax.a[2] * c[2];
+        if (ax.lo - pc > ax.r || ax.hi - pc < -ax.r) return false;
     }
     return true;
+}
+
+bool TriangleOverlapsBox(const Vec3& p0, const Vec3& p1, const Vec3& p2, const double c[3], const double h[3]) {
+    return TriangleBoxOverlap(p0, p1, p2, h).Overlaps(c);
 }
 
 }  // namespace lm

@@ -143,9 +143,29 @@ inline Vec3 TriangleNormal(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
 
 /// Triangle/box overlap by the separating-axis theorem (Akenine-Möller, "Fast 3D
 /// Triangle-Box Overlap Testing", JGT 2001): 3 box normals, the triangle's normal and the 9
-/// edge cross products, in double. The box is given by its centre `c` and half sizes `h`;
-/// touching counts as overlapping. The nested grid assigns triangles to cells with it, and
-/// the light mesh finds the triangles near a cell with it.
+/// edge cross products, in double; touching counts as overlapping. Everything that depends
+/// on the triangle and the boxes' half sizes `h` only (the 13 axes, the vertices'
+/// projections on them, the boxes' radii) is computed once, so a box then costs 13
+/// projections of its centre: the nested grid tests one triangle against every cell of its
+/// bounding box with it.
+class TriangleBoxOverlap {
+  public:
+    TriangleBoxOverlap(const Vec3& p0, const Vec3& p1, const Vec3& p2, const double h[3]);
+    /// Whether the triangle meets the box of centre `c` and the half sizes given.
+    bool Overlaps(const double c[3]) const;
+
+  private:
+    struct Axis {
+        double a[3];      // the axis
+        double lo, hi;    // the vertices' projections on it: min and max
+        double r;         // the box's radius along it
+    };
+    Axis axes_[10];  // the triangle's normal, then the 9 edge × box-axis products
+    int count_ = 0;  // the edge axes that are not zero
+    double lo_[3], hi_[3], h_[3];
+};
+
+/// One-shot TriangleBoxOverlap: the box is given by its centre `c` and half sizes `h`.
 bool TriangleOverlapsBox(const Vec3& p0, const Vec3& p1, const Vec3& p2, const double c[3],
                          const double h[3]);
 
