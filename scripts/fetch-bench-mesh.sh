@@ -1,5 +1,5 @@
 #!/bin/sh
-# fetch-bench-mesh.sh -- the real meshes bench_accel's "garden" scene uses.
+# fetch-bench-mesh.sh -- the real meshes bench_accel's "trees" scene uses.
 #
 # Two trees of Debian's sweethome3d-furniture package (Scopia collection, CC-BY 3.0):
 # japaneseMaple.obj (198,396 triangles) and copperBeech.obj (187,308 triangles), 385,704 in
