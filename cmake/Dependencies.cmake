@@ -43,3 +43,16 @@ if(LIGHTMESH_BUILD_BENCHMARKS)
   find_package(benchmark QUIET)
   lightmesh_require(benchmark_FOUND libbenchmark-dev "Google Benchmark (benchmarks)")
 endif()
+
+# MPI (OpenMPI from libopenmpi-dev) is optional: without it lightmesh renders on one
+# process and says so when started by mpirun. LIGHTMESH_HAS_MPI tells the code.
+set(LIGHTMESH_HAS_MPI OFF)
+if(LIGHTMESH_ENABLE_MPI)
+  find_package(MPI QUIET COMPONENTS CXX)
+  if(MPI_CXX_FOUND)
+    set(LIGHTMESH_HAS_MPI ON)
+  else()
+    message(STATUS "lightmesh: MPI not found (apt-get install libopenmpi-dev openmpi-bin, or "
+                   "scripts/install-deps.sh): building without `mpirun -np N lightmesh render`")
+  endif()
+endif()

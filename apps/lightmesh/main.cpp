@@ -9,10 +9,15 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 
 #include "lightmesh/accel/accelerator.h"
+#include "lightmesh/distributed/launch.h"
+#ifdef LIGHTMESH_HAS_MPI
+#include "lightmesh/distributed/mpi_render.h"
+#endif
 #include "lightmesh/io/compare.h"
 #include "lightmesh/io/image.h"
 #include "lightmesh/render/benchmark.h"
@@ -41,29 +46,36 @@ std::string Count(uint64_t n) {
     return s;
 }
 
-/// Runs a command so that every exception becomes one line and exit code 1: the project's
-/// errors as they are, allocation failures and file-system errors with what failed.
+/// The message of the exception being handled, as one line: the project's errors as they
+/// are, allocation failures and file-system errors with what failed. Call inside a catch.
+std::string CurrentErrorLine() {
+    try {
+        throw;
+    } catch (const lm::Error& e) {
+        return e.what();
+    } catch (const std::bad_alloc&) {
+        const uint64_t budget = lm::PhysicalMemoryBytes();
+        return lm::StringPrintf("out of memory: an allocation failed (peak %s; this machine's budget %s, "
+                                "LIGHTMESH_MEMORY_LIMIT lowers it)",
+                                lm::FormatBytes(lm::PeakMemoryBytes()).c_str(),
+                                budget ? lm::FormatBytes(budget).c_str() : "unknown");
+    } catch (const std::filesystem::filesystem_error& e) {
+        std::string what = e.code().message();
+        return lm::Printable(e.path1().string()) + ": " + lm::Printable(what);
+    } catch (const std::exception& e) {
+        return lm::Printable(e.what());
+    } catch (...) {
+        return "unknown failure";
+    }
+}
+
+/// Runs a command so that every exception becomes one line and exit code 1.
 template <typename F>
 int Guarded(F&& run) {
     try {
         return run();
-    } catch (const lm::Error& e) {
-        std::fprintf(stderr, "lightmesh: error: %s\n", e.what());
-    } catch (const std::bad_alloc&) {
-        const uint64_t budget = lm::PhysicalMemoryBytes();
-        std::fprintf(stderr,
-                     "lightmesh: error: out of memory: an allocation failed (peak %s; this machine's "
-                     "budget %s, LIGHTMESH_MEMORY_LIMIT lowers it)\n",
-                     lm::FormatBytes(lm::PeakMemoryBytes()).c_str(),
-                     budget ? lm::FormatBytes(budget).c_str() : "unknown");
-    } catch (const std::filesystem::filesystem_error& e) {
-        std::string what = e.code().message();
-        std::fprintf(stderr, "lightmesh: error: %s: %s\n", lm::Printable(e.path1().string()).c_str(),
-                     lm::Printable(what).c_str());
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "lightmesh: error: %s\n", lm::Printable(e.what()).c_str());
     } catch (...) {
-        std::fprintf(stderr, "lightmesh: error: unknown failure\n");
+        std::fprintf(stderr, "lightmesh: error: %s\n", CurrentErrorLine().c_str());
     }
     return 1;
 }
@@ -124,14 +136,27 @@ void PrintFigures(const char* title, const std::vector<std::pair<std::string, st
     std::printf("\n");
 }
 
-int RunRender(const RenderCommand& cmd) {
-    ApplyLogLevel(cmd.common);
-    lm::InstallInterruptCleanup();
-    const auto t0 = Clock::now();
-    lm::Scene scene = LoadWithWarnings(cmd.common, cmd.width.value_or(0), cmd.height.value_or(0));
-    const double loadSeconds = SecondsSince(t0);
+/// A render ready to run: the scene loaded, options merged and checked, the output's folder
+/// checked, the back-end and the shadow method built.
+struct PreparedRender {
+    lm::Scene scene;
+    lm::RenderOptions options;
+    std::string output;
+    std::unique_ptr<lm::Accelerator> accel;
+    std::unique_ptr<lm::ShadowMethod> shadows;
+    std::unique_ptr<lm::WhittedRenderer> renderer;
+    double loadSeconds = 0, buildSeconds = 0, shadowSetupSeconds = 0;
+};
 
-    lm::RenderOptions options = scene.render;
+std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
+    auto prepared = std::make_unique<PreparedRender>();
+    const auto t0 = Clock::now();
+    lm::Scene& scene = prepared->scene;
+    scene = LoadWithWarnings(cmd.common, cmd.width.value_or(0), cmd.height.value_or(0));
+    prepared->loadSeconds = SecondsSince(t0);
+
+    lm::RenderOptions& options = prepared->options;
+    options = scene.render;
     if (cmd.width) options.width = *cmd.width;
     if (cmd.height) options.height = *cmd.height;
     if (cmd.aa) options.aa = *cmd.aa;
@@ -180,7 +205,8 @@ int RunRender(const RenderCommand& cmd) {
                            "(set --light-radius)");
     }
     // Check everything about the output before spending time on the render.
-    std::string output = cmd.output;
+    std::string& output = prepared->output;
+    output = cmd.output;
     if (output.empty()) {
         std::string stem = cmd.common.scene.rfind("builtin:", 0) == 0
                                ? cmd.common.scene.substr(8)
@@ -197,58 +223,132 @@ int RunRender(const RenderCommand& cmd) {
                        lm::FormatBytes(physical).c_str());
 
     const auto t1 = Clock::now();
-    auto accel = lm::CreateAccelerator(options.accel, scene.mesh, options.accelOptions);
-    const double buildSeconds = SecondsSince(t1);
+    prepared->accel = lm::CreateAccelerator(options.accel, scene.mesh, options.accelOptions);
+    prepared->buildSeconds = SecondsSince(t1);
     const auto t2 = Clock::now();
-    auto shadows = lm::CreateShadowMethod(options.shadows, scene, *accel, options);
-    const double shadowSetupSeconds = SecondsSince(t2);
+    prepared->shadows = lm::CreateShadowMethod(options.shadows, scene, *prepared->accel, options);
+    prepared->shadowSetupSeconds = SecondsSince(t2);
+    prepared->renderer =
+        std::make_unique<lm::WhittedRenderer>(scene, *prepared->accel, *prepared->shadows, options);
+    return prepared;
+}
 
-    lm::WhittedRenderer renderer(scene, *accel, *shadows, options);
-    const int tiles = ((options.width + 15) / 16) * ((options.height + 15) / 16);
+// The summary line, and with --stats the figures (per rank under MPI).
+void PrintRender(const RenderCommand& cmd, const PreparedRender& p, const lm::RenderResult& result,
+                 double writeSeconds, const std::vector<lm::RankReport>* ranks) {
+    const lm::RenderOptions& options = p.options;
+    std::printf("%s: %dx%d, shadows %s, accel %s, %zu triangles, %zu lights: render %.3f s\n",
+                p.output.c_str(), options.width, options.height, std::string(p.shadows->Name()).c_str(),
+                std::string(p.accel->Name()).c_str(), p.scene.mesh.TriangleCount(), p.scene.lights.size(),
+                result.seconds);
+    if (!cmd.stats) return;
+    const lm::RenderCounters& c = result.counters;
+    std::printf("time      load %.3f s, build %.3f s, shadow setup %.3f s, render %.3f s, write %.3f s\n",
+                p.loadSeconds, p.buildSeconds, p.shadowSetupSeconds, result.seconds, writeSeconds);
+    std::printf("threads   %d%s\n",
+                static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)),
+                ranks ? " per rank" : "");
+    if (ranks) {
+        uint64_t nodes = 0;
+        for (const lm::RankReport& r : *ranks) nodes += r.nodesEvaluated;
+        std::printf("ranks     %zu, tiles handed out in batches from a counter on rank 0 (one-sided MPI)%s\n",
+                    ranks->size(),
+                    nodes ? lm::StringPrintf("; light-mesh nodes evaluated by all ranks together %s", Count(nodes).c_str()).c_str()
+                          : "");
+        for (const lm::RankReport& r : *ranks)
+            std::printf("rank %-5d tiles %d (%d batches), render %.3f s, rays camera %s, shadow %s, reflection %s%s\n",
+                        r.rank, r.tiles, r.batches, r.seconds, Count(r.counters.cameraRays).c_str(),
+                        Count(r.counters.shadowRays).c_str(), Count(r.counters.reflectionRays).c_str(),
+                        nodes ? (", nodes evaluated " + Count(r.nodesEvaluated)).c_str() : "");
+    }
+    std::printf("rays      camera %s, shadow %s, reflection %s; shading points %s\n",
+                Count(c.cameraRays).c_str(), Count(c.shadowRays).c_str(),
+                Count(c.reflectionRays).c_str(), Count(c.shadingPoints).c_str());
+    PrintFigures("accel", p.accel->Figures());
+    if (c.interpolations + c.fallbacks > 0) {
+        const double points = static_cast<double>(c.interpolations + c.fallbacks);
+        std::printf("lmm       interpolated points %s, mean m %.1f, candidates per point %.1f, "
+                    "local-visibility segments %s, fallbacks %s (%.2f%%)\n",
+                    Count(c.interpolations).c_str(),
+                    c.interpolations ? static_cast<double>(c.nodesUsed) / static_cast<double>(c.interpolations) : 0.0,
+                    static_cast<double>(c.candidates) / points, Count(c.localSegments).c_str(),
+                    Count(c.fallbacks).c_str(), 100.0 * static_cast<double>(c.fallbacks) / points);
+        if (c.uniformCellPoints + c.planarCellPoints > 0)
+            std::printf("cells     points answered by their cell's summary %s (%.1f%%), in planar cells %s (%.1f%%), "
+                        "segments decided without a ray %s; mean m counts the other points only\n",
+                        Count(c.uniformCellPoints).c_str(), 100.0 * static_cast<double>(c.uniformCellPoints) / points,
+                        Count(c.planarCellPoints).c_str(), 100.0 * static_cast<double>(c.planarCellPoints) / points,
+                        Count(c.culledSegments).c_str());
+    }
+    PrintFigures(ranks ? "shadows (rank 0)" : "shadows", p.shadows->Figures());
+    std::printf("memory    peak %s%s\n", lm::FormatBytes(lm::PeakMemoryBytes()).c_str(), ranks ? " (rank 0)" : "");
+}
+
+int RunRender(const RenderCommand& cmd) {
+    ApplyLogLevel(cmd.common);
+    lm::InstallInterruptCleanup();
+    const std::unique_ptr<PreparedRender> p = PrepareRender(cmd);
     lm::RenderResult result;
     {
-        lm::ProgressReporter progress(tiles, "Rendering",
+        lm::ProgressReporter progress(p->renderer->TileCount(), "Rendering",
                                       !cmd.common.quiet && lm::ProgressReporter::StderrIsTerminal());
-        result = renderer.Render(&progress);
+        result = p->renderer->Render(&progress);
     }
     const auto t3 = Clock::now();
-    lm::WriteImage(output, result.image);
-    const double writeSeconds = SecondsSince(t3);
-
-    std::printf("%s: %dx%d, shadows %s, accel %s, %zu triangles, %zu lights: render %.3f s\n",
-                output.c_str(), options.width, options.height, std::string(shadows->Name()).c_str(),
-                std::string(accel->Name()).c_str(), scene.mesh.TriangleCount(), scene.lights.size(),
-                result.seconds);
-    if (cmd.stats) {
-        const lm::RenderCounters& c = result.counters;
-        std::printf("time      load %.3f s, build %.3f s, shadow setup %.3f s, render %.3f s, write %.3f s\n",
-                    loadSeconds, buildSeconds, shadowSetupSeconds, result.seconds, writeSeconds);
-        std::printf("threads   %d\n", static_cast<int>(tbb::global_control::active_value(
-                                          tbb::global_control::max_allowed_parallelism)));
-        std::printf("rays      camera %s, shadow %s, reflection %s; shading points %s\n",
-                    Count(c.cameraRays).c_str(), Count(c.shadowRays).c_str(),
-                    Count(c.reflectionRays).c_str(), Count(c.shadingPoints).c_str());
-        PrintFigures("accel", accel->Figures());
-        if (c.interpolations + c.fallbacks > 0) {
-            const double points = static_cast<double>(c.interpolations + c.fallbacks);
-            std::printf("lmm       interpolated points %s, mean m %.1f, candidates per point %.1f, "
-                        "local-visibility segments %s, fallbacks %s (%.2f%%)\n",
-                        Count(c.interpolations).c_str(),
-                        c.interpolations ? static_cast<double>(c.nodesUsed) / static_cast<double>(c.interpolations) : 0.0,
-                        static_cast<double>(c.candidates) / points, Count(c.localSegments).c_str(),
-                        Count(c.fallbacks).c_str(), 100.0 * static_cast<double>(c.fallbacks) / points);
-            if (c.uniformCellPoints + c.planarCellPoints > 0)
-                std::printf("cells     points answered by their cell's summary %s (%.1f%%), in planar cells %s (%.1f%%), "
-                            "segments decided without a ray %s; mean m counts the other points only\n",
-                            Count(c.uniformCellPoints).c_str(), 100.0 * static_cast<double>(c.uniformCellPoints) / points,
-                            Count(c.planarCellPoints).c_str(), 100.0 * static_cast<double>(c.planarCellPoints) / points,
-                            Count(c.culledSegments).c_str());
-        }
-        PrintFigures("shadows", shadows->Figures());
-        std::printf("memory    peak %s\n", lm::FormatBytes(lm::PeakMemoryBytes()).c_str());
-    }
+    lm::WriteImage(p->output, result.image);
+    PrintRender(cmd, *p, result, SecondsSince(t3), nullptr);
     return 0;
 }
+
+#ifdef LIGHTMESH_HAS_MPI
+/// `mpirun -np N lightmesh render …`: every rank prepares the render; if one fails, rank 0
+/// prints the first failing rank's message and every rank exits 1. The tiles are shared out
+/// (RenderDistributed), rank 0 gathers and writes the image, and prints the figures.
+int RunRenderMpi(const RenderCommand& cmd, const lm::MpiSession& session) {
+    const bool root = session.Rank() == 0;
+    ApplyLogLevel(cmd.common);
+    if (!root) lm::SetLogLevel(lm::LogLevel::Error);  // warnings once, from rank 0
+    lm::InstallInterruptCleanup();
+    auto fail = [&](const std::string& message, int rank) {
+        if (root)
+            std::fprintf(stderr, "lightmesh: error: %s%s\n", message.c_str(),
+                         rank > 0 ? lm::StringPrintf(" (rank %d of %d)", rank, session.Size()).c_str() : "");
+        return 1;
+    };
+    std::unique_ptr<PreparedRender> p;
+    std::string error, message;
+    int failedRank = -1;
+    try {
+        p = PrepareRender(cmd);
+    } catch (...) {
+        error = CurrentErrorLine();
+    }
+    if (!session.AllSucceeded(error, &message, &failedRank)) return fail(message, failedRank);
+    // mpirun binds each of up to two ranks to one core by default: more threads than the
+    // CPUs a rank may run on only share them.
+    const int cpus = lm::AffinityCpuCount();
+    if (root && cmd.common.threads > 0 && cpus > 0 && cmd.common.threads > cpus)
+        lm::LogWarning(lm::StringPrintf("--threads %d, but each rank may run on %d CPU(s) only (mpirun's binding): "
+                                        "the threads share them; run mpirun with --bind-to none",
+                                        cmd.common.threads, cpus));
+
+    auto* lightMesh = dynamic_cast<const lm::LightMeshShadows*>(p->shadows.get());
+    std::function<uint64_t()> nodes;
+    if (lightMesh) nodes = [lightMesh] { return lightMesh->NodesEvaluated(); };
+    lm::DistributedRender d;
+    {
+        lm::ProgressReporter progress(p->renderer->TileCount(), "Rendering",
+                                      root && !cmd.common.quiet && lm::ProgressReporter::StderrIsTerminal());
+        d = lm::RenderDistributed(session, *p->renderer, nodes, root ? &progress : nullptr);
+    }
+    if (d.errorRank >= 0) return fail(d.error, d.errorRank);
+    if (!root) return 0;
+    const auto t3 = Clock::now();
+    lm::WriteImage(p->output, d.result.image);
+    PrintRender(cmd, *p, d.result, SecondsSince(t3), &d.ranks);
+    return 0;
+}
+#endif
 
 int RunInfo(const CommonOptions& common, const std::string& accelName, int grid) {
     ApplyLogLevel(common);
@@ -649,6 +749,42 @@ int main(int argc, char** argv) {
         // --help and --version exit 0; a command-line mistake exits 1 like any bad input
         // (CLI11's own codes are 100 and up).
         return app.exit(e) == 0 ? 0 : 1;
+    }
+
+    // Under mpirun: render spreads its tiles over the ranks; the other commands run once,
+    // on rank 0, and the other ranks leave at once.
+    const int worldSize = lm::LauncherWorldSize(), worldRank = lm::LauncherWorldRank();
+    if (lm::LaunchedByMpi() && renderCmd->parsed()) {
+#ifdef LIGHTMESH_HAS_MPI
+        std::unique_ptr<tbb::global_control> limit;
+        if (render.common.threads > 0)
+            limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                          static_cast<size_t>(render.common.threads));
+        std::unique_ptr<lm::MpiSession> session;
+        try {
+            session = std::make_unique<lm::MpiSession>(&argc, &argv);
+        } catch (...) {
+            std::fprintf(stderr, "lightmesh: error: %s\n", CurrentErrorLine().c_str());
+            return 1;
+        }
+        return Guarded([&] { return RunRenderMpi(render, *session); });
+#else
+        if (worldSize > 1) {
+            if (worldRank == 0)
+                std::fprintf(stderr,
+                             "lightmesh: error: started by an MPI launcher with %d processes, but this lightmesh "
+                             "was built without MPI: install OpenMPI (apt-get install libopenmpi-dev openmpi-bin, "
+                             "or scripts/install-deps.sh) and rebuild (scripts/build.sh), or run it without "
+                             "mpirun\n",
+                             worldSize);
+            return 1;
+        }
+#endif
+    }
+    if (worldSize > 1) {
+        if (worldRank != 0) return 0;
+        std::fprintf(stderr, "lightmesh: note: under mpirun only `render` is spread over the ranks; this command "
+                             "runs once, on rank 0 (the other %d ranks exit)\n", worldSize - 1);
     }
 
     if (benchCmd->parsed()) {

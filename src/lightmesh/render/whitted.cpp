@@ -124,21 +124,21 @@ Color WhittedRenderer::Pixel(int x, int y, RenderCounters& counters) const {
     return sum * (1.0f / static_cast<float>(aa * aa));
 }
 
+void WhittedRenderer::RenderTile(int tile, Image* image, RenderCounters& counters) const {
+    const int w = options_.width, h = options_.height, tilesX = TilesX();
+    const int x0 = (tile % tilesX) * kTileSize, y0 = (tile / tilesX) * kTileSize;
+    for (int y = y0; y < std::min(y0 + kTileSize, h); ++y)
+        for (int x = x0; x < std::min(x0 + kTileSize, w); ++x) image->At(x, y) = Pixel(x, y, counters);
+}
+
 RenderResult WhittedRenderer::Render(ProgressReporter* progress) const {
-    constexpr int kTile = 16;
-    const int w = options_.width, h = options_.height;
-    const int tilesX = (w + kTile - 1) / kTile, tilesY = (h + kTile - 1) / kTile;
     RenderResult result;
-    result.image = Image(w, h);
-    std::vector<RenderCounters> tileCounters(static_cast<size_t>(tilesX) * tilesY);
+    result.image = Image(options_.width, options_.height);
+    std::vector<RenderCounters> tileCounters(static_cast<size_t>(TileCount()));
     const auto start = std::chrono::steady_clock::now();
-    ParallelFor(tbb::blocked_range<int>(0, tilesX * tilesY, 1), [&](const tbb::blocked_range<int>& range) {
+    ParallelFor(tbb::blocked_range<int>(0, TileCount(), 1), [&](const tbb::blocked_range<int>& range) {
         for (int tile = range.begin(); tile != range.end(); ++tile) {
-            const int x0 = (tile % tilesX) * kTile, y0 = (tile / tilesX) * kTile;
-            RenderCounters& counters = tileCounters[tile];
-            for (int y = y0; y < std::min(y0 + kTile, h); ++y)
-                for (int x = x0; x < std::min(x0 + kTile, w); ++x)
-                    result.image.At(x, y) = Pixel(x, y, counters);
+            RenderTile(tile, &result.image, tileCounters[tile]);
             if (progress) progress->Update(1);
         }
     });

@@ -36,9 +36,19 @@ class WhittedRenderer {
     /// The value of pixel (x, y): the mean over aa × aa sub-pixel camera rays.
     Color Pixel(int x, int y, RenderCounters& counters) const;
 
-    /// Renders the whole image in parallel over 16×16 tiles. Every pixel depends only on
-    /// its own rays, so the image is the same for any number of threads.
+    /// Renders the whole image in parallel over kTileSize² tiles. Every pixel depends only
+    /// on its own rays, so the image is the same for any number of threads (or processes:
+    /// RenderTile renders any subset of the tiles into the same pixels).
     RenderResult Render(ProgressReporter* progress = nullptr) const;
+    /// Tiles of the image, row by row: tile t covers the pixels from
+    /// ((t % tilesX)·kTileSize, (t / tilesX)·kTileSize), clipped to the image.
+    static constexpr int kTileSize = 16;
+    int Width() const { return options_.width; }
+    int Height() const { return options_.height; }
+    int TilesX() const { return (options_.width + kTileSize - 1) / kTileSize; }
+    int TileCount() const { return TilesX() * ((options_.height + kTileSize - 1) / kTileSize); }
+    /// The pixels of one tile into *image (of the render's size).
+    void RenderTile(int tile, Image* image, RenderCounters& counters) const;
 
     /// Builds the shading point for a hit of `ray` (also used by tests and the shadow
     /// methods' tests).

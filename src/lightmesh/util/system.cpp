@@ -2,6 +2,7 @@
 
 #include <dirent.h>
 #include <fcntl.h>
+#include <sched.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -242,6 +243,13 @@ uint64_t ParseByteCount(const std::string& text) {
     else if (!unit.empty()) return 0;
     const double bytes = v * scale;
     return bytes < 1.8e19 ? static_cast<uint64_t>(bytes) : 0;
+}
+
+int AffinityCpuCount() {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    if (sched_getaffinity(0, sizeof(set), &set) != 0) return 0;
+    return CPU_COUNT(&set);
 }
 
 uint64_t PhysicalMemoryBytes() {

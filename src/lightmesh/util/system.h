@@ -51,6 +51,9 @@ uint64_t PeakMemoryBytes();
 /// smaller. Light meshes and images that would need more than half are refused up front.
 uint64_t PhysicalMemoryBytes();
 
+/// The CPUs this process may run on (its affinity mask); 0 if unknown.
+int AffinityCpuCount();
+
 /// Parses "4096", "512K", "64M", "1.5G", "2T" (binary units); 0 for anything else.
 uint64_t ParseByteCount(const std::string& text);
 

@@ -1,0 +1,278 @@
+// mpi_render.cpp -- tiles over MPI ranks: a shared counter for dynamic scheduling, one
+// gather of the tiles on rank 0 (see mpi_render.h).
+#include "lightmesh/distributed/mpi_render.h"
+
+#include <mpi.h>
+
+#include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <new>
+
+#include "lightmesh/util/error.h"
+#include "lightmesh/util/parallel.h"
+
+namespace lm {
+namespace {
+
+// RenderCounters is a plain run of uint64_t counters: it travels as such.
+constexpr int kCounterWords = static_cast<int>(sizeof(RenderCounters) / sizeof(uint64_t));
+static_assert(sizeof(RenderCounters) == kCounterWords * sizeof(uint64_t), "RenderCounters must be uint64_t only");
+
+// A rank's figures as one fixed-size message: tiles, batches, seconds (its bits), nodes
+// evaluated, then the counters.
+constexpr int kReportWords = 4 + kCounterWords;
+
+void Check(int code, const char* what) {
+    if (code == MPI_SUCCESS) return;
+    char text[MPI_MAX_ERROR_STRING];
+    int length = 0;
+    MPI_Error_string(code, text, &length);
+    ThrowError("MPI: %s failed: %.*s", what, length, text);
+}
+
+// Test hooks (tests/mpi): LIGHTMESH_MPI_TEST_FAIL_RANK=k makes rank k fail after its first
+// batch as an out-of-memory would; LIGHTMESH_MPI_TEST_KILL_RANK=k kills rank k there.
+bool RankIs(const char* variable, int rank) {
+    const char* v = std::getenv(variable);
+    return v && *v && std::atoi(v) == rank;
+}
+
+// The error line of the exception being handled (as main's catch ladder words it).
+std::string CurrentErrorMessage() {
+    try {
+        throw;
+    } catch (const Error& e) {
+        return e.what();
+    } catch (const std::bad_alloc&) {
+        return "out of memory: an allocation failed while rendering";
+    } catch (const std::exception& e) {
+        return e.what();
+    } catch (...) {
+        return "unknown failure while rendering";
+    }
+}
+
+// The tiles in Z order (Morton: the bits of tx and ty interleaved), so that a batch of
+// consecutive ones is a compact patch of the image rather than a band of rows: fewer
+// patch borders, so fewer light-mesh nodes that two ranks both evaluate.
+std::vector<int> TilesInZOrder(int tilesX, int tiles) {
+    auto spread = [](uint64_t v) {
+        uint64_t r = 0;
+        for (int b = 0; b < 32; ++b) r |= ((v >> b) & 1) << (2 * b);
+        return r;
+    };
+    std::vector<std::pair<uint64_t, int>> keyed(static_cast<size_t>(tiles));
+    for (int t = 0; t < tiles; ++t)
+        keyed[static_cast<size_t>(t)] = {spread(static_cast<uint64_t>(t % tilesX)) | (spread(static_cast<uint64_t>(t / tilesX)) << 1), t};
+    std::sort(keyed.begin(), keyed.end());
+    std::vector<int> order(static_cast<size_t>(tiles));
+    for (int i = 0; i < tiles; ++i) order[static_cast<size_t>(i)] = keyed[static_cast<size_t>(i)].second;
+    return order;
+}
+
+}  // namespace
+
+MpiSession::MpiSession(int* argc, char*** argv) {
+    int provided = 0;
+    Check(MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
+    // Errors are returned, not fatal, so they become our messages.
+    MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+    MPI_Comm_size(MPI_COMM_WORLD, &size_);
+}
+
+MpiSession::~MpiSession() { MPI_Finalize(); }
+
+bool MpiSession::AllSucceeded(const std::string& myError, std::string* message, int* failedRank) const {
+    const int mine = myError.empty() ? size_ : rank_;
+    int first = size_;
+    Check(MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD), "MPI_Allreduce");
+    if (first == size_) return true;
+    *failedRank = first;
+    if (first == 0) {
+        if (rank_ == 0) *message = myError;
+        return false;
+    }
+    if (rank_ == first) {
+        Check(MPI_Send(myError.data(), static_cast<int>(myError.size()), MPI_CHAR, 0, 1, MPI_COMM_WORLD), "MPI_Send");
+    } else if (rank_ == 0) {
+        MPI_Status status;
+        Check(MPI_Probe(first, 1, MPI_COMM_WORLD, &status), "MPI_Probe");
+        int length = 0;
+        MPI_Get_count(&status, MPI_CHAR, &length);
+        message->assign(static_cast<size_t>(length), '\0');
+        Check(MPI_Recv(message->data(), length, MPI_CHAR, first, 1, MPI_COMM_WORLD, MPI_STATUS_IGNORE), "MPI_Recv");
+    }
+    return false;
+}
+
+DistributedRender RenderDistributed(const MpiSession& session, const WhittedRenderer& renderer,
+                                    const std::function<uint64_t()>& nodesEvaluated,
+                                    ProgressReporter* progress) {
+    const int rank = session.Rank(), size = session.Size();
+    const int64_t tiles = renderer.TileCount();
+    const int tilesX = renderer.TilesX();
+    constexpr int T = WhittedRenderer::kTileSize;
+
+    // The counter of tiles handed out (in TilesInZOrder's order), on rank 0, advanced by
+    // every rank.
+    int64_t* counter = nullptr;
+    MPI_Win window;
+    Check(MPI_Win_allocate(rank == 0 ? sizeof(int64_t) : 0, sizeof(int64_t), MPI_INFO_NULL, MPI_COMM_WORLD, &counter,
+                           &window),
+          "MPI_Win_allocate");
+    if (rank == 0) {
+        MPI_Win_lock(MPI_LOCK_EXCLUSIVE, 0, 0, window);
+        *counter = 0;
+        MPI_Win_unlock(0, window);
+    }
+    Check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier");
+    MPI_Win_lock_all(0, window);
+
+    const int width = renderer.Width(), height = renderer.Height();
+    Image image;
+    std::vector<int> mine;  // the tiles this rank rendered, in the order it rendered them
+    RankReport report;
+    report.rank = rank;
+    std::string error;
+    const auto start = std::chrono::steady_clock::now();
+    try {
+        image = Image(width, height);
+        const std::vector<int> order = TilesInZOrder(tilesX, static_cast<int>(tiles));
+        std::vector<RenderCounters> tileCounters;
+        int64_t seen = 0;      // the counter's value when this rank last read it
+        int64_t reported = 0;  // tiles the progress bar shows as handed out
+        for (;;) {
+            // Guided batches: big while much is left, down to one tile at the end, so the
+            // ranks finish together; the counter is read once per batch.
+            int64_t batch = std::max<int64_t>(1, (tiles - seen) / (4 * int64_t(size)));
+            int64_t first = 0;
+            Check(MPI_Fetch_and_op(&batch, &first, MPI_INT64_T, 0, 0, MPI_SUM, window), "MPI_Fetch_and_op");
+            Check(MPI_Win_flush(0, window), "MPI_Win_flush");
+            const int64_t last = std::min(tiles, first + batch);
+            if (progress && last > reported) {
+                progress->Update(last - reported);
+                reported = last;
+            }
+            if (first >= tiles) break;
+            seen = last;
+            tileCounters.assign(static_cast<size_t>(last - first), RenderCounters{});
+            ParallelFor(tbb::blocked_range<int64_t>(first, last, 1), [&](const tbb::blocked_range<int64_t>& r) {
+                for (int64_t i = r.begin(); i != r.end(); ++i)
+                    renderer.RenderTile(order[static_cast<size_t>(i)], &image, tileCounters[static_cast<size_t>(i - first)]);
+            });
+            for (const RenderCounters& c : tileCounters) report.counters += c;
+            for (int64_t i = first; i < last; ++i) mine.push_back(order[static_cast<size_t>(i)]);
+            ++report.batches;
+            if (RankIs("LIGHTMESH_MPI_TEST_KILL_RANK", rank)) std::raise(SIGKILL);
+            if (RankIs("LIGHTMESH_MPI_TEST_FAIL_RANK", rank)) throw std::bad_alloc();
+        }
+    } catch (...) {
+        error = CurrentErrorMessage();
+        if (error.empty()) error = "unknown failure while rendering";
+    }
+    report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    report.tiles = static_cast<int>(mine.size());
+    if (nodesEvaluated) report.nodesEvaluated = nodesEvaluated();
+    MPI_Win_unlock_all(window);
+    MPI_Win_free(&window);
+
+    DistributedRender out;
+    // Who failed: the lowest failing rank's message goes to rank 0, and nobody sends tiles.
+    std::string message;
+    int failedRank = -1;
+    if (!session.AllSucceeded(error, &message, &failedRank)) {
+        out.error = message;
+        out.errorRank = failedRank;
+        return out;
+    }
+
+    // The figures of every rank.
+    uint64_t words[kReportWords];
+    words[0] = static_cast<uint64_t>(report.tiles);
+    words[1] = static_cast<uint64_t>(report.batches);
+    static_assert(sizeof(double) == sizeof(uint64_t));
+    std::memcpy(&words[2], &report.seconds, sizeof(double));
+    words[3] = report.nodesEvaluated;
+    std::memcpy(&words[4], &report.counters, sizeof(RenderCounters));
+    std::vector<uint64_t> all(rank == 0 ? static_cast<size_t>(kReportWords) * size : 0);
+    Check(MPI_Gather(words, kReportWords, MPI_UINT64_T, all.data(), kReportWords, MPI_UINT64_T, 0, MPI_COMM_WORLD),
+          "MPI_Gather");
+
+    // The tiles: their indices, then their pixels (each tile's rows, clipped to the image),
+    // in the order the rank rendered them.
+    auto tileBox = [&](int t, int* x0, int* y0, int* w, int* h) {
+        *x0 = (t % tilesX) * T;
+        *y0 = (t / tilesX) * T;
+        *w = std::min(T, width - *x0);
+        *h = std::min(T, height - *y0);
+    };
+    std::vector<float> pixels;
+    pixels.reserve(mine.size() * T * T * 3);
+    for (int t : mine) {
+        int x0, y0, w, h;
+        tileBox(t, &x0, &y0, &w, &h);
+        for (int y = y0; y < y0 + h; ++y)
+            for (int x = x0; x < x0 + w; ++x) {
+                const Color& c = image.At(x, y);
+                pixels.insert(pixels.end(), {c.r, c.g, c.b});
+            }
+    }
+    const int myTiles = static_cast<int>(mine.size()), myFloats = static_cast<int>(pixels.size());
+    std::vector<int> tileCounts(rank == 0 ? size : 0), floatCounts(rank == 0 ? size : 0);
+    Check(MPI_Gather(&myTiles, 1, MPI_INT, tileCounts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Gather");
+    Check(MPI_Gather(&myFloats, 1, MPI_INT, floatCounts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Gather");
+    std::vector<int> tileOffsets(rank == 0 ? size : 0), floatOffsets(rank == 0 ? size : 0);
+    std::vector<int> allTiles;
+    std::vector<float> allPixels;
+    if (rank == 0) {
+        int64_t nt = 0, nf = 0;
+        for (int r = 0; r < size; ++r) {
+            tileOffsets[r] = static_cast<int>(nt);
+            floatOffsets[r] = static_cast<int>(nf);
+            nt += tileCounts[r];
+            nf += floatCounts[r];
+        }
+        if (nt != tiles || nf > INT32_MAX) ThrowError("MPI: ranks returned %lld of %lld tiles", static_cast<long long>(nt),
+                                                      static_cast<long long>(tiles));
+        allTiles.resize(static_cast<size_t>(nt));
+        allPixels.resize(static_cast<size_t>(nf));
+    }
+    Check(MPI_Gatherv(mine.data(), myTiles, MPI_INT, allTiles.data(), tileCounts.data(), tileOffsets.data(), MPI_INT, 0,
+                      MPI_COMM_WORLD),
+          "MPI_Gatherv");
+    Check(MPI_Gatherv(pixels.data(), myFloats, MPI_FLOAT, allPixels.data(), floatCounts.data(), floatOffsets.data(),
+                      MPI_FLOAT, 0, MPI_COMM_WORLD),
+          "MPI_Gatherv");
+    out.result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (rank != 0) return out;
+
+    out.result.image = Image(width, height);
+    size_t f = 0;
+    for (int t : allTiles) {
+        int x0, y0, w, h;
+        tileBox(t, &x0, &y0, &w, &h);
+        for (int y = y0; y < y0 + h; ++y)
+            for (int x = x0; x < x0 + w; ++x, f += 3) out.result.image.At(x, y) = Color(allPixels[f], allPixels[f + 1], allPixels[f + 2]);
+    }
+    for (int r = 0; r < size; ++r) {
+        const uint64_t* w = &all[static_cast<size_t>(r) * kReportWords];
+        RankReport rr;
+        rr.rank = r;
+        rr.tiles = static_cast<int>(w[0]);
+        rr.batches = static_cast<int>(w[1]);
+        std::memcpy(&rr.seconds, &w[2], sizeof(double));
+        rr.nodesEvaluated = w[3];
+        std::memcpy(static_cast<void*>(&rr.counters), &w[4], sizeof(RenderCounters));
+        out.result.counters += rr.counters;
+        out.ranks.push_back(rr);
+    }
+    return out;
+}
+
+}  // namespace lm
