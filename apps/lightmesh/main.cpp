@@ -256,8 +256,9 @@ void PrintRender(const RenderCommand& cmd, const PreparedRender& p, const lm::Re
                     nodes ? lm::StringPrintf("; light-mesh nodes evaluated by all ranks together %s", Count(nodes).c_str()).c_str()
                           : "");
         for (const lm::RankReport& r : *ranks)
-            std::printf("rank %-5d tiles %d (%d batches), render %.3f s, rays camera %s, shadow %s, reflection %s%s\n",
-                        r.rank, r.tiles, r.batches, r.seconds, Count(r.counters.cameraRays).c_str(),
+            std::printf("rank %-5d tiles %d (%d batches, %.2f ms waiting for them), render %.3f s, rays camera %s, "
+                        "shadow %s, reflection %s%s\n",
+                        r.rank, r.tiles, r.batches, r.fetchSeconds * 1e3, r.seconds, Count(r.counters.cameraRays).c_str(),
                         Count(r.counters.shadowRays).c_str(), Count(r.counters.reflectionRays).c_str(),
                         nodes ? (", nodes evaluated " + Count(r.nodesEvaluated)).c_str() : "");
     }

@@ -23,9 +23,9 @@ namespace {
 constexpr int kCounterWords = static_cast<int>(sizeof(RenderCounters) / sizeof(uint64_t));
 static_assert(sizeof(RenderCounters) == kCounterWords * sizeof(uint64_t), "RenderCounters must be uint64_t only");
 
-// A rank's figures as one fixed-size message: tiles, batches, seconds (its bits), nodes
-// evaluated, then the counters.
-constexpr int kReportWords = 4 + kCounterWords;
+// A rank's figures as one fixed-size message: tiles, batches, seconds and fetch seconds
+// (their bits), nodes evaluated, then the counters.
+constexpr int kReportWords = 5 + kCounterWords;
 
 void Check(int code, const char* what) {
     if (code == MPI_SUCCESS) return;
@@ -152,8 +152,11 @@ DistributedRender RenderDistributed(const MpiSession& session, const WhittedRend
             // ranks finish together; the counter is read once per batch.
             int64_t batch = std::max<int64_t>(1, (tiles - seen) / (4 * int64_t(size)));
             int64_t first = 0;
+            const auto fetchStart = std::chrono::steady_clock::now();
             Check(MPI_Fetch_and_op(&batch, &first, MPI_INT64_T, 0, 0, MPI_SUM, window), "MPI_Fetch_and_op");
             Check(MPI_Win_flush(0, window), "MPI_Win_flush");
+            report.fetchSeconds +=
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - fetchStart).count();
             const int64_t last = std::min(tiles, first + batch);
             if (progress && last > reported) {
                 progress->Update(last - reported);
@@ -198,8 +201,9 @@ DistributedRender RenderDistributed(const MpiSession& session, const WhittedRend
     words[1] = static_cast<uint64_t>(report.batches);
     static_assert(sizeof(double) == sizeof(uint64_t));
     std::memcpy(&words[2], &report.seconds, sizeof(double));
-    words[3] = report.nodesEvaluated;
-    std::memcpy(&words[4], &report.counters, sizeof(RenderCounters));
+    std::memcpy(&words[3], &report.fetchSeconds, sizeof(double));
+    words[4] = report.nodesEvaluated;
+    std::memcpy(&words[5], &report.counters, sizeof(RenderCounters));
     std::vector<uint64_t> all(rank == 0 ? static_cast<size_t>(kReportWords) * size : 0);
     Check(MPI_Gather(words, kReportWords, MPI_UINT64_T, all.data(), kReportWords, MPI_UINT64_T, 0, MPI_COMM_WORLD),
           "MPI_Gather");
@@ -267,8 +271,9 @@ DistributedRender RenderDistributed(const MpiSession& session, const WhittedRend
         rr.tiles = static_cast<int>(w[0]);
         rr.batches = static_cast<int>(w[1]);
         std::memcpy(&rr.seconds, &w[2], sizeof(double));
-        rr.nodesEvaluated = w[3];
-        std::memcpy(static_cast<void*>(&rr.counters), &w[4], sizeof(RenderCounters));
+        std::memcpy(&rr.fetchSeconds, &w[3], sizeof(double));
+        rr.nodesEvaluated = w[4];
+        std::memcpy(static_cast<void*>(&rr.counters), &w[5], sizeof(RenderCounters));
         out.result.counters += rr.counters;
         out.ranks.push_back(rr);
     }

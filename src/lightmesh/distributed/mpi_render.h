@@ -46,7 +46,8 @@ struct RankReport {
     int rank = 0;
     int tiles = 0;
     int batches = 0;
-    double seconds = 0;  ///< the rank's render loop, wall clock
+    double seconds = 0;       ///< the rank's render loop, wall clock
+    double fetchSeconds = 0;  ///< of which waiting for the counter (MPI_Fetch_and_op)
     RenderCounters counters;
     uint64_t nodesEvaluated = 0;  ///< light-mesh nodes this rank evaluated
 };
