@@ -33,6 +33,13 @@ identical)
         done
         echo "ok: $m"
     done
+    # Linear float pixels (EXR), and an image smaller than the ranks' share (17x5: two
+    # tiles for three ranks).
+    "$lightmesh" render builtin:gazebo --width 17 --height 5 --shadows lmm -q -o "$work/ref.exr" >/dev/null ||
+        fail "single-process EXR"
+    mpi 3 "$lightmesh" render builtin:gazebo --width 17 --height 5 --shadows lmm -q -o "$work/mpi.exr" >/dev/null ||
+        fail "mpirun EXR"
+    cmp -s "$work/ref.exr" "$work/mpi.exr" || fail "EXR from 3 ranks differs from one process"
     ;;
 failure)
     # A rank that fails while rendering: one message (from rank 0, naming the rank), exit
