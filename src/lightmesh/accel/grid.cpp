@@ -12,6 +12,7 @@
 #endif
 
 #include "lightmesh/geometry/triangle.h"
+#include "lightmesh/math/simd.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/parallel.h"
 
@@ -37,23 +38,11 @@ bool IsFiniteTri(const NestedGridAccel::Tri& t) {
 // exact edge or vertex case, go through IntersectPrepared itself. So the answers, ties
 // included, are brute force's bit for bit, and a triangle tested in several cells gets the
 // same answer each time (no mailbox is needed: a repeat costs one SIMD lane).
-template <int W>
-struct GridVectors;
-template <>
-struct GridVectors<4> {
-    typedef float F __attribute__((vector_size(16)));
-    typedef int I __attribute__((vector_size(16)));
-};
-template <>
-struct GridVectors<8> {
-    typedef float F __attribute__((vector_size(32)));
-    typedef int I __attribute__((vector_size(32)));
-};
 
 // The ray's constants of the filter, broadcast to W lanes.
 template <int W>
 struct FilterRay {
-    using VF = typename GridVectors<W>::F;
+    using VF = typename SimdVectors<W>::F;
     VF ox, oy, oz, sx, sy, sz, tMin, tMax;
     int kx, ky, kz;
     [[gnu::always_inline]] explicit FilterRay(const detail::PreparedRay& r) : kx(r.kx), ky(r.ky), kz(r.kz) {
@@ -75,9 +64,9 @@ struct FilterRay {
 // a lane with a zero edge function (the tie-breaks, in double) is always set.
 template <int W>
 [[gnu::always_inline]] inline void FilterLanes(const NestedGridAccel::TriBlock& block, int h, const FilterRay<W>& r,
-                                               typename GridVectors<W>::I* lanes) {
-    using VF = typename GridVectors<W>::F;
-    using VI = typename GridVectors<W>::I;
+                                               typename SimdVectors<W>::I* lanes) {
+    using VF = typename SimdVectors<W>::F;
+    using VI = typename SimdVectors<W>::I;
     const VF zero = {};
     auto at = [&](int row) -> const VF& { return *reinterpret_cast<const VF*>(&block.v[row][h]); };
     const int kx = r.kx, ky = r.ky, kz = r.kz;
@@ -109,7 +98,7 @@ uint64_t FilterBlocks4(const NestedGridAccel::TriBlock* blocks, uint32_t count, 
     uint64_t mask = 0;
     for (uint32_t b = 0; b < count; ++b)
         for (int h = 0; h < 8; h += 4) {
-            GridVectors<4>::I lanes;
+            SimdVectors<4>::I lanes;
             FilterLanes<4>(blocks[b], h, r, &lanes);
 #if defined(__x86_64__) || defined(__i386__)
             const uint64_t bits = static_cast<uint32_t>(_mm_movemask_ps(reinterpret_cast<__m128>(lanes)));
@@ -128,7 +117,7 @@ __attribute__((target("avx2"))) uint64_t FilterBlocks8(const NestedGridAccel::Tr
     const FilterRay<8> r(ray);
     uint64_t mask = 0;
     for (uint32_t b = 0; b < count; ++b) {
-        GridVectors<8>::I lanes;
+        SimdVectors<8>::I lanes;
         FilterLanes<8>(blocks[b], 0, r, &lanes);
         mask |= uint64_t(static_cast<uint32_t>(_mm256_movemask_ps(reinterpret_cast<__m256>(lanes)))) << (8 * b);
     }

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "lightmesh/geometry/triangle.h"
+#include "lightmesh/math/simd.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/log.h"
 #include "lightmesh/util/parallel.h"
@@ -127,21 +128,9 @@ struct Blockers {
 /// vector extensions): 1 if a blocker is certainly hit, 0 if every blocker is certainly
 /// missed, -1 if undecided.
 template <int W>
-struct CullVectors;
-template <>
-struct CullVectors<4> {
-    typedef float F __attribute__((vector_size(16)));
-    typedef int I __attribute__((vector_size(16)));
-};
-template <>
-struct CullVectors<8> {
-    typedef float F __attribute__((vector_size(32)));
-    typedef int I __attribute__((vector_size(32)));
-};
-template <int W>
 [[gnu::always_inline]] inline int CullSegment(const Blockers& b, const Vec3& x, const Vec3& o, float m) {
-    using VF = typename CullVectors<W>::F;
-    using VI = typename CullVectors<W>::I;
+    using VF = typename SimdVectors<W>::F;
+    using VI = typename SimdVectors<W>::I;
     const VF zero = {};
     const VF xx = zero + x.x, xy = zero + x.y, xz = zero + x.z, mm = zero + m;
     const Vec3 dv = x - o;
