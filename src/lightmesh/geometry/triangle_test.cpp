@@ -117,3 +117,55 @@ TEST(Triangle, BadCases) {
 
 }  // namespace
 }  // namespace lm
+
+namespace lm {
+namespace {
+
+// TriangleBoxOverlap (the grid's rasterization) against what overlap means: a box that holds
+// a point of the triangle overlaps it; a box beyond one of the triangle's supporting
+// planes, or beyond its bounding box, does not.
+TEST(TriangleBox, AgreesWithPointsInsideAndSeparatingPlanes) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    int hits = 0, misses = 0;
+    for (int trial = 0; trial < 4000; ++trial) {
+        const Vec3 p0(u(rng), u(rng), u(rng)), p1(u(rng), u(rng), u(rng)), p2(u(rng), u(rng), u(rng));
+        const double h[3] = {0.05 + 0.2 * std::abs(u(rng)), 0.05 + 0.2 * std::abs(u(rng)), 0.05 + 0.2 * std::abs(u(rng))};
+        const TriangleBoxOverlap overlap(p0, p1, p2, h);
+        // A point of the triangle, and a box around it.
+        const float a = std::abs(u(rng)), b = std::abs(u(rng)) * (1 - a);
+        const Vec3 q = p0 + (p1 - p0) * a + (p2 - p0) * b;
+        const double inside[3] = {q.x + 0.9 * h[0] * u(rng), q.y + 0.9 * h[1] * u(rng), q.z + 0.9 * h[2] * u(rng)};
+        ASSERT_TRUE(overlap.Overlaps(inside)) << "trial " << trial;
+        ASSERT_TRUE(TriangleOverlapsBox(p0, p1, p2, inside, h));
+        ++hits;
+        // A box entirely on the far side of the triangle's plane.
+        const Vec3 n = Normalize(TriangleNormal(p0, p1, p2));
+        if (!(Length(TriangleNormal(p0, p1, p2)) > 1e-3f)) continue;
+        const double reach = std::abs(n.x) * h[0] + std::abs(n.y) * h[1] + std::abs(n.z) * h[2];
+        const double off = reach * 1.01 + 1e-3;
+        const double beyond[3] = {q.x + n.x * off, q.y + n.y * off, q.z + n.z * off};
+        ASSERT_FALSE(overlap.Overlaps(beyond)) << "trial " << trial;
+        // A box outside the bounding box along x.
+        const double right[3] = {std::max({p0.x, p1.x, p2.x}) + h[0] * 1.01, q.y, q.z};
+        ASSERT_FALSE(overlap.Overlaps(right));
+        misses += 2;
+    }
+    EXPECT_GT(hits, 3000);
+    EXPECT_GT(misses, 3000);
+}
+
+// A degenerate triangle (a segment) still overlaps the boxes it passes through and no others:
+// its zero edge axes are left out, the others still separate.
+TEST(TriangleBox, DegenerateTriangleIsASegment) {
+    const Vec3 a(0, 0, 0), b(1, 1, 0);
+    const double h[3] = {0.1, 0.1, 0.1};
+    const TriangleBoxOverlap segment(a, b, b, h);
+    const double onIt[3] = {0.5, 0.5, 0.0}, beside[3] = {0.5, 0.2, 0.0}, above[3] = {0.5, 0.5, 0.3};
+    EXPECT_TRUE(segment.Overlaps(onIt));
+    EXPECT_FALSE(segment.Overlaps(beside));
+    EXPECT_FALSE(segment.Overlaps(above));
+}
+
+}  // namespace
+}  // namespace lm
