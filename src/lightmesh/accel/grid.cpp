@@ -131,11 +131,11 @@ uint64_t FilterBlocks8(const NestedGridAccel::TriBlock* blocks, uint32_t count, 
 bool HasAvx2() { return false; }
 #endif
 
-// One leaf cell as the walk hands it to a query: its blocks, and the cell's exit along
-// the ray.
+// One leaf cell as the walk hands it to a query: its lanes in the blocks, and the cell's
+// exit along the ray.
 struct CellSpan {
-    const NestedGridAccel::TriBlock* blocks;
-    uint32_t count;  // triangles
+    const NestedGridAccel::TriBlock* blocks;  // all of them
+    uint32_t first, count;                    // the cell's lanes: first … first + count - 1
     NestedGridAccel::BlockFilter filter;
     float tCellExit;
 };
@@ -145,11 +145,15 @@ struct CellSpan {
 // true (then returns true).
 template <typename Test>
 [[gnu::always_inline]] inline bool ForEachHit(const CellSpan& c, const detail::PreparedRay& ray, Test&& test) {
-    for (uint32_t first = 0; first < c.count; first += 64) {
-        const uint32_t n = std::min<uint32_t>(64, c.count - first);
-        const NestedGridAccel::TriBlock* blocks = c.blocks + first / 8;
-        uint64_t mask = c.filter(blocks, (n + 7) / 8, ray);
-        if (n < 64) mask &= (uint64_t(1) << n) - 1;
+    // The blocks that hold the cell's lanes, up to 8 (64 lanes) per filter call; lanes of
+    // the neighbouring cells that share the first and last block are masked off.
+    const uint64_t begin = c.first, end = begin + c.count;
+    for (uint64_t b0 = begin / 8; b0 * 8 < end; b0 += 8) {
+        const uint64_t base = b0 * 8, stop = std::min(end, base + 64);
+        const NestedGridAccel::TriBlock* blocks = c.blocks + b0;
+        uint64_t mask = c.filter(blocks, static_cast<uint32_t>((stop - base + 7) / 8), ray);
+        const uint64_t lo = begin > base ? begin - base : 0, hi = stop - base;
+        mask &= (hi == 64 ? ~uint64_t(0) : (uint64_t(1) << hi) - 1) & ~((uint64_t(1) << lo) - 1);
         while (mask) {
             const uint32_t k = static_cast<uint32_t>(__builtin_ctzll(mask));
             mask &= mask - 1;
@@ -473,7 +477,7 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
     stats_ = Stats{};
     stats_.resolution = res;
     stats_.topCells = size_t(res[0]) * res[1] * res[2];
-    uint64_t blockCount = 0;
+    uint64_t laneCount = 0;  // the leaf cells' triangles one after another, 8 lanes per block
     for (size_t q = 0; q < queue.size(); ++q) {
         Builder::Level& level = *queue[q];
         Node node = level.node;
@@ -490,10 +494,10 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
                 queue.push_back(level.children[k].second.get());
                 ++k;
             } else if (const uint32_t n = level.start[c + 1] - level.start[c]; n > 0) {
-                ref = {uint32_t(blockCount), n};
-                blockCount += (n + 7) / 8;
-                if (blockCount >= kChildBit) ThrowError("the grid is too large (%llu triangle blocks)",
-                                                        static_cast<unsigned long long>(blockCount));
+                ref = {uint32_t(laneCount), n};
+                laneCount += n;
+                if (laneCount >= UINT32_MAX) ThrowError("the grid is too large (%llu triangle references)",
+                                                        static_cast<unsigned long long>(laneCount));
                 ++stats_.leafCells;
                 stats_.references += n;
                 stats_.maxPerCell = std::max<size_t>(stats_.maxPerCell, n);
@@ -513,23 +517,32 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
 
     ComputeEmptyReach();
 
-    // The blocks, node by node in parallel (each leaf cell writes its own, padding
-    // included: the storage is not cleared first, a pass over memory the size of the grid).
+    // The blocks, node by node in parallel (each leaf cell writes its own lanes; the storage
+    // is not cleared first, a pass over memory the size of the grid, so the last block's
+    // unused lanes are cleared here).
+    const uint64_t blockCount = (laneCount + 7) / 8;
     blockCount_ = blockCount;
     blocks_.reset(new TriBlock[blockCount]);
+    if (blockCount) {
+        TriBlock& last = blocks_[blockCount - 1];
+        for (uint64_t lane = laneCount % 8; lane != 0 && lane < 8; ++lane) {
+            for (int row = 0; row < 9; ++row) last.v[row][lane] = 0.0f;
+            last.id[lane] = 0;
+        }
+    }
     ForEachIndex(queue.size(), blockCount > 4096 ? 2 : SIZE_MAX, [&](size_t q) {
         const Builder::Level& level = *queue[q];
         const size_t cells = level.start.size() - 1;
         for (size_t c = 0; c < cells; ++c) {
             const CellRef& ref = cells_[nodes_[q].firstCell + c];
             if (ref.count == 0 || (ref.count & kChildBit)) continue;
-            const uint32_t padded = (ref.count + 7) / 8 * 8;
-            for (uint32_t i = 0; i < padded; ++i) {
-                const uint32_t id = i < ref.count ? level.prims[level.start[c] + i] : 0;
+            for (uint32_t i = 0; i < ref.count; ++i) {
+                const uint32_t id = level.prims[level.start[c] + i];
                 const float* v = Floats(tris_[id]);
-                TriBlock& block = blocks_[ref.first + i / 8];
-                for (int row = 0; row < 9; ++row) block.v[row][i % 8] = i < ref.count ? v[row] : 0.0f;
-                block.id[i % 8] = id;
+                const uint64_t lane = uint64_t(ref.first) + i;
+                TriBlock& block = blocks_[lane / 8];
+                for (int row = 0; row < 9; ++row) block.v[row][lane % 8] = v[row];
+                block.id[lane % 8] = id;
             }
         }
     });
@@ -610,7 +623,7 @@ AccelFigures NestedGridAccel::Figures() const {
          StringPrintf("%zu, depth reached %d of %d", s.subGrids, s.depth, options_.gridMaxDepth)},
         {"grid bytes", StringPrintf("%zu (%.1f per triangle)", s.bytes, double(s.bytes) / tris)},
         {"grid build ms", StringPrintf("%.1f", s.buildMs)},
-        {"grid triangle tests", StringPrintf("%d at a time (%s), %zu blocks of 8 (%.0f%% full)", simdWidth_, simdWidth_ == 8 ? "AVX2" : "SSE", blockCount_, 100.0 * double(s.references) / double(std::max<size_t>(blockCount_ * 8, 1)))},
+        {"grid triangle tests", StringPrintf("%d at a time (%s), %zu blocks of 8", simdWidth_, simdWidth_ == 8 ? "AVX2" : "SSE", blockCount_)},
     };
 }
 
@@ -666,7 +679,7 @@ bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD,
             if (ref.count & kChildBit) {
                 if (Walk(ref.count & ~kChildBit, ray, invD, tCell, tCellExit, query)) return true;
             } else {
-                const CellSpan span{blocks_.get() + ref.first, ref.count, filter_, tCellExit};
+                const CellSpan span{blocks_.get(), ref.first, ref.count, filter_, tCellExit};
                 if (query.Cell(span)) return true;
             }
         } else if (empty && empty[idx] > 1) {

@@ -104,8 +104,10 @@ class NestedGridAccel final : public Accelerator {
         float v[9][8];
         uint32_t id[8];
     };
-    /// A cell of any level: a leaf's `count` triangles in blocks_[first ...], or (count
-    /// with kChildBit) the sub-grid node count & ~kChildBit; count 0 when empty.
+    /// A cell of any level: a leaf's `count` triangles in lanes first … first + count - 1 of
+    /// blocks_ (lane L is lane L % 8 of block L / 8: cells share blocks, so every block is
+    /// full), or (count with kChildBit) the sub-grid node count & ~kChildBit; count 0 when
+    /// empty.
     struct CellRef {
         uint32_t first;
         uint32_t count;
@@ -129,8 +131,7 @@ class NestedGridAccel final : public Accelerator {
     std::vector<Node> nodes_;  // [0] is the top level
     std::vector<CellRef> cells_;       // all cells of all nodes, node by node
     std::vector<uint64_t> occupied_;   // one bit per cell: not empty
-    // The leaf cells' triangles in blocks of 8 (each cell's in id order, its last block
-    // padded), cell after cell.
+    // The leaf cells' triangles, each cell's in id order, cell after cell, 8 lanes per block.
     std::unique_ptr<TriBlock[]> blocks_;
     size_t blockCount_ = 0;
     // Per top-level cell: how many cells around it are empty (ComputeEmptyReach).
