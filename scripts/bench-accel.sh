@@ -2,7 +2,9 @@
 # bench-accel.sh -- bench_accel on every scene of issue 12: the builtin gazebo, the teapot in
 # a stadium, the two Scopia trees (scripts/fetch-bench-mesh.sh) and the castle and garden
 # scene files (scripts/fetch-scenes.sh); scenes whose files are not fetched are left out with
-# a note. REPEAT (default 5) repetitions, medians; extra arguments go to bench_accel.
+# a note. REPEAT (default 5) repetitions, medians, the repetitions of all rows interleaved
+# at random (a shared machine's load changes then hit every row alike); extra arguments go
+# to bench_accel.
 #
 #   scripts/bench-accel.sh [bench_accel flags]      e.g. --benchmark_filter=/1t
 set -eu
@@ -19,4 +21,5 @@ for scene in castle garden; do
     fi
 done
 exec "$bin" ${files:+--scene-file=$files} --benchmark_repetitions="${REPEAT:-5}" \
+    --benchmark_enable_random_interleaving=true \
     --benchmark_report_aggregates_only=true "$@"
