@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # The whole test suite -- the README's test command, and what CI runs (.ci/run):
 #   1. the Release build (scripts/build.sh) and every test;
+#   1b. the build without MPI (core and executable only, in build-nompi): it must build,
+#      and say how to get the MPI build when started by mpirun with several processes;
 #   2. the asan preset (CMakePresets.json): every test under AddressSanitizer +
 #      UndefinedBehaviorSanitizer, built with clang into build-asan (with the fuzz targets);
 #   3. the tsan preset: the multithreaded tests (renderer, light mesh, back-ends, CLI
@@ -26,6 +28,19 @@ scripts/build.sh
 # -LE real: the real scenes' checks need downloads; scripts/test-real-scenes.sh runs them.
 (cd build && ctest --output-on-failure -LE real -j"$jobs" "${args[@]}")
 [ "$quick" = 1 ] && exit 0
+
+step "build without MPI"
+cmake -S . -B build-nompi -G Ninja -DCMAKE_BUILD_TYPE=Release -DLIGHTMESH_ENABLE_MPI=OFF \
+  -DLIGHTMESH_BUILD_TESTS=OFF -DLIGHTMESH_BUILD_BENCHMARKS=OFF >/dev/null
+cmake --build build-nompi --target lightmesh -j "$jobs"
+if message="$(OMPI_COMM_WORLD_SIZE=2 OMPI_COMM_WORLD_RANK=0 build-nompi/apps/lightmesh render builtin:gazebo \
+               -o build-nompi/never.png 2>&1 >/dev/null)"; then
+  echo "test.sh: the build without MPI rendered under a 2-process launcher" >&2
+  exit 1
+fi
+grep -q "built without MPI: install OpenMPI" <<<"$message" ||
+  { echo "test.sh: unexpected message from the build without MPI: $message" >&2; exit 1; }
+[ ! -e build-nompi/never.png ] || { echo "test.sh: the build without MPI wrote an image" >&2; exit 1; }
 
 for preset in asan tsan; do
   step "$preset build"

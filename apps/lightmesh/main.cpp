@@ -15,6 +15,7 @@
 
 #include "lightmesh/accel/accelerator.h"
 #include "lightmesh/distributed/launch.h"
+#include "lightmesh/distributed/rank_report.h"
 #ifdef LIGHTMESH_HAS_MPI
 #include "lightmesh/distributed/mpi_render.h"
 #endif

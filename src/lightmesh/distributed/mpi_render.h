@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "lightmesh/distributed/rank_report.h"
 #include "lightmesh/render/whitted.h"
 
 namespace lm {
@@ -39,17 +40,6 @@ class MpiSession {
 
   private:
     int rank_ = 0, size_ = 1;
-};
-
-/// One rank's share of a distributed render (--stats prints one line per rank).
-struct RankReport {
-    int rank = 0;
-    int tiles = 0;
-    int batches = 0;
-    double seconds = 0;       ///< the rank's render loop, wall clock
-    double fetchSeconds = 0;  ///< of which waiting for the counter (MPI_Fetch_and_op)
-    RenderCounters counters;
-    uint64_t nodesEvaluated = 0;  ///< light-mesh nodes this rank evaluated
 };
 
 struct DistributedRender {
