@@ -758,17 +758,16 @@ int main(int argc, char** argv) {
     const int worldSize = lm::LauncherWorldSize(), worldRank = lm::LauncherWorldRank();
     if (lm::LaunchedByMpi() && renderCmd->parsed()) {
 #ifdef LIGHTMESH_HAS_MPI
-        std::unique_ptr<tbb::global_control> limit;
-        if (render.common.threads > 0)
-            limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                          static_cast<size_t>(render.common.threads));
         std::unique_ptr<lm::MpiSession> session;
+        int threads = render.common.threads;
         try {
             session = std::make_unique<lm::MpiSession>(&argc, &argv);
+            if (threads == 0) threads = session->DefaultThreads();
         } catch (...) {
             std::fprintf(stderr, "lightmesh: error: %s\n", CurrentErrorLine().c_str());
             return 1;
         }
+        const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
         return Guarded([&] { return RunRenderMpi(render, *session); });
 #else
         if (worldSize > 1) {

@@ -3,6 +3,7 @@
 #include "lightmesh/distributed/mpi_render.h"
 
 #include <mpi.h>
+#include <sched.h>
 
 #include <algorithm>
 #include <chrono>
@@ -109,6 +110,28 @@ bool MpiSession::AllSucceeded(const std::string& myError, std::string* message, 
         Check(MPI_Recv(message->data(), length, MPI_CHAR, first, 1, MPI_COMM_WORLD, MPI_STATUS_IGNORE), "MPI_Recv");
     }
     return false;
+}
+
+int MpiSession::DefaultThreads() const {
+    cpu_set_t mine;
+    CPU_ZERO(&mine);
+    if (sched_getaffinity(0, sizeof(mine), &mine) != 0) return 1;
+    MPI_Comm node;
+    Check(MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank_, MPI_INFO_NULL, &node),
+          "MPI_Comm_split_type");
+    int nodeSize = 1;
+    MPI_Comm_size(node, &nodeSize);
+    std::vector<cpu_set_t> masks(static_cast<size_t>(nodeSize));
+    const int code = MPI_Allgather(&mine, sizeof(cpu_set_t), MPI_BYTE, masks.data(), sizeof(cpu_set_t), MPI_BYTE, node);
+    MPI_Comm_free(&node);
+    Check(code, "MPI_Allgather");
+    int sharers = 0;
+    for (cpu_set_t& other : masks) {
+        cpu_set_t both;
+        CPU_AND(&both, &mine, &other);
+        if (CPU_COUNT(&both) > 0) ++sharers;
+    }
+    return std::max(1, CPU_COUNT(&mine) / std::max(1, sharers));
 }
 
 DistributedRender RenderDistributed(const MpiSession& session, const WhittedRenderer& renderer,

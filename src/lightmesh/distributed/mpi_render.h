@@ -38,6 +38,12 @@ class MpiSession {
     /// and, on rank 0, *message is its message.
     bool AllSucceeded(const std::string& myError, std::string* message, int* failedRank) const;
 
+    /// Collective: the threads this rank should use when --threads is not given: the CPUs
+    /// it may run on (its affinity mask) shared among the ranks of this machine whose masks
+    /// overlap it (at least 1). mpirun's default binding gives each of up to two ranks its
+    /// own core (1 thread each); with --bind-to none, N ranks on C cores get C / N each.
+    int DefaultThreads() const;
+
   private:
     int rank_ = 0, size_ = 1;
 };
