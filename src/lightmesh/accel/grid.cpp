@@ -19,7 +19,6 @@
 namespace lm {
 namespace {
 
-
 static_assert(sizeof(NestedGridAccel::Tri) == 9 * sizeof(float), "Tri must be 9 packed floats");
 inline const float* Floats(const NestedGridAccel::Tri& t) { return &t.p0.x; }
 
@@ -425,23 +424,23 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
         ThrowError("the grid holds at most %u triangles, the scene has %zu", kChildBit - 1,
                    mesh.triangles.size());
 
-    std::vector<Tri> tris_(mesh.triangles.size());  // by primitive id, for the build only
-    for (size_t i = 0; i < tris_.size(); ++i)
-        tris_[i] = Tri{mesh.Vertex(uint32_t(i), 0), mesh.Vertex(uint32_t(i), 1),
+    std::vector<Tri> tris(mesh.triangles.size());  // by primitive id, for the build only
+    for (size_t i = 0; i < tris.size(); ++i)
+        tris[i] = Tri{mesh.Vertex(uint32_t(i), 0), mesh.Vertex(uint32_t(i), 1),
                        mesh.Vertex(uint32_t(i), 2)};
 
     // The box of the triangles (not of stray vertices). Triangles with a non-finite vertex
     // are left out: they would make the box infinite, and IntersectTriangle never reports
     // them (every comparison with NaN fails).
     std::vector<uint32_t> ids;
-    ids.reserve(tris_.size());
+    ids.reserve(tris.size());
     Bounds3 b;
-    for (uint32_t i = 0; i < tris_.size(); ++i) {
-        if (!IsFiniteTri(tris_[i])) continue;
+    for (uint32_t i = 0; i < tris.size(); ++i) {
+        if (!IsFiniteTri(tris[i])) continue;
         ids.push_back(i);
-        b.Extend(tris_[i].p0);
-        b.Extend(tris_[i].p1);
-        b.Extend(tris_[i].p2);
+        b.Extend(tris[i].p0);
+        b.Extend(tris[i].p1);
+        b.Extend(tris[i].p2);
     }
     if (b.IsEmpty()) b = Bounds3(Vec3(-1), Vec3(1));
     // A flat scene (a single plane) has a zero-thickness box: give every axis at least 1e-3
@@ -465,7 +464,7 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
     box_ = b;
 
     epsAbs_ = 2e-7f * extent + 2.5e-7f * maxAbs;
-    Builder builder{tris_, options_, double(epsAbs_)};
+    Builder builder{tris, options_, double(epsAbs_)};
     Builder::Level top;
     const auto res = AutoResolution(ids.size(), box_, options_.gridResolution);
     top.node = Builder::MakeNode(box_.lo, box_.hi, res);
@@ -538,7 +537,7 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
             if (ref.count == 0 || (ref.count & kChildBit)) continue;
             for (uint32_t i = 0; i < ref.count; ++i) {
                 const uint32_t id = level.prims[level.start[c] + i];
-                const float* v = Floats(tris_[id]);
+                const float* v = Floats(tris[id]);
                 const uint64_t lane = uint64_t(ref.first) + i;
                 TriBlock& block = blocks_[lane / 8];
                 for (int row = 0; row < 9; ++row) block.v[row][lane % 8] = v[row];
@@ -551,7 +550,6 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
 
     stats_.bytes = nodes_.size() * sizeof(Node) + cells_.size() * sizeof(CellRef) +
                    occupied_.size() * sizeof(uint64_t) + blockCount_ * sizeof(TriBlock) + emptyReach_.size();
-    stats_.triangles = tris_.size();
     stats_.buildMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - startTime)
             .count();
@@ -608,7 +606,7 @@ void NestedGridAccel::ComputeEmptyReach() {
 AccelFigures NestedGridAccel::Figures() const {
     const Stats& s = stats_;
     const double nonEmpty = double(std::max<size_t>(s.leafCells, 1));
-    const double tris = double(std::max<size_t>(s.triangles, 1));
+    const double tris = double(std::max<size_t>(mesh_.triangles.size(), 1));
     return {
         {"grid resolution",
          StringPrintf("%d x %d x %d", s.resolution[0], s.resolution[1], s.resolution[2])},

@@ -79,7 +79,6 @@ class NestedGridAccel final : public Accelerator {
         size_t subGrids = 0;              ///< grids below the top level
         int depth = 1;                    ///< levels reached, top included
         size_t bytes = 0;                 ///< memory of the structure, triangles included
-        size_t triangles = 0;             ///< of the mesh
         double buildMs = 0;               ///< wall-clock build time
     };
     const Stats& GetStats() const { return stats_; }
@@ -93,7 +92,7 @@ class NestedGridAccel final : public Accelerator {
         int res[3];
         uint32_t firstCell;
     };
-    /// A triangle's vertices, copied in primitive order so a test needs no index lookup.
+    /// A triangle's vertices, copied in primitive order while the grid is built.
     struct Tri {
         Vec3 p0, p1, p2;
     };
@@ -113,8 +112,9 @@ class NestedGridAccel final : public Accelerator {
         uint32_t count;
     };
     static constexpr uint32_t kChildBit = 0x80000000u;
-    /// Tests `count` (≤ 8) blocks against a prepared ray: bit 8·b + lane is set unless the
-    /// watertight test certainly rejects that triangle (the same arithmetic, lane by lane).
+    /// Tests `count` (≤ 8) blocks against a prepared ray: bit 8·b + lane is set where the
+    /// watertight test hits that triangle (the same arithmetic, lane by lane), and wherever
+    /// an edge function is exactly zero (the tie-breaks, left to the scalar test).
     using BlockFilter = uint64_t (*)(const TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray);
 
   private:
