@@ -47,36 +47,13 @@ std::string Count(uint64_t n) {
     return s;
 }
 
-/// The message of the exception being handled, as one line: the project's errors as they
-/// are, allocation failures and file-system errors with what failed. Call inside a catch.
-std::string CurrentErrorLine() {
-    try {
-        throw;
-    } catch (const lm::Error& e) {
-        return e.what();
-    } catch (const std::bad_alloc&) {
-        const uint64_t budget = lm::PhysicalMemoryBytes();
-        return lm::StringPrintf("out of memory: an allocation failed (peak %s; this machine's budget %s, "
-                                "LIGHTMESH_MEMORY_LIMIT lowers it)",
-                                lm::FormatBytes(lm::PeakMemoryBytes()).c_str(),
-                                budget ? lm::FormatBytes(budget).c_str() : "unknown");
-    } catch (const std::filesystem::filesystem_error& e) {
-        std::string what = e.code().message();
-        return lm::Printable(e.path1().string()) + ": " + lm::Printable(what);
-    } catch (const std::exception& e) {
-        return lm::Printable(e.what());
-    } catch (...) {
-        return "unknown failure";
-    }
-}
-
 /// Runs a command so that every exception becomes one line and exit code 1.
 template <typename F>
 int Guarded(F&& run) {
     try {
         return run();
     } catch (...) {
-        std::fprintf(stderr, "lightmesh: error: %s\n", CurrentErrorLine().c_str());
+        std::fprintf(stderr, "lightmesh: error: %s\n", lm::CurrentExceptionLine().c_str());
     }
     return 1;
 }
@@ -323,7 +300,7 @@ int RunRenderMpi(const RenderCommand& cmd, const lm::MpiSession& session) {
     try {
         p = PrepareRender(cmd);
     } catch (...) {
-        error = CurrentErrorLine();
+        error = lm::CurrentExceptionLine();
     }
     if (!session.AllSucceeded(error, &message, &failedRank)) return fail(message, failedRank);
     // mpirun binds each of up to two ranks to one core by default: more threads than the
@@ -764,7 +741,7 @@ int main(int argc, char** argv) {
             session = std::make_unique<lm::MpiSession>(&argc, &argv);
             if (threads == 0) threads = session->DefaultThreads();
         } catch (...) {
-            std::fprintf(stderr, "lightmesh: error: %s\n", CurrentErrorLine().c_str());
+            std::fprintf(stderr, "lightmesh: error: %s\n", lm::CurrentExceptionLine().c_str());
             return 1;
         }
         const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));

@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <new>
 #include <string_view>
 
 #include "lightmesh/util/error.h"
@@ -243,6 +244,25 @@ uint64_t ParseByteCount(const std::string& text) {
     else if (!unit.empty()) return 0;
     const double bytes = v * scale;
     return bytes < 1.8e19 ? static_cast<uint64_t>(bytes) : 0;
+}
+
+std::string CurrentExceptionLine() {
+    try {
+        throw;
+    } catch (const Error& e) {
+        return e.what();
+    } catch (const std::bad_alloc&) {
+        const uint64_t budget = PhysicalMemoryBytes();
+        return StringPrintf("out of memory: an allocation failed (peak %s; this machine's budget %s, "
+                            "LIGHTMESH_MEMORY_LIMIT lowers it)",
+                            FormatBytes(PeakMemoryBytes()).c_str(), budget ? FormatBytes(budget).c_str() : "unknown");
+    } catch (const std::filesystem::filesystem_error& e) {
+        return Printable(e.path1().string()) + ": " + Printable(e.code().message());
+    } catch (const std::exception& e) {
+        return Printable(e.what());
+    } catch (...) {
+        return "unknown failure";
+    }
 }
 
 int AffinityCpuCount() {

@@ -51,6 +51,11 @@ uint64_t PeakMemoryBytes();
 /// smaller. Light meshes and images that would need more than half are refused up front.
 uint64_t PhysicalMemoryBytes();
 
+/// The message of the exception being handled, as one line: the project's errors as they
+/// are, allocation failures with the peak and the budget, file-system errors with the path.
+/// Call inside a catch block; every command (and every MPI rank) words its failure so.
+std::string CurrentExceptionLine();
+
 /// The CPUs this process may run on (its affinity mask); 0 if unknown.
 int AffinityCpuCount();
 
