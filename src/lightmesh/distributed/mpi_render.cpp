@@ -10,12 +10,14 @@
 #include <csignal>
 #include <cstdint>
 #include <cstdlib>
+#include <cstdio>
 #include <cstring>
 #include <exception>
 #include <new>
 
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/parallel.h"
+#include "lightmesh/util/system.h"
 
 namespace lm {
 namespace {
@@ -41,21 +43,6 @@ void Check(int code, const char* what) {
 bool RankIs(const char* variable, int rank) {
     const char* v = std::getenv(variable);
     return v && *v && std::atoi(v) == rank;
-}
-
-// The error line of the exception being handled (as main's catch ladder words it).
-std::string CurrentErrorMessage() {
-    try {
-        throw;
-    } catch (const Error& e) {
-        return e.what();
-    } catch (const std::bad_alloc&) {
-        return "out of memory: an allocation failed while rendering";
-    } catch (const std::exception& e) {
-        return e.what();
-    } catch (...) {
-        return "unknown failure while rendering";
-    }
 }
 
 // The tiles in Z order (Morton: the bits of tx and ty interleaved), so that a batch of
@@ -115,7 +102,10 @@ bool MpiSession::AllSucceeded(const std::string& myError, std::string* message, 
 int MpiSession::DefaultThreads() const {
     cpu_set_t mine;
     CPU_ZERO(&mine);
-    if (sched_getaffinity(0, sizeof(mine), &mine) != 0) return 1;
+    // A rank that cannot read its mask still takes part in the collectives below (an
+    // empty mask: it shares with nobody and gets 1 thread), so no other rank waits for it.
+    const bool known = sched_getaffinity(0, sizeof(mine), &mine) == 0;
+    if (!known) CPU_ZERO(&mine);
     MPI_Comm node;
     Check(MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank_, MPI_INFO_NULL, &node),
           "MPI_Comm_split_type");
@@ -131,7 +121,100 @@ int MpiSession::DefaultThreads() const {
         CPU_AND(&both, &mine, &other);
         if (CPU_COUNT(&both) > 0) ++sharers;
     }
-    return std::max(1, CPU_COUNT(&mine) / std::max(1, sharers));
+    return known ? std::max(1, CPU_COUNT(&mine) / std::max(1, sharers)) : 1;
+}
+
+// Rank 0 collects every rank's figures and the tiles the others rendered into its own
+// image (its tiles are there already): their indices, then their pixels, each tile's rows
+// clipped to the image, in the order the rank rendered them.
+static void GatherOnRankZero(int rank, int size, int tilesX, const RankReport& report, const std::vector<int>& mine,
+                             Image* image, DistributedRender* out) {
+    constexpr int T = WhittedRenderer::kTileSize;
+    const int width = image->width, height = image->height;
+    uint64_t words[kReportWords];
+    words[0] = static_cast<uint64_t>(report.tiles);
+    words[1] = static_cast<uint64_t>(report.batches);
+    static_assert(sizeof(double) == sizeof(uint64_t));
+    std::memcpy(&words[2], &report.seconds, sizeof(double));
+    std::memcpy(&words[3], &report.fetchSeconds, sizeof(double));
+    words[4] = report.nodesEvaluated;
+    std::memcpy(&words[5], &report.counters, sizeof(RenderCounters));
+    std::vector<uint64_t> all(rank == 0 ? static_cast<size_t>(kReportWords) * size : 0);
+    Check(MPI_Gather(words, kReportWords, MPI_UINT64_T, all.data(), kReportWords, MPI_UINT64_T, 0, MPI_COMM_WORLD),
+          "MPI_Gather");
+
+    auto tileBox = [&](int t, int* x0, int* y0, int* w, int* h) {
+        *x0 = (t % tilesX) * T;
+        *y0 = (t / tilesX) * T;
+        *w = std::min(T, width - *x0);
+        *h = std::min(T, height - *y0);
+    };
+    std::vector<float> pixels;
+    if (rank != 0) {
+        pixels.reserve(mine.size() * T * T * 3);
+        for (int t : mine) {
+            int x0, y0, w, h;
+            tileBox(t, &x0, &y0, &w, &h);
+            for (int y = y0; y < y0 + h; ++y)
+                for (int x = x0; x < x0 + w; ++x) {
+                    const Color& c = image->At(x, y);
+                    pixels.insert(pixels.end(), {c.r, c.g, c.b});
+                }
+        }
+    }
+    const int myTiles = rank == 0 ? 0 : static_cast<int>(mine.size()), myFloats = static_cast<int>(pixels.size());
+    std::vector<int> tileCounts(rank == 0 ? size : 0), floatCounts(rank == 0 ? size : 0);
+    Check(MPI_Gather(&myTiles, 1, MPI_INT, tileCounts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Gather");
+    Check(MPI_Gather(&myFloats, 1, MPI_INT, floatCounts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Gather");
+    std::vector<int> tileOffsets(rank == 0 ? size : 0), floatOffsets(rank == 0 ? size : 0);
+    std::vector<int> allTiles;
+    std::vector<float> allPixels;
+    if (rank == 0) {
+        int64_t nt = 0, nf = 0;
+        for (int r = 0; r < size; ++r) {
+            tileOffsets[r] = static_cast<int>(nt);
+            floatOffsets[r] = static_cast<int>(nf);
+            nt += tileCounts[r];
+            nf += floatCounts[r];
+        }
+        if (nf > INT32_MAX) ThrowError("the other ranks' pixels (%lld floats) exceed one MPI message", static_cast<long long>(nf));
+        allTiles.resize(static_cast<size_t>(nt));
+        allPixels.resize(static_cast<size_t>(nf));
+    }
+    Check(MPI_Gatherv(mine.data(), myTiles, MPI_INT, allTiles.data(), tileCounts.data(), tileOffsets.data(), MPI_INT, 0,
+                      MPI_COMM_WORLD),
+          "MPI_Gatherv");
+    Check(MPI_Gatherv(pixels.data(), myFloats, MPI_FLOAT, allPixels.data(), floatCounts.data(), floatOffsets.data(),
+                      MPI_FLOAT, 0, MPI_COMM_WORLD),
+          "MPI_Gatherv");
+    if (rank != 0) return;
+
+    size_t f = 0;
+    for (int t : allTiles) {
+        int x0, y0, w, h;
+        tileBox(t, &x0, &y0, &w, &h);
+        for (int y = y0; y < y0 + h; ++y)
+            for (int x = x0; x < x0 + w; ++x, f += 3) image->At(x, y) = Color(allPixels[f], allPixels[f + 1], allPixels[f + 2]);
+    }
+    int64_t rendered = 0;
+    for (int r = 0; r < size; ++r) {
+        const uint64_t* w = &all[static_cast<size_t>(r) * kReportWords];
+        RankReport rr;
+        rr.rank = r;
+        rr.tiles = static_cast<int>(w[0]);
+        rr.batches = static_cast<int>(w[1]);
+        std::memcpy(&rr.seconds, &w[2], sizeof(double));
+        std::memcpy(&rr.fetchSeconds, &w[3], sizeof(double));
+        rr.nodesEvaluated = w[4];
+        std::memcpy(static_cast<void*>(&rr.counters), &w[5], sizeof(RenderCounters));
+        rendered += rr.tiles;
+        out->result.counters += rr.counters;
+        out->ranks.push_back(rr);
+    }
+    if (rendered != int64_t(tilesX) * ((height + T - 1) / T))
+        ThrowError("the ranks rendered %lld tiles, the image has %lld", static_cast<long long>(rendered),
+                   static_cast<long long>(int64_t(tilesX) * ((height + T - 1) / T)));
+    out->result.image = std::move(*image);
 }
 
 DistributedRender RenderDistributed(const MpiSession& session, const WhittedRenderer& renderer,
@@ -140,7 +223,6 @@ DistributedRender RenderDistributed(const MpiSession& session, const WhittedRend
     const int rank = session.Rank(), size = session.Size();
     const int64_t tiles = renderer.TileCount();
     const int tilesX = renderer.TilesX();
-    constexpr int T = WhittedRenderer::kTileSize;
 
     // The counter of tiles handed out (in TilesInZOrder's order), on rank 0, advanced by
     // every rank.
@@ -199,8 +281,7 @@ DistributedRender RenderDistributed(const MpiSession& session, const WhittedRend
             if (RankIs("LIGHTMESH_MPI_TEST_FAIL_RANK", rank)) throw std::bad_alloc();
         }
     } catch (...) {
-        error = CurrentErrorMessage();
-        if (error.empty()) error = "unknown failure while rendering";
+        error = CurrentExceptionLine();
     }
     report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     report.tiles = static_cast<int>(mine.size());
@@ -218,88 +299,16 @@ DistributedRender RenderDistributed(const MpiSession& session, const WhittedRend
         return out;
     }
 
-    // The figures of every rank.
-    uint64_t words[kReportWords];
-    words[0] = static_cast<uint64_t>(report.tiles);
-    words[1] = static_cast<uint64_t>(report.batches);
-    static_assert(sizeof(double) == sizeof(uint64_t));
-    std::memcpy(&words[2], &report.seconds, sizeof(double));
-    std::memcpy(&words[3], &report.fetchSeconds, sizeof(double));
-    words[4] = report.nodesEvaluated;
-    std::memcpy(&words[5], &report.counters, sizeof(RenderCounters));
-    std::vector<uint64_t> all(rank == 0 ? static_cast<size_t>(kReportWords) * size : 0);
-    Check(MPI_Gather(words, kReportWords, MPI_UINT64_T, all.data(), kReportWords, MPI_UINT64_T, 0, MPI_COMM_WORLD),
-          "MPI_Gather");
-
-    // The tiles: their indices, then their pixels (each tile's rows, clipped to the image),
-    // in the order the rank rendered them.
-    auto tileBox = [&](int t, int* x0, int* y0, int* w, int* h) {
-        *x0 = (t % tilesX) * T;
-        *y0 = (t / tilesX) * T;
-        *w = std::min(T, width - *x0);
-        *h = std::min(T, height - *y0);
-    };
-    std::vector<float> pixels;
-    pixels.reserve(mine.size() * T * T * 3);
-    for (int t : mine) {
-        int x0, y0, w, h;
-        tileBox(t, &x0, &y0, &w, &h);
-        for (int y = y0; y < y0 + h; ++y)
-            for (int x = x0; x < x0 + w; ++x) {
-                const Color& c = image.At(x, y);
-                pixels.insert(pixels.end(), {c.r, c.g, c.b});
-            }
+    // The gathers. A failure here (out of memory on rank 0, an MPI error) would leave the
+    // other ranks waiting in a collective, so it ends the whole job at once.
+    try {
+        GatherOnRankZero(rank, size, tilesX, report, mine, &image, &out);
+    } catch (...) {
+        std::fprintf(stderr, "lightmesh: error: %s (rank %d of %d, gathering the image)\n",
+                     CurrentExceptionLine().c_str(), rank, size);
+        MPI_Abort(MPI_COMM_WORLD, 1);
     }
-    const int myTiles = static_cast<int>(mine.size()), myFloats = static_cast<int>(pixels.size());
-    std::vector<int> tileCounts(rank == 0 ? size : 0), floatCounts(rank == 0 ? size : 0);
-    Check(MPI_Gather(&myTiles, 1, MPI_INT, tileCounts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Gather");
-    Check(MPI_Gather(&myFloats, 1, MPI_INT, floatCounts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Gather");
-    std::vector<int> tileOffsets(rank == 0 ? size : 0), floatOffsets(rank == 0 ? size : 0);
-    std::vector<int> allTiles;
-    std::vector<float> allPixels;
-    if (rank == 0) {
-        int64_t nt = 0, nf = 0;
-        for (int r = 0; r < size; ++r) {
-            tileOffsets[r] = static_cast<int>(nt);
-            floatOffsets[r] = static_cast<int>(nf);
-            nt += tileCounts[r];
-            nf += floatCounts[r];
-        }
-        if (nt != tiles || nf > INT32_MAX) ThrowError("MPI: ranks returned %lld of %lld tiles", static_cast<long long>(nt),
-                                                      static_cast<long long>(tiles));
-        allTiles.resize(static_cast<size_t>(nt));
-        allPixels.resize(static_cast<size_t>(nf));
-    }
-    Check(MPI_Gatherv(mine.data(), myTiles, MPI_INT, allTiles.data(), tileCounts.data(), tileOffsets.data(), MPI_INT, 0,
-                      MPI_COMM_WORLD),
-          "MPI_Gatherv");
-    Check(MPI_Gatherv(pixels.data(), myFloats, MPI_FLOAT, allPixels.data(), floatCounts.data(), floatOffsets.data(),
-                      MPI_FLOAT, 0, MPI_COMM_WORLD),
-          "MPI_Gatherv");
     out.result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (rank != 0) return out;
-
-    out.result.image = Image(width, height);
-    size_t f = 0;
-    for (int t : allTiles) {
-        int x0, y0, w, h;
-        tileBox(t, &x0, &y0, &w, &h);
-        for (int y = y0; y < y0 + h; ++y)
-            for (int x = x0; x < x0 + w; ++x, f += 3) out.result.image.At(x, y) = Color(allPixels[f], allPixels[f + 1], allPixels[f + 2]);
-    }
-    for (int r = 0; r < size; ++r) {
-        const uint64_t* w = &all[static_cast<size_t>(r) * kReportWords];
-        RankReport rr;
-        rr.rank = r;
-        rr.tiles = static_cast<int>(w[0]);
-        rr.batches = static_cast<int>(w[1]);
-        std::memcpy(&rr.seconds, &w[2], sizeof(double));
-        std::memcpy(&rr.fetchSeconds, &w[3], sizeof(double));
-        rr.nodesEvaluated = w[4];
-        std::memcpy(static_cast<void*>(&rr.counters), &w[5], sizeof(RenderCounters));
-        out.result.counters += rr.counters;
-        out.ranks.push_back(rr);
-    }
     return out;
 }
 
