@@ -8,7 +8,7 @@
 //   e.g. bench_accel --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 //   scripts/bench-accel.sh runs every scene below, the real ones included.
 //
-// Scenes (--scene, default all that are available):
+// Scenes (--scene, default all that are available; "none": only the --scene-file ones):
 //  - "gazebo": builtin:gazebo, a few thousand triangles;
 //  - "stadium": "a teapot in a stadium", a 196,608-triangle sphere on a ground slab three
 //    times its width (procedural, always there);
@@ -383,6 +383,12 @@ int main(int argc, char** argv) {
 
     std::vector<std::unique_ptr<BenchScene>> scenes;
     const std::vector<std::string> wanted = Split(sceneFlag, ',');
+    for (const std::string& w : wanted)
+        if (w != "gazebo" && w != "stadium" && w != "trees" && w != "none") {
+            std::fprintf(stderr, "bench_accel: --scene: unknown scene '%s' (gazebo, stadium, trees, or none with "
+                                 "--scene-file)\n", w.c_str());
+            return 1;
+        }
     auto want = [&](const char* name) {
         return wanted.empty() || std::find(wanted.begin(), wanted.end(), name) != wanted.end();
     };
