@@ -54,9 +54,19 @@ for t in "${targets[@]}"; do
   fi
   echo "fuzz: $t for $seconds s" >&2
   log="$(mktemp)"
-  if ! ASAN_OPTIONS="$asan" "$build/fuzz/$t" "$work" "$seeds" "${extra[@]}" -max_total_time="$seconds" \
+  code=0
+  ASAN_OPTIONS="$asan" "$build/fuzz/$t" "$work" "$seeds" "${extra[@]}" -max_total_time="$seconds" \
       -max_len="$max_len" -timeout=10 -rss_limit_mb=2048 \
-      -artifact_prefix="$prefix" -print_final_stats=1 >"$log" 2>&1; then
+      -artifact_prefix="$prefix" -print_final_stats=1 >"$log" 2>&1 || code=$?
+  # In fork mode libFuzzer (14) exits with the code of the last job that ended, even an
+  # ignored timeout or crash ("INFO: exiting: 70"): a run that reached its time limit is
+  # judged by the triage of its findings below, not by that code.
+  if [ "$code" -ne 0 ] && [ "$t" = fuzz_mesh_import ] &&
+      grep -qE "^INFO: fuzzed for [0-9]+ seconds, wrapping up soon" "$log"; then
+    echo "fuzz: $t: fork mode ended with code $code after its time limit (the last job's); findings triaged below" >&2
+    code=0
+  fi
+  if [ "$code" -ne 0 ]; then
     status=1
     echo "fuzz: $t FAILED; the input is in $prefix -- last lines of its log:" >&2
     tail -n 40 "$log" >&2
