@@ -26,6 +26,10 @@ struct LightMeshOptions {
     /// (consensus) only, so the paper's variants run the paper's algorithms; "on" also for
     /// none (Нет) and inside (СТ); "off" nowhere.
     std::string cellSummaries = "auto";
+    /// Lanes of the vectorised loops (the templates' front test, the segment culling), for
+    /// tests: 1 the scalar front test (the oracle of the others), 4 SSE, 8 AVX2 where the
+    /// processor has it; 0 the widest available.
+    int simdWidth = 0;
 };
 
 /// Settings of the area-light reference ("--shadows area", issue 7): every point light

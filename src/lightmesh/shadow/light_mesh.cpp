@@ -4,6 +4,7 @@
 #include <array>
 #include <atomic>
 #include <cstdlib>
+#include <limits>
 #include <mutex>
 #include <new>
 #include <tuple>
@@ -11,6 +12,8 @@
 #include <type_traits>
 #include <utility>
 #include <vector>
+
+#include <immintrin.h>
 
 #include "lightmesh/geometry/triangle.h"
 #include "lightmesh/math/simd.h"
@@ -168,15 +171,65 @@ __attribute__((target("avx2"))) int CullSegmentAvx2(const Blockers& b, const Vec
     return CullSegment<8>(b, x, o, m);
 }
 using CullFunction = int (*)(const Blockers&, const Vec3&, const Vec3&, float);
-CullFunction ChooseCullFunction() { return __builtin_cpu_supports("avx2") ? CullSegmentAvx2 : CullSegmentSse; }
+CullFunction ChooseCullFunction(int width) {
+    return (width == 0 || width == 8) && __builtin_cpu_supports("avx2") ? CullSegmentAvx2 : CullSegmentSse;
+}
 
-/// A template entry converted for one lattice: the node's offset from LM0 as lattice
-/// coordinates, as floats (for the vector from P) and as a linear index offset.
-struct TemplateEntry {
-    int di, dj, dk;
-    Vec3 offset;
-    int64_t linear;
+/// Eight entries of one sub-position's template: the nodes' offsets from the cell's corner
+/// LM0 in lattice steps, coordinate by coordinate (whole numbers, exact as floats), for the
+/// front test of eight entries at once, and their linear index offsets, so that a node's
+/// word is one load away. Padding lanes have NaN offsets, which no comparison finds in
+/// front.
+struct alignas(32) FrontBlock {
+    float ox[8], oy[8], oz[8];
+    int32_t linear[8];
 };
+
+/// The templates' front test, (n(P), x - P) > eps·h with x - P = (offset - frac)·h, written
+/// (n, offset) - nfrac > eps with nfrac = (n, frac) once per point, over `count` blocks:
+/// bit k of masks[b] is set when lane k of block b is in front. Dot()'s operations in its
+/// order, then the subtraction (the library is built with -ffp-contract=off), so SSE, AVX2
+/// and a scalar Dot agree bit for bit; what it saves is a scalar loop's unpredictable
+/// branch per entry.
+void FrontMasksSse(const FrontBlock* blocks, uint32_t count, const Vec3& n, float nfrac, float eps, uint8_t* masks) {
+    const __m128 nx = _mm_set1_ps(n.x), ny = _mm_set1_ps(n.y), nz = _mm_set1_ps(n.z);
+    const __m128 nf = _mm_set1_ps(nfrac), e = _mm_set1_ps(eps);
+    for (uint32_t b = 0; b < count; ++b) {
+        int mask = 0;
+        for (int half = 0; half < 2; ++half) {
+            const int o = 4 * half;
+            __m128 d = _mm_add_ps(_mm_mul_ps(nx, _mm_load_ps(blocks[b].ox + o)), _mm_mul_ps(ny, _mm_load_ps(blocks[b].oy + o)));
+            d = _mm_sub_ps(_mm_add_ps(d, _mm_mul_ps(nz, _mm_load_ps(blocks[b].oz + o))), nf);
+            mask |= _mm_movemask_ps(_mm_cmpgt_ps(d, e)) << o;
+        }
+        masks[b] = static_cast<uint8_t>(mask);
+    }
+}
+__attribute__((target("avx2"))) void FrontMasksAvx2(const FrontBlock* blocks, uint32_t count, const Vec3& n, float nfrac,
+                                                    float eps, uint8_t* masks) {
+    const __m256 nx = _mm256_set1_ps(n.x), ny = _mm256_set1_ps(n.y), nz = _mm256_set1_ps(n.z);
+    const __m256 nf = _mm256_set1_ps(nfrac), e = _mm256_set1_ps(eps);
+    for (uint32_t b = 0; b < count; ++b) {
+        __m256 d = _mm256_add_ps(_mm256_mul_ps(nx, _mm256_load_ps(blocks[b].ox)), _mm256_mul_ps(ny, _mm256_load_ps(blocks[b].oy)));
+        d = _mm256_sub_ps(_mm256_add_ps(d, _mm256_mul_ps(nz, _mm256_load_ps(blocks[b].oz))), nf);
+        masks[b] = static_cast<uint8_t>(_mm256_movemask_ps(_mm256_cmp_ps(d, e, _CMP_GT_OQ)));
+    }
+}
+// One lane at a time with Dot() itself: the oracle of the other two (tests).
+void FrontMasksScalar(const FrontBlock* blocks, uint32_t count, const Vec3& n, float nfrac, float eps, uint8_t* masks) {
+    for (uint32_t b = 0; b < count; ++b) {
+        int mask = 0;
+        for (int k = 0; k < 8; ++k)
+            if (Dot(n, Vec3(blocks[b].ox[k], blocks[b].oy[k], blocks[b].oz[k])) - nfrac > eps) mask |= 1 << k;
+        masks[b] = static_cast<uint8_t>(mask);
+    }
+}
+using FrontFunction = void (*)(const FrontBlock*, uint32_t, const Vec3&, float, float, uint8_t*);
+// LightMeshOptions::simdWidth: 0 the widest, 1 scalar, 4 SSE, 8 AVX2 if the processor has it.
+FrontFunction ChooseFrontFunction(int width) {
+    if (width == 1) return FrontMasksScalar;
+    return width != 4 && __builtin_cpu_supports("avx2") ? FrontMasksAvx2 : FrontMasksSse;
+}
 
 /// The light mesh with node words of type Word (uint8_t for up to 6 lights).
 ///
@@ -194,9 +247,11 @@ class LightMesh final : public LightMeshShadows {
 
   public:
     LightMesh(const Scene& scene, const Accelerator& accel, const LightMeshLattice& lattice,
-              const LightMeshVariant& variant, TemplateLoad templates, const std::string& cellSummaries)
+              const LightMeshVariant& variant, TemplateLoad templates, const LightMeshOptions& options)
         : scene_(scene), accel_(accel), lattice_(lattice), variant_(variant),
-          templates_(std::move(templates)), nodes_(ZeroedArray<Word>(lattice.NodeCount())) {
+          templates_(std::move(templates)), frontMasks_(ChooseFrontFunction(options.simdWidth)),
+          cull_(ChooseCullFunction(options.simdWidth)), nodes_(ZeroedArray<Word>(lattice.NodeCount())) {
+        const std::string& cellSummaries = options.cellSummaries;
         if (variant_.enumeration == SphereEnumeration::Templates) ConvertTemplates();
         sceneBox_ = scene.mesh.Bounds();
         // Tolerances at the lattice's scale. delta: how far from a plane a vertex may lie and
@@ -802,11 +857,6 @@ class LightMesh final : public LightMeshShadows {
         return !accel_.Occluded(Segment(x, sp.origin));
     }
 
-    // The templates' front test, (n(P), x - P) > frontEps_·h with x - P = (offset - frac)·h,
-    // written offset·n - frac·n; nfrac = frac·n, once per point.
-    bool InFront(const ShadingPoint& sp, const TemplateEntry& e, float nfrac) const {
-        return Dot(sp.n, e.offset) - nfrac > frontEps_;
-    }
 
     // A candidate that passed the sphere and surface tests, for the variants that decide
     // node by node (all but У).
@@ -877,14 +927,26 @@ class LightMesh final : public LightMeshShadows {
         // Nearest sub-step, halves up (f >= 0 here, so the truncation is a floor).
         auto snap = [ns](float f) { return std::clamp(static_cast<int>(f * static_cast<float>(ns) + 0.5f), 0, ns); };
         const int s = templates_.templates.SubPosition(snap(frac.x), snap(frac.y), snap(frac.z));
-        const uint32_t begin = templates_.templates.begin[s], end = templates_.templates.begin[s + 1];
-        const uint32_t innerBegin = begin + templates_.templates.boundaryCount[s];
         const int64_t base = static_cast<int64_t>(L.Index(ci, cj, ck));
         // (n(P), x - P) with x - P = (offset - frac)·h, over the tolerance of frontEps_.
         // (offset - frac)·n = offset·n - frac·n: the second term once per point.
         const float nfrac = Dot(sp.n, frac);
-        auto front = [&](const TemplateEntry& e) { return InFront(sp, e, nfrac); };
-        auto node = [&](const TemplateEntry& e) { return L.Node(ci + e.di, cj + e.dj, ck + e.dk); };
+        auto node = [&](const FrontBlock& b, int k) {
+            return L.Node(ci + static_cast<int>(b.ox[k]), cj + static_cast<int>(b.oy[k]), ck + static_cast<int>(b.oz[k]));
+        };
+        // The front test of all of s's entries at once, a bit mask per block of eight.
+        const uint32_t fb = frontBegin_[s], fi = frontInner_[s], fe = frontBegin_[s + 1];
+        uint8_t maskBuffer[256];
+        std::vector<uint8_t> maskHeap;
+        uint8_t* masks = maskBuffer;
+        if (fe - fb > sizeof(maskBuffer)) {
+            maskHeap.resize(fe - fb);
+            masks = maskHeap.data();
+        }
+        frontMasks_(frontBlocks_.data() + fb, fe - fb, sp.n, nfrac, frontEps_, masks);
+        const FrontRun all{frontBlocks_.data() + fb, masks, fe - fb};
+        const FrontRun boundary{frontBlocks_.data() + fb, masks, fi - fb};
+        const FrontRun inner{frontBlocks_.data() + fi, masks + (fi - fb), fe - fi};
 
         bool planar = false;
         Blockers blockers;
@@ -917,23 +979,20 @@ class LightMesh final : public LightMeshShadows {
                 // as the walk would find.
                 bool some = false;
                 if (variant_.local == LocalVisibility::Inside) {
-                    for (uint32_t t = begin; t < end && !some; ++t) {
-                        const TemplateEntry& e = entries_[t];
-                        some = front(e) && !(Evaluate(static_cast<uint64_t>(base + e.linear)) & kInside);
-                    }
+                    some = all.Any([&](const FrontBlock& b, int k) {
+                        return !(Evaluate(static_cast<uint64_t>(base + b.linear[k])) & kInside);
+                    });
                 } else if (variant_.local != LocalVisibility::Consensus || planar) {
-                    for (uint32_t t = begin; t < end && !some; ++t) some = front(entries_[t]);
+                    some = all.Any([](const FrontBlock&, int) { return true; });
                 } else {
                     // Usually the first candidate sees P: one ray is cheaper than finding
                     // the blockers, which pay only when more segments follow.
                     int tested = 0;
-                    for (uint32_t t = begin; t < end && !some; ++t) {
-                        const TemplateEntry& e = entries_[t];
-                        if (!front(e)) continue;
+                    some = all.Any([&](const FrontBlock& b, int k) {
                         ++counters.candidates;
                         if (tested++ == 1) FindBlockers(c, base, sp, &blockers);
-                        some = SeesPointCulled(node(e), sp, blockers, counters);
-                    }
+                        return SeesPointCulled(node(b, k), sp, blockers, counters);
+                    });
                 }
                 if (some) *uniform = (w & kVisMask) | kInit;
                 return true;  // with !some, m = 0: the caller falls back to shadow rays
@@ -941,36 +1000,85 @@ class LightMesh final : public LightMeshShadows {
         }
 
         if (variant_.local == LocalVisibility::Consensus) {
-            ConsensusWalk(sp, neededMask, begin, end, base, ci, cj, ck, frac, planar, summary, blockers, acc, counters);
+            ConsensusWalk(sp, neededMask, all, base, ci, cj, ck, planar, summary, blockers, acc, counters);
+            return true;
+        }
+        if (variant_.local == LocalVisibility::None) {
+            UseAll(all, base, acc);  // Нет: every node in front
+            counters.candidates += acc.m;
             return true;
         }
         if (variant_.local != LocalVisibility::Reduced) {
-            for (uint32_t t = begin; t < end; ++t) {
-                const TemplateEntry& e = entries_[t];
-                if (!front(e)) continue;
-                Candidate(node(e), static_cast<uint64_t>(base + e.linear), sp, acc, counters);
-            }
+            all.ForEach([&](const FrontBlock& b, int k) {
+                Candidate(node(b, k), static_cast<uint64_t>(base + b.linear[k]), sp, acc, counters);
+            });
             return true;
         }
         // У (§3.2): test the boundary nodes first; if all of them see P, take the inner
         // nodes without testing them, otherwise test the inner nodes too.
         bool allSee = true;
-        for (uint32_t t = begin; t < innerBegin; ++t) {
-            const TemplateEntry& e = entries_[t];
-            if (!front(e)) continue;
+        boundary.ForEach([&](const FrontBlock& b, int k) {
             ++counters.candidates;
-            const Vec3 x = node(e);
-            if (SeesPoint(x, sp, counters)) Use(acc, Evaluate(static_cast<uint64_t>(base + e.linear)));
+            if (SeesPoint(node(b, k), sp, counters)) Use(acc, Evaluate(static_cast<uint64_t>(base + b.linear[k])));
             else allSee = false;
-        }
-        for (uint32_t t = innerBegin; t < end; ++t) {
-            const TemplateEntry& e = entries_[t];
-            if (!front(e)) continue;
+        });
+        inner.ForEach([&](const FrontBlock& b, int k) {
             ++counters.candidates;
-            const Vec3 x = node(e);
-            if (allSee || SeesPoint(x, sp, counters)) Use(acc, Evaluate(static_cast<uint64_t>(base + e.linear)));
-        }
+            if (allSee || SeesPoint(node(b, k), sp, counters)) Use(acc, Evaluate(static_cast<uint64_t>(base + b.linear[k])));
+        });
         return true;
+    }
+
+    // A run of FrontBlocks with their front masks: visits the entries in front in the
+    // template's order.
+    struct FrontRun {
+        const FrontBlock* blocks;
+        const uint8_t* masks;
+        uint32_t count;
+        template <typename F>
+        void ForEach(F&& f) const {
+            for (uint32_t b = 0; b < count; ++b)
+                for (unsigned m = masks[b]; m; m &= m - 1) f(blocks[b], __builtin_ctz(m));
+        }
+        /// Whether f holds for some entry in front, stopping at the first.
+        template <typename F>
+        bool Any(F&& f) const {
+            for (uint32_t b = 0; b < count; ++b)
+                for (unsigned m = masks[b]; m; m &= m - 1)
+                    if (f(blocks[b], __builtin_ctz(m))) return true;
+            return false;
+        }
+    };
+
+    // Use() for every entry of the run in front of P: Нет's whole walk, and consensus's in
+    // a planar cell. The counts live in registers (one byte per light, flushed before 255)
+    // instead of in *acc, which the lazy evaluation's call might change for all the
+    // compiler knows.
+    void UseAll(const FrontRun& run, int64_t base, Accumulator& acc) const {
+        const std::atomic<Word>* nodes = nodes_.get() + base;
+        auto word = [&](int32_t linear) {
+            const Word w = nodes[linear].load(std::memory_order_acquire);
+            return (w & kInit) ? w : EvaluateSlow(static_cast<uint64_t>(base + linear));
+        };
+        if constexpr (sizeof(Word) == 1) {
+            uint64_t lanes = 0;
+            uint32_t m = 0, pending = 0;
+            auto flush = [&] {
+                for (int l = 0; l < 8; ++l) acc.visible[l] += static_cast<uint32_t>((lanes >> (8 * l)) & 0xFF);
+                lanes = 0;
+                pending = 0;
+            };
+            for (uint32_t b = 0; b < run.count; ++b)
+                for (unsigned mask = run.masks[b]; mask; mask &= mask - 1) {
+                    lanes += kSpread[word(run.blocks[b].linear[__builtin_ctz(mask)])];
+                    ++m;
+                    if (++pending == 255) flush();
+                }
+            flush();
+            acc.m += m;
+        } else {
+            run.ForEach([&](const FrontBlock& b, int k) { Use(acc, word(b.linear[k])); });
+        }
     }
 
     // Consensus (ours, exact): ОТ keeps the candidates that see P and averages their bits.
@@ -981,43 +1089,44 @@ class LightMesh final : public LightMeshShadows {
     // The image is identical to ОТ's; only the mean m in --stats differs.
     //
     // In a planar cell (cell summaries) no segment is traced at all: every candidate sees P.
-    void ConsensusWalk(const ShadingPoint& sp, Word neededMask, uint32_t begin, uint32_t end, int64_t base, int ci, int cj,
-                       int ck, const Vec3& frac, bool planar, const CellSummary* summary, Blockers& blockers,
+    void ConsensusWalk(const ShadingPoint& sp, Word neededMask, const FrontRun& all, int64_t base, int ci, int cj,
+                       int ck, bool planar, const CellSummary* summary, Blockers& blockers,
                        Accumulator& acc, RenderCounters& counters) const {
-        const float nfrac = Dot(sp.n, frac);
         struct Candidate {
-            uint32_t entry;
+            const FrontBlock* block;
+            int lane;
             Word word;
         };
         Candidate buffer[512];
         std::vector<Candidate> heap;
         Candidate* list = buffer;
-        if (end - begin > 512) {
-            heap.resize(end - begin);
+        if (8 * all.count > 512) {
+            heap.resize(8 * all.count);
             list = heap.data();
         }
         uint32_t n = 0;
         bool agree = true;
         const LightMeshLattice& L = lattice_;
-        for (uint32_t t = begin; t < end; ++t) {
-            const TemplateEntry& e = entries_[t];
-            if (!InFront(sp, e, nfrac)) continue;
-            ++counters.candidates;
-            const Word w = Evaluate(static_cast<uint64_t>(base + e.linear));
-            if (planar) {
-                Use(acc, w);
-                continue;
-            }
+        if (planar) {
+            UseAll(all, base, acc);
+            counters.candidates += acc.m;
+            return;
+        }
+        all.ForEach([&](const FrontBlock& b, int k) {
+            const Word w = Evaluate(static_cast<uint64_t>(base + b.linear[k]));
             // Only the lights the renderer needs matter (the others light P from behind).
             if (n > 0 && ((w ^ list[0].word) & neededMask)) agree = false;
-            list[n++] = {t, w};
-        }
+            list[n++] = {&b, k, w};
+        });
+        counters.candidates += n;
         // The blockers (cell summaries) pay when many segments are to be decided; when
         // the candidates agree one segment usually settles it, and a ray is cheaper.
         for (uint32_t c = 0; c < n; ++c) {
             if (summary && !blockers.tried && (!agree || c == 1)) FindBlockers(*summary, base, sp, &blockers);
-            const TemplateEntry& e = entries_[list[c].entry];
-            if (!SeesPointCulled(L.Node(ci + e.di, cj + e.dj, ck + e.dk), sp, blockers, counters)) continue;
+            const FrontBlock& e = *list[c].block;
+            const int k = list[c].lane;
+            const Vec3 x = L.Node(ci + static_cast<int>(e.ox[k]), cj + static_cast<int>(e.oy[k]), ck + static_cast<int>(e.oz[k]));
+            if (!SeesPointCulled(x, sp, blockers, counters)) continue;
             Use(acc, list[c].word);
             if (agree) return;
         }
@@ -1026,7 +1135,6 @@ class LightMesh final : public LightMeshShadows {
     void ConvertTemplates() {
         const SphereTemplates& t = templates_.templates;
         invH_ = 1.0f / lattice_.h;
-        entries_.reserve(t.offsets.size());
         // The offsets' range: -floor(kI) … floor(kI) + 1, inside the lattice's ceil(kI)
         // cells of padding for every P in the scene's box.
         for (const auto& o : t.offsets)
@@ -1037,7 +1145,34 @@ class LightMesh final : public LightMeshShadows {
         auto linear = [&](int di, int dj, int dk) {
             return di + static_cast<int64_t>(lattice_.nx) * (dj + static_cast<int64_t>(lattice_.ny) * dk);
         };
-        for (const auto& o : t.offsets) entries_.push_back({o[0], o[1], o[2], Vec3(o[0], o[1], o[2]), linear(o[0], o[1], o[2])});
+        // |linear| <= 17·(nx·ny + nx + 1) at kI 16: below 2^31 up to about 11,000 nodes a
+        // side, far past CC's 4096.
+        const int64_t reach = std::max(-minOffset_, maxOffset_);
+        if (linear(reach, reach, reach) > std::numeric_limits<int32_t>::max())
+            ThrowError("light mesh %dx%dx%d: too many nodes for the templates' 32-bit offsets: lower --cc", lattice_.nx,
+                       lattice_.ny, lattice_.nz);
+        auto pack = [&](uint32_t from, uint32_t to) {
+            for (uint32_t first = from; first < to; first += 8) {
+                FrontBlock b;
+                for (uint32_t k = 0; k < 8; ++k) {
+                    const float nan = std::numeric_limits<float>::quiet_NaN();
+                    const bool real = first + k < to;
+                    const std::array<int8_t, 3> o = real ? t.offsets[first + k] : std::array<int8_t, 3>{};
+                    b.ox[k] = real ? o[0] : nan;
+                    b.oy[k] = real ? o[1] : nan;
+                    b.oz[k] = real ? o[2] : nan;
+                    b.linear[k] = static_cast<int32_t>(linear(o[0], o[1], o[2]));
+                }
+                frontBlocks_.push_back(b);
+            }
+        };
+        for (size_t sp = 0; sp + 1 < t.begin.size(); ++sp) {
+            frontBegin_.push_back(static_cast<uint32_t>(frontBlocks_.size()));
+            pack(t.begin[sp], t.begin[sp] + t.boundaryCount[sp]);
+            frontInner_.push_back(static_cast<uint32_t>(frontBlocks_.size()));
+            pack(t.begin[sp] + t.boundaryCount[sp], t.begin[sp + 1]);
+        }
+        frontBegin_.push_back(static_cast<uint32_t>(frontBlocks_.size()));
         // The union of all sub-positions' sets: every node a point of a cell may use, in
         // memory order (the cell summaries read them all).
         std::vector<std::array<int8_t, 3>> all(t.offsets.begin(), t.offsets.end());
@@ -1122,12 +1257,17 @@ class LightMesh final : public LightMeshShadows {
     const LightMeshLattice lattice_;
     const LightMeshVariant variant_;
     const TemplateLoad templates_;
-    std::vector<TemplateEntry> entries_;
     int minOffset_ = 0, maxOffset_ = 0;
     float invH_ = 0;
     Bounds3 sceneBox_;
     float planeDelta_ = 0, frontEps_ = 0, reachMargin_ = 0, cullMargin_ = 0, pointReach_ = 0;
-    const CullFunction cull_ = ChooseCullFunction();
+    // The templates again, as FrontBlocks: sub-position s's boundary entries are blocks
+    // frontBegin_[s] … frontInner_[s] - 1, its inner entries frontInner_[s] … frontBegin_[s + 1] - 1,
+    // each run in the template's order.
+    std::vector<FrontBlock> frontBlocks_;
+    std::vector<uint32_t> frontBegin_, frontInner_;
+    FrontFunction frontMasks_ = nullptr;
+    CullFunction cull_ = nullptr;
     const uint64_t serial_ = NextSerial();  // tells this mesh's thread-local caches from others'
     static uint64_t NextSerial() {
         static std::atomic<uint64_t> next{1};
@@ -1193,11 +1333,13 @@ std::unique_ptr<LightMeshShadows> CreateLightMeshShadows(const Scene& scene, con
     const std::string& summaries = options.cellSummaries;
     if (summaries != "auto" && summaries != "on" && summaries != "off")
         ThrowError("cell summaries \"%s\": choose auto, on or off", summaries.c_str());
+    if (options.simdWidth != 0 && options.simdWidth != 1 && options.simdWidth != 4 && options.simdWidth != 8)
+        ThrowError("light mesh: SIMD width %d: choose 0, 1, 4 or 8", options.simdWidth);
     switch (bytes) {
-        case 1: return std::make_unique<LightMesh<uint8_t>>(scene, accel, lattice, variant, std::move(templates), summaries);
-        case 2: return std::make_unique<LightMesh<uint16_t>>(scene, accel, lattice, variant, std::move(templates), summaries);
-        case 4: return std::make_unique<LightMesh<uint32_t>>(scene, accel, lattice, variant, std::move(templates), summaries);
-        default: return std::make_unique<LightMesh<uint64_t>>(scene, accel, lattice, variant, std::move(templates), summaries);
+        case 1: return std::make_unique<LightMesh<uint8_t>>(scene, accel, lattice, variant, std::move(templates), options);
+        case 2: return std::make_unique<LightMesh<uint16_t>>(scene, accel, lattice, variant, std::move(templates), options);
+        case 4: return std::make_unique<LightMesh<uint32_t>>(scene, accel, lattice, variant, std::move(templates), options);
+        default: return std::make_unique<LightMesh<uint64_t>>(scene, accel, lattice, variant, std::move(templates), options);
     }
 }
 

@@ -356,6 +356,43 @@ TEST(LightMesh, CellSummariesKeepEveryImageExactly) {
     EXPECT_GT(culledSegments, 0u);  // the blockers' culling decided segments too
 }
 
+// The templates' front test runs eight entries at a time (AVX2) or four (SSE), the
+// segment culling too: every variant's image and candidate count must equal the scalar
+// front test's (simdWidth 1), on scenes where every case of the walks happens.
+TEST(LightMesh, VectorisedFrontTestAndCullingMatchTheScalarOnes) {
+    uint64_t candidates = 0;
+    for (int index = 0; index < 5; ++index) {
+        Scene s = SummaryTestScene(index);
+        s.render.width = 64;
+        s.render.height = 48;
+        auto accel = CreateAccelerator("grid", s.mesh);
+        for (float ki : {2.0f, 3.0f})
+            for (const char* variant : {"none", "consensus", "reduced", "inside", "object", "templates"}) {
+                RenderResult results[3];
+                const int widths[3] = {1, 4, 8};
+                for (int w = 0; w < 3; ++w) {
+                    s.render.lightMesh.ki = ki;
+                    s.render.lightMesh.variant = variant;
+                    s.render.lightMesh.simdWidth = widths[w];
+                    auto lmm = CreateShadowMethod("lmm", s, *accel, s.render);
+                    results[w] = WhittedRenderer(s, *accel, *lmm, s.render).Render();
+                }
+                const std::string what = StringPrintf("scene %d, kI %g, %s", index, ki, variant);
+                for (int w = 1; w < 3; ++w) {
+                    EXPECT_EQ(results[0].image.pixels, results[w].image.pixels) << what << ", width " << widths[w];
+                    EXPECT_EQ(results[0].counters.candidates, results[w].counters.candidates) << what;
+                    EXPECT_EQ(results[0].counters.localSegments, results[w].counters.localSegments) << what;
+                }
+                candidates += results[0].counters.candidates;
+            }
+    }
+    EXPECT_GT(candidates, 0u);
+    Scene s = SummaryTestScene(0);
+    s.render.lightMesh.simdWidth = 2;
+    auto accel = CreateAccelerator("grid", s.mesh);
+    EXPECT_THROW(CreateShadowMethod("lmm", s, *accel, s.render), Error);
+}
+
 // A file of huge overlapping triangles would make the brick lists enormous (every
 // triangle's box covers every brick): the binning counts the pairs before storing any,
 // turns the summaries off over its budget, and the image is still ОТ's.
