@@ -231,6 +231,46 @@ FrontFunction ChooseFrontFunction(int width) {
     return width != 4 && __builtin_cpu_supports("avx2") ? FrontMasksAvx2 : FrontMasksSse;
 }
 
+/// Нет's sum (LightMesh::UseAll) for one-byte node words with AVX2: the words of a block's
+/// eight entries gathered at once (32-bit loads at byte addresses: the node array has
+/// padding after its end), then per light the entries in front whose bit is set, by
+/// popcount of a movemask. False, having added nothing, if an entry in front is not yet
+/// evaluated (the scalar path evaluates it). The loads are relaxed: a node's word is all
+/// it publishes, and a byte cannot tear.
+__attribute__((target("avx2,popcnt"))) bool SumFrontBytesAvx2(const FrontBlock* blocks, const uint8_t* masks,
+                                                              uint32_t count, const uint8_t* nodes, int lights,
+                                                              uint32_t* visible, uint32_t* m) {
+    uint32_t sums[8] = {}, used = 0;
+    for (uint32_t b = 0; b < count; ++b) {
+        const int mask = masks[b];
+        if (!mask) continue;
+        const __m256i laneBits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+        const __m256i on = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(mask), laneBits), laneBits);
+        const __m256i index = _mm256_load_si256(reinterpret_cast<const __m256i*>(blocks[b].linear));
+        const __m256i w = _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), reinterpret_cast<const int*>(nodes), index, on, 1);
+        // Bit 7 of each byte word is "initialised".
+        if ((_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(w, 24))) & mask) != mask) return false;
+        for (int l = 0; l < lights; ++l)
+            sums[l] += static_cast<uint32_t>(
+                __builtin_popcount(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(w, 31 - l))) & mask));
+        used += static_cast<uint32_t>(__builtin_popcount(mask));
+    }
+    for (int l = 0; l < lights; ++l) visible[l] += sums[l];
+    *m += used;
+    return true;
+}
+using SumFrontFunction = bool (*)(const FrontBlock*, const uint8_t*, uint32_t, const uint8_t*, int, uint32_t*, uint32_t*);
+// Null where the scalar sum is used: no AVX2, a test's narrower width, or ThreadSanitizer
+// (which does not see the gather's loads as atomic).
+SumFrontFunction ChooseSumFrontFunction(int width) {
+#ifdef LIGHTMESH_TSAN
+    (void)width;
+    return nullptr;
+#else
+    return (width == 0 || width == 8) && __builtin_cpu_supports("avx2") ? SumFrontBytesAvx2 : nullptr;
+#endif
+}
+
 /// The light mesh with node words of type Word (uint8_t for up to 6 lights).
 ///
 /// Node word layout: bits 0 … nL-1 are V(L_i, x) (paper §4: S = ⟨f, v_1…v_nL, i⟩), the top
@@ -250,7 +290,8 @@ class LightMesh final : public LightMeshShadows {
               const LightMeshVariant& variant, TemplateLoad templates, const LightMeshOptions& options)
         : scene_(scene), accel_(accel), lattice_(lattice), variant_(variant),
           templates_(std::move(templates)), frontMasks_(ChooseFrontFunction(options.simdWidth)),
-          cull_(ChooseCullFunction(options.simdWidth)), nodes_(ZeroedArray<Word>(lattice.NodeCount())) {
+          cull_(ChooseCullFunction(options.simdWidth)), sumFront_(ChooseSumFrontFunction(options.simdWidth)),
+          nodes_(ZeroedArray<Word>(lattice.NodeCount() + kNodePadding)) {
         const std::string& cellSummaries = options.cellSummaries;
         if (variant_.enumeration == SphereEnumeration::Templates) ConvertTemplates();
         sceneBox_ = scene.mesh.Bounds();
@@ -1061,6 +1102,10 @@ class LightMesh final : public LightMeshShadows {
             return (w & kInit) ? w : EvaluateSlow(static_cast<uint64_t>(base + linear));
         };
         if constexpr (sizeof(Word) == 1) {
+            if (sumFront_ &&
+                sumFront_(run.blocks, run.masks, run.count, reinterpret_cast<const uint8_t*>(nodes),
+                          static_cast<int>(scene_.lights.size()), acc.visible, &acc.m))
+                return;
             uint64_t lanes = 0;
             uint32_t m = 0, pending = 0;
             auto flush = [&] {
@@ -1268,6 +1313,8 @@ class LightMesh final : public LightMeshShadows {
     std::vector<uint32_t> frontBegin_, frontInner_;
     FrontFunction frontMasks_ = nullptr;
     CullFunction cull_ = nullptr;
+    SumFrontFunction sumFront_ = nullptr;  // for one-byte words
+    static constexpr uint64_t kNodePadding = 8;  // words after the last node, for SumFrontBytesAvx2's loads
     const uint64_t serial_ = NextSerial();  // tells this mesh's thread-local caches from others'
     static uint64_t NextSerial() {
         static std::atomic<uint64_t> next{1};
