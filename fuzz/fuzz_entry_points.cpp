@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "lightmesh/accel/accelerator.h"
-#include "lightmesh/render/whitted.h"
+#include "lightmesh/render/render_job.h"
 #include "lightmesh/scene/mesh_loader.h"
 #include "lightmesh/scene/scene_file.h"
 #include "lightmesh/scene/shapes.h"
@@ -200,10 +200,7 @@ int FuzzSceneFile(const uint8_t* data, size_t size) {
     ro.lightMesh.ns = std::min(ro.lightMesh.ns, 3);
     ro.lightMesh.templateDir = templateFolder.path;
     try {
-        const auto accel = CreateAccelerator(ro.accel, scene.mesh, ro.accelOptions);
-        const auto shadows = CreateShadowMethod(ro.shadows, scene, *accel, ro);
-        const WhittedRenderer renderer(scene, *accel, *shadows, ro);
-        const RenderResult result = renderer.Render();
+        const RenderResult result = RenderJob(scene, ro).Render();
         FUZZ_CHECK(result.image.width == ro.width && result.image.height == ro.height);
         FUZZ_CHECK(result.image.pixels.size() == static_cast<size_t>(ro.width) * ro.height);
     } catch (const Error& e) {

@@ -22,6 +22,7 @@
 #include "lightmesh/io/compare.h"
 #include "lightmesh/io/image.h"
 #include "lightmesh/render/benchmark.h"
+#include "lightmesh/render/render_job.h"
 #include "lightmesh/render/whitted.h"
 #include "lightmesh/scene/scene_file.h"
 #include "lightmesh/shadow/area_light.h"
@@ -120,10 +121,8 @@ struct PreparedRender {
     lm::Scene scene;
     lm::RenderOptions options;
     std::string output;
-    std::unique_ptr<lm::Accelerator> accel;
-    std::unique_ptr<lm::ShadowMethod> shadows;
-    std::unique_ptr<lm::WhittedRenderer> renderer;
-    double loadSeconds = 0, buildSeconds = 0, shadowSetupSeconds = 0;
+    std::unique_ptr<lm::RenderJob> job;
+    double loadSeconds = 0;
 };
 
 std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
@@ -200,14 +199,7 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
                        options.width, options.height, lm::FormatBytes(imageBytes).c_str(),
                        lm::FormatBytes(physical).c_str());
 
-    const auto t1 = Clock::now();
-    prepared->accel = lm::CreateAccelerator(options.accel, scene.mesh, options.accelOptions);
-    prepared->buildSeconds = SecondsSince(t1);
-    const auto t2 = Clock::now();
-    prepared->shadows = lm::CreateShadowMethod(options.shadows, scene, *prepared->accel, options);
-    prepared->shadowSetupSeconds = SecondsSince(t2);
-    prepared->renderer =
-        std::make_unique<lm::WhittedRenderer>(scene, *prepared->accel, *prepared->shadows, options);
+    prepared->job = std::make_unique<lm::RenderJob>(scene, options);
     return prepared;
 }
 
@@ -216,13 +208,13 @@ void PrintRender(const RenderCommand& cmd, const PreparedRender& p, const lm::Re
                  double writeSeconds, const std::vector<lm::RankReport>* ranks) {
     const lm::RenderOptions& options = p.options;
     std::printf("%s: %dx%d, shadows %s, accel %s, %zu triangles, %zu lights: render %.3f s\n",
-                p.output.c_str(), options.width, options.height, std::string(p.shadows->Name()).c_str(),
-                std::string(p.accel->Name()).c_str(), p.scene.mesh.TriangleCount(), p.scene.lights.size(),
+                p.output.c_str(), options.width, options.height, std::string(p.job->Shadows().Name()).c_str(),
+                std::string(p.job->Accel().Name()).c_str(), p.scene.mesh.TriangleCount(), p.scene.lights.size(),
                 result.seconds);
     if (!cmd.stats) return;
     const lm::RenderCounters& c = result.counters;
     std::printf("time      load %.3f s, build %.3f s, shadow setup %.3f s, render %.3f s, write %.3f s\n",
-                p.loadSeconds, p.buildSeconds, p.shadowSetupSeconds, result.seconds, writeSeconds);
+                p.loadSeconds, p.job->BuildSeconds(), p.job->ShadowSetupSeconds(), result.seconds, writeSeconds);
     std::printf("threads   %d%s\n",
                 static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)),
                 ranks ? " per rank" : "");
@@ -243,7 +235,7 @@ void PrintRender(const RenderCommand& cmd, const PreparedRender& p, const lm::Re
     std::printf("rays      camera %s, shadow %s, reflection %s; shading points %s\n",
                 Count(c.cameraRays).c_str(), Count(c.shadowRays).c_str(),
                 Count(c.reflectionRays).c_str(), Count(c.shadingPoints).c_str());
-    PrintFigures("accel", p.accel->Figures());
+    PrintFigures("accel", p.job->Accel().Figures());
     if (c.interpolations + c.fallbacks > 0) {
         const double points = static_cast<double>(c.interpolations + c.fallbacks);
         std::printf("lmm       interpolated points %s, mean m %.1f, candidates per point %.1f, "
@@ -259,7 +251,7 @@ void PrintRender(const RenderCommand& cmd, const PreparedRender& p, const lm::Re
                         Count(c.planarCellPoints).c_str(), 100.0 * static_cast<double>(c.planarCellPoints) / points,
                         Count(c.culledSegments).c_str());
     }
-    PrintFigures(ranks ? "shadows (rank 0)" : "shadows", p.shadows->Figures());
+    PrintFigures(ranks ? "shadows (rank 0)" : "shadows", p.job->Shadows().Figures());
     std::printf("memory    peak %s%s\n", lm::FormatBytes(lm::PeakMemoryBytes()).c_str(), ranks ? " (rank 0)" : "");
 }
 
@@ -269,9 +261,9 @@ int RunRender(const RenderCommand& cmd) {
     const std::unique_ptr<PreparedRender> p = PrepareRender(cmd);
     lm::RenderResult result;
     {
-        lm::ProgressReporter progress(p->renderer->TileCount(), "Rendering",
+        lm::ProgressReporter progress(p->job->Renderer().TileCount(), "Rendering",
                                       !cmd.common.quiet && lm::ProgressReporter::StderrIsTerminal());
-        result = p->renderer->Render(&progress);
+        result = p->job->Render(&progress);
     }
     const auto t3 = Clock::now();
     lm::WriteImage(p->output, result.image);
@@ -311,14 +303,13 @@ int RunRenderMpi(const RenderCommand& cmd, const lm::MpiSession& session) {
                                         "the threads share them; run mpirun with --bind-to none",
                                         cmd.common.threads, cpus));
 
-    auto* lightMesh = dynamic_cast<const lm::LightMeshShadows*>(p->shadows.get());
-    std::function<uint64_t()> nodes;
-    if (lightMesh) nodes = [lightMesh] { return lightMesh->NodesEvaluated(); };
+    const lm::ShadowMethod& shadows = p->job->Shadows();
+    const std::function<uint64_t()> nodes = [&shadows] { return shadows.NodesEvaluated(); };
     lm::DistributedRender d;
     {
-        lm::ProgressReporter progress(p->renderer->TileCount(), "Rendering",
+        lm::ProgressReporter progress(p->job->Renderer().TileCount(), "Rendering",
                                       root && !cmd.common.quiet && lm::ProgressReporter::StderrIsTerminal());
-        d = lm::RenderDistributed(session, *p->renderer, nodes, root ? &progress : nullptr);
+        d = lm::RenderDistributed(session, p->job->Renderer(), nodes, root ? &progress : nullptr);
     }
     if (d.errorRank >= 0) return fail(d.error, d.errorRank);
     if (!root) return 0;

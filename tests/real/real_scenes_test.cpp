@@ -29,7 +29,7 @@
 #include "lightmesh/accel/accelerator.h"
 #include "lightmesh/accel/test_scenes.h"
 #include "lightmesh/io/compare.h"
-#include "lightmesh/render/whitted.h"
+#include "lightmesh/render/render_job.h"
 #include "lightmesh/scene/scene_file.h"
 #include "lightmesh/shadow/shadow.h"
 #include "lightmesh/util/error.h"
@@ -110,9 +110,7 @@ Image Render(const Scene& scene, const std::string& shadows, const std::string& 
     ro.lightMesh.ki = 2.0f;
     ro.lightMesh.variant = variant;
     ro.lightMesh.templateDir = g_templateDir;
-    const auto acc = CreateAccelerator(ro.accel, scene.mesh, ro.accelOptions);
-    const auto method = CreateShadowMethod(ro.shadows, scene, *acc, ro);
-    return WhittedRenderer(scene, *acc, *method, ro).Render().image;
+    return RenderJob(scene, ro).Render().image;
 }
 
 class RealSceneTest : public ::testing::TestWithParam<RealScene> {

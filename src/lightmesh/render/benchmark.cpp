@@ -15,6 +15,7 @@
 #include "lightmesh/accel/accelerator.h"
 #include "lightmesh/io/compare.h"
 #include "lightmesh/io/image.h"
+#include "lightmesh/render/render_job.h"
 #include "lightmesh/render/whitted.h"
 #include "lightmesh/scene/scene_file.h"
 #include "lightmesh/shadow/light_mesh.h"
@@ -127,14 +128,12 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
         loaded.push_back(std::move(ls));
     }
 
-    auto render = [&](const Scene& scene, const Accelerator& accel, const RenderOptions& options,
-                      double* setup, const ShadowMethod** out, std::unique_ptr<ShadowMethod>* keep) {
-        const auto t0 = Clock::now();
-        *keep = CreateShadowMethod(options.shadows, scene, accel, options);
-        if (setup) *setup = std::chrono::duration<double>(Clock::now() - t0).count();
-        if (out) *out = keep->get();
-        WhittedRenderer renderer(scene, accel, **keep, options);
-        return renderer.Render();
+    // One render on the scene's shared back-end; *job keeps the shadow method for its figures.
+    auto render = [&](const Scene& scene, const Accelerator& accel, const RenderOptions& options, double* setup,
+                      std::unique_ptr<RenderJob>* job) {
+        *job = std::make_unique<RenderJob>(scene, options, &accel);
+        if (setup) *setup = (*job)->ShadowSetupSeconds();
+        return (*job)->Render();
     };
 
     if (estimate) {
@@ -145,8 +144,8 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
             o.width = m.sizes.front().first;
             o.height = m.sizes.front().second;
             o.shadows = "rt";
-            std::unique_ptr<ShadowMethod> keep;
-            const double rt = render(scene, *loaded[si]->accels[m.accels.front()], o, nullptr, nullptr, &keep).seconds;
+            std::unique_ptr<RenderJob> keep;
+            const double rt = render(scene, *loaded[si]->accels[m.accels.front()], o, nullptr, &keep).seconds;
             const double px0 = static_cast<double>(o.width) * o.height;
             for (const auto& size : m.sizes) {
                 const double unit = rt * (static_cast<double>(size.first) * size.second / px0) * (m.repeat + 1);
@@ -229,9 +228,8 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
             for (int i = -1; i < m.repeat; ++i) {  // i = -1: the warm-up pass
                 for (size_t c = 0; c < cells.size(); ++c) {
                     BenchResult& r = cells[c].r;
-                    std::unique_ptr<ShadowMethod> shadows;
-                    const ShadowMethod* sm = nullptr;
-                    RenderResult rr = render(scene, *cells[c].accel, cells[c].options, &r.setupSeconds, &sm, &shadows);
+                    std::unique_ptr<RenderJob> job;
+                    RenderResult rr = render(scene, *cells[c].accel, cells[c].options, &r.setupSeconds, &job);
                     // The process's peak so far, as before the round-robin: read in the first
                     // pass, which runs the cells in order (later passes would all read the
                     // matrix's peak).
@@ -241,7 +239,7 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                     }
                     r.seconds.push_back(rr.seconds);
                     r.counters = rr.counters;
-                    if (auto* lmm = dynamic_cast<const LightMeshShadows*>(sm)) r.nodesEvaluated = lmm->NodesEvaluated();
+                    r.nodesEvaluated = job->Shadows().NodesEvaluated();
                     if (i < m.repeat - 1) continue;
                     // The last pass: the cell is done.
                     if (!m.imageDir.empty()) {
@@ -281,8 +279,8 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
             if (!noneImage) {
                 RenderOptions o = base;
                 o.shadows = "none";
-                std::unique_ptr<ShadowMethod> keep;
-                noneOwned = render(scene, lmmAccel, o, nullptr, nullptr, &keep).image;
+                std::unique_ptr<RenderJob> keep;
+                noneOwned = render(scene, lmmAccel, o, nullptr, &keep).image;
                 noneImage = &noneOwned;
             }
             std::vector<Image> refs;
@@ -291,8 +289,8 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                 o.shadows = "area";
                 o.areaLight.radius = q.radius * f;
                 o.areaLight.samples = m.refSamples;
-                std::unique_ptr<ShadowMethod> keep;
-                RenderResult rr = render(scene, lmmAccel, o, nullptr, nullptr, &keep);
+                std::unique_ptr<RenderJob> keep;
+                RenderResult rr = render(scene, lmmAccel, o, nullptr, &keep);
                 if (f == 1.0f) q.mainRadius = q.radii.size();
                 q.radii.push_back(o.areaLight.radius);
                 q.refSeconds.push_back(rr.seconds);
@@ -326,8 +324,8 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                 o.shadows = "area";
                 o.areaLight.radius = q.radius;
                 o.areaLight.samples = n;
-                std::unique_ptr<ShadowMethod> keep;
-                RenderResult rr = render(scene, lmmAccel, o, nullptr, nullptr, &keep);
+                std::unique_ptr<RenderJob> keep;
+                RenderResult rr = render(scene, lmmAccel, o, nullptr, &keep);
                 QualityRow row;
                 row.method = "area";
                 row.samples = n;

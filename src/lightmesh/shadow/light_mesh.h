@@ -88,7 +88,7 @@ class LightMeshShadows : public ShadowMethod {
     /// Bytes of node storage per node (1 for up to 6 lights).
     virtual int BytesPerNode() const = 0;
     /// Distinct nodes evaluated so far.
-    virtual uint64_t NodesEvaluated() const = 0;
+    uint64_t NodesEvaluated() const override = 0;
     /// Whether node `index` has been evaluated (for tests of laziness).
     virtual bool IsEvaluated(uint64_t index) const = 0;
     /// The node's visibility bits (bit i: light i visible), evaluating it if need be.

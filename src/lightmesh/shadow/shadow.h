@@ -40,6 +40,8 @@ class ShadowMethod {
 
     /// Figures gathered during rendering and set-up, for --stats.
     virtual ShadowFigures Figures() const { return {}; }
+    /// Light-mesh nodes evaluated so far; 0 for methods without nodes.
+    virtual uint64_t NodesEvaluated() const { return 0; }
 };
 
 /// Builds the method called `name` ("none", "rt", ...). `scene` and `accel` must

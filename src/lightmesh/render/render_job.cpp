@@ -1,0 +1,27 @@
+#include "lightmesh/render/render_job.h"
+
+#include <chrono>
+
+namespace lm {
+
+namespace {
+double SecondsSince(std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+}  // namespace
+
+RenderJob::RenderJob(const Scene& scene, const RenderOptions& options, const Accelerator* accel)
+    : options_(options), accel_(accel) {
+    if (!accel_) {
+        const auto t0 = std::chrono::steady_clock::now();
+        ownAccel_ = CreateAccelerator(options_.accel, scene.mesh, options_.accelOptions);
+        buildSeconds_ = SecondsSince(t0);
+        accel_ = ownAccel_.get();
+    }
+    const auto t1 = std::chrono::steady_clock::now();
+    shadows_ = CreateShadowMethod(options_.shadows, scene, *accel_, options_);
+    shadowSetupSeconds_ = SecondsSince(t1);
+    renderer_ = std::make_unique<WhittedRenderer>(scene, *accel_, *shadows_, options_);
+}
+
+}  // namespace lm
