@@ -259,6 +259,51 @@ __attribute__((target("avx2,popcnt"))) bool SumFrontBytesAvx2(const FrontBlock* 
     *m += used;
     return true;
 }
+/// Consensus's first pass (LightMesh::ConsensusWalk) for one-byte words with AVX2: how many
+/// entries are in front and whether their words agree on the `needed` lights. False,
+/// having decided nothing, if one of them is not yet evaluated.
+__attribute__((target("avx2,popcnt"))) bool AgreeFrontBytesAvx2(const FrontBlock* blocks, const uint8_t* masks,
+                                                                uint32_t count, const uint8_t* nodes, uint32_t needed,
+                                                                uint32_t* first, bool* agree, uint32_t* n) {
+    const __m256i laneBits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    const __m256i need = _mm256_set1_epi32(static_cast<int>(needed));
+    __m256i firstWord = _mm256_setzero_si256();
+    bool haveFirst = false, same = true;
+    uint32_t used = 0;
+    for (uint32_t b = 0; b < count; ++b) {
+        const int mask = masks[b];
+        if (!mask) continue;
+        const __m256i on = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(mask), laneBits), laneBits);
+        const __m256i index = _mm256_load_si256(reinterpret_cast<const __m256i*>(blocks[b].linear));
+        const __m256i w = _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), reinterpret_cast<const int*>(nodes), index, on, 1);
+        if ((_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(w, 24))) & mask) != mask) return false;
+        if (!haveFirst) {
+            alignas(32) uint32_t lanes[8];
+            _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), w);
+            *first = lanes[__builtin_ctz(static_cast<unsigned>(mask))] & 0xFF;
+            firstWord = _mm256_set1_epi32(static_cast<int>(*first));
+            haveFirst = true;
+        }
+        // needed has bits below 8 only, so the bytes the 32-bit loads read past the word drop out.
+        const __m256i differ = _mm256_and_si256(_mm256_xor_si256(w, firstWord), need);
+        const int equal = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(differ, _mm256_setzero_si256())));
+        if ((equal & mask) != mask) same = false;
+        used += static_cast<uint32_t>(__builtin_popcount(static_cast<unsigned>(mask)));
+    }
+    *agree = same;
+    *n = used;
+    return true;
+}
+using AgreeFrontFunction = bool (*)(const FrontBlock*, const uint8_t*, uint32_t, const uint8_t*, uint32_t, uint32_t*, bool*,
+                                    uint32_t*);
+AgreeFrontFunction ChooseAgreeFrontFunction(int width) {
+#ifdef LIGHTMESH_TSAN
+    (void)width;
+    return nullptr;
+#else
+    return (width == 0 || width == 8) && __builtin_cpu_supports("avx2") ? AgreeFrontBytesAvx2 : nullptr;
+#endif
+}
 using SumFrontFunction = bool (*)(const FrontBlock*, const uint8_t*, uint32_t, const uint8_t*, int, uint32_t*, uint32_t*);
 // Null where the scalar sum is used: no AVX2, a test's narrower width, or ThreadSanitizer
 // (which does not see the gather's loads as atomic).
@@ -291,6 +336,7 @@ class LightMesh final : public LightMeshShadows {
         : scene_(scene), accel_(accel), lattice_(lattice), variant_(variant),
           templates_(std::move(templates)), frontMasks_(ChooseFrontFunction(options.simdWidth)),
           cull_(ChooseCullFunction(options.simdWidth)), sumFront_(ChooseSumFrontFunction(options.simdWidth)),
+          agreeFront_(ChooseAgreeFrontFunction(options.simdWidth)),
           nodes_(ZeroedArray<Word>(lattice.NodeCount() + kNodePadding)) {
         const std::string& cellSummaries = options.cellSummaries;
         if (variant_.enumeration == SphereEnumeration::Templates) ConvertTemplates();
@@ -1137,44 +1183,42 @@ class LightMesh final : public LightMeshShadows {
     void ConsensusWalk(const ShadingPoint& sp, Word neededMask, const FrontRun& all, int64_t base, int ci, int cj,
                        int ck, bool planar, const CellSummary* summary, Blockers& blockers,
                        Accumulator& acc, RenderCounters& counters) const {
-        struct Candidate {
-            const FrontBlock* block;
-            int lane;
-            Word word;
-        };
-        Candidate buffer[512];
-        std::vector<Candidate> heap;
-        Candidate* list = buffer;
-        if (8 * all.count > 512) {
-            heap.resize(8 * all.count);
-            list = heap.data();
-        }
-        uint32_t n = 0;
-        bool agree = true;
         const LightMeshLattice& L = lattice_;
         if (planar) {
             UseAll(all, base, acc);
             counters.candidates += acc.m;
             return;
         }
-        all.ForEach([&](const FrontBlock& b, int k) {
-            const Word w = Evaluate(static_cast<uint64_t>(base + b.linear[k]));
-            // Only the lights the renderer needs matter (the others light P from behind).
-            if (n > 0 && ((w ^ list[0].word) & neededMask)) agree = false;
-            list[n++] = {&b, k, w};
-        });
-        counters.candidates += n;
-        // The blockers (cell summaries) pay when many segments are to be decided; when
-        // the candidates agree one segment usually settles it, and a ray is cheaper.
-        for (uint32_t c = 0; c < n; ++c) {
-            if (summary && !blockers.tried && (!agree || c == 1)) FindBlockers(*summary, base, sp, &blockers);
-            const FrontBlock& e = *list[c].block;
-            const int k = list[c].lane;
-            const Vec3 x = L.Node(ci + static_cast<int>(e.ox[k]), cj + static_cast<int>(e.oy[k]), ck + static_cast<int>(e.oz[k]));
-            if (!SeesPointCulled(x, sp, blockers, counters)) continue;
-            Use(acc, list[c].word);
-            if (agree) return;
+        // Pass 1: evaluate the candidates, and do they agree? (Only the lights the renderer
+        // needs matter: the others light P from behind.)
+        uint32_t n = 0;
+        bool agree = true;
+        Word first = 0;
+        uint32_t firstWord = 0;
+        if (!(sizeof(Word) == 1 && agreeFront_ &&
+              agreeFront_(all.blocks, all.masks, all.count, reinterpret_cast<const uint8_t*>(nodes_.get() + base),
+                          static_cast<uint32_t>(neededMask), &firstWord, &agree, &n))) {
+            n = 0;
+            agree = true;
+            all.ForEach([&](const FrontBlock& b, int k) {
+                const Word w = Evaluate(static_cast<uint64_t>(base + b.linear[k]));
+                if (n++ == 0) first = w;
+                else if ((w ^ first) & neededMask) agree = false;
+            });
         }
+        counters.candidates += n;
+        // Pass 2, in the template's order: the segments. When the candidates agree the first
+        // that sees P settles it; the blockers (cell summaries) pay when many segments are
+        // to be decided, and when they agree a ray is cheaper for the first one.
+        uint32_t c = 0;
+        all.Any([&](const FrontBlock& b, int k) {
+            if (summary && !blockers.tried && (!agree || c == 1)) FindBlockers(*summary, base, sp, &blockers);
+            ++c;
+            const Vec3 x = L.Node(ci + static_cast<int>(b.ox[k]), cj + static_cast<int>(b.oy[k]), ck + static_cast<int>(b.oz[k]));
+            if (!SeesPointCulled(x, sp, blockers, counters)) return false;
+            Use(acc, nodes_[static_cast<uint64_t>(base + b.linear[k])].load(std::memory_order_acquire));
+            return agree;
+        });
     }
 
     void ConvertTemplates() {
@@ -1314,6 +1358,7 @@ class LightMesh final : public LightMeshShadows {
     FrontFunction frontMasks_ = nullptr;
     CullFunction cull_ = nullptr;
     SumFrontFunction sumFront_ = nullptr;  // for one-byte words
+    AgreeFrontFunction agreeFront_ = nullptr;
     static constexpr uint64_t kNodePadding = 8;  // words after the last node, for SumFrontBytesAvx2's loads
     const uint64_t serial_ = NextSerial();  // tells this mesh's thread-local caches from others'
     static uint64_t NextSerial() {
