@@ -10,12 +10,12 @@
 #include <set>
 #include <sstream>
 
-#include <nlohmann/json.hpp>
 
 #include "lightmesh/accel/accelerator.h"
 #include "lightmesh/io/compare.h"
 #include "lightmesh/io/image.h"
 #include "lightmesh/render/render_job.h"
+#include "lightmesh/scene/json_reader.h"
 #include "lightmesh/render/whitted.h"
 #include "lightmesh/scene/scene_file.h"
 #include "lightmesh/shadow/light_mesh.h"
@@ -523,66 +523,27 @@ BenchMatrix BenchTablePreset(int table, bool quick, const std::string& repoDir) 
     return m;
 }
 
-namespace {
-
-using Json = nlohmann::ordered_json;
-
-std::string JsonType(const Json& j) {
-    if (j.is_number_integer()) return "an integer";
-    if (j.is_number()) return "a number";
-    if (j.is_string()) return "a string";
-    if (j.is_array()) return "a list";
-    if (j.is_object()) return "an object";
-    if (j.is_boolean()) return "a boolean";
-    return "null";
-}
-
-}  // namespace
-
 BenchMatrix LoadBenchMatrix(const std::string& path) {
+    // The scene files' reader: messages name the file and the JSON pointer (line and column
+    // for a syntax error); unknown and duplicate keys are errors.
+    json::Reader r(path, /*strict=*/true, nullptr);
     const std::string text = ReadRegularFile(path, "matrix file");  // never blocks on a FIFO
-    Json j;
-    try {
-        j = Json::parse(text);
-    } catch (const Json::exception& e) {
-        std::string what = e.what();
-        const size_t p = what.find("] ");
-        ThrowError("%s: not valid JSON: %s", path.c_str(), p == std::string::npos ? what.c_str() : what.c_str() + p + 2);
-    }
-    auto fail = [&](const std::string& where, const std::string& msg) {
-        ThrowError("%s %s: %s", path.c_str(), where.c_str(), msg.c_str());
-    };
-    if (!j.is_object()) fail("/", "expected an object, got " + JsonType(j));
+    const Json root = json::ParseJson(r, text);
+    json::Object o(r, root, "");
     BenchMatrix m;
     auto list = [&](const char* key) -> const Json* {
-        auto it = j.find(key);
-        if (it == j.end()) return nullptr;
-        if (!it->is_array()) fail(std::string("/") + key, "expected a list, got " + JsonType(*it));
-        if (it->empty()) fail(std::string("/") + key, "must not be empty");
-        return &*it;
-    };
-    auto integer = [&](const Json& v, const std::string& where, int lo, int hi) {
-        if (!v.is_number_integer()) fail(where, "expected an integer, got " + JsonType(v));
-        const long long x = v.get<long long>();
-        if (x < lo || x > hi) fail(where, StringPrintf("expected %d .. %d, got %lld", lo, hi, x));
-        return static_cast<int>(x);
+        const Json* v = o.Find(key);
+        if (!v) return nullptr;
+        if (!v->is_array()) r.Fail(o.Child(key), "expected a list, got " + json::Describe(*v));
+        if (v->empty()) r.Fail(o.Child(key), "must not be empty");
+        return v;
     };
     auto strings = [&](const char* key, std::vector<std::string>* out) {
         if (const Json* l = list(key)) {
             out->clear();
-            for (size_t i = 0; i < l->size(); ++i) {
-                const Json& v = (*l)[i];
-                const std::string where = StringPrintf("/%s/%zu", key, i);
-                if (!v.is_string()) fail(where, "expected a string, got " + JsonType(v));
-                out->push_back(v.get<std::string>());
-            }
+            for (size_t i = 0; i < l->size(); ++i) out->push_back(json::String(r, (*l)[i], json::Index(o.Child(key), i)));
         }
     };
-    for (auto it = j.begin(); it != j.end(); ++it) {
-        static const std::set<std::string> known{"scenes", "sizes", "cc", "ki", "variants", "accels", "repeat"};
-        if (!known.count(it.key()))
-            fail("/" + it.key(), "unknown key (expected scenes, sizes, cc, ki, variants, accels, repeat)");
-    }
     strings("scenes", &m.scenes);
     const std::filesystem::path folder = std::filesystem::path(path).parent_path();
     for (std::string& s : m.scenes)
@@ -592,7 +553,7 @@ BenchMatrix LoadBenchMatrix(const std::string& path) {
         try {
             ParseLightMeshVariant(m.variants[i]);
         } catch (const Error& e) {
-            fail(StringPrintf("/variants/%zu", i), e.what());
+            r.Fail(json::Index("/variants", i), e.what());
         }
     }
     strings("accels", &m.accels);
@@ -600,27 +561,26 @@ BenchMatrix LoadBenchMatrix(const std::string& path) {
         m.sizes.clear();
         for (size_t i = 0; i < l->size(); ++i) {
             const Json& v = (*l)[i];
-            const std::string where = StringPrintf("/sizes/%zu", i);
-            if (!v.is_array() || v.size() != 2) fail(where, "expected [width, height], got " + JsonType(v));
-            m.sizes.push_back({integer(v[0], where + "/0", 1, 16384), integer(v[1], where + "/1", 1, 16384)});
+            const std::string where = json::Index("/sizes", i);
+            if (!v.is_array() || v.size() != 2) r.Fail(where, "expected [width, height], got " + json::Describe(v));
+            m.sizes.push_back({json::Int(r, v[0], where + "/0", 1, 16384), json::Int(r, v[1], where + "/1", 1, 16384)});
         }
     }
     if (const Json* l = list("cc")) {
         m.cc.clear();
-        for (size_t i = 0; i < l->size(); ++i) m.cc.push_back(integer((*l)[i], StringPrintf("/cc/%zu", i), 1, 4096));
+        for (size_t i = 0; i < l->size(); ++i) m.cc.push_back(json::Int(r, (*l)[i], json::Index("/cc", i), 1, 4096));
     }
     if (const Json* l = list("ki")) {
         m.ki.clear();
         for (size_t i = 0; i < l->size(); ++i) {
-            const Json& v = (*l)[i];
-            const std::string where = StringPrintf("/ki/%zu", i);
-            if (!v.is_number()) fail(where, "expected a number, got " + JsonType(v));
-            const double k = v.get<double>();
-            if (!(k >= 0.01 && k <= 16)) fail(where, StringPrintf("expected 0.01 .. 16, got %g", k));
-            m.ki.push_back(static_cast<float>(k));
+            const std::string where = json::Index("/ki", i);
+            const float k = json::Float(r, (*l)[i], where);
+            if (!(k >= 0.01f && k <= 16)) r.Fail(where, StringPrintf("must be between 0.01 and 16, got %g", k));
+            m.ki.push_back(k);
         }
     }
-    if (auto it = j.find("repeat"); it != j.end()) m.repeat = integer(*it, "/repeat", 1, 100);
+    if (const Json* v = o.Find("repeat")) m.repeat = json::Int(r, *v, "/repeat", 1, 100);
+    o.Finish();
     return m;
 }
 
