@@ -28,6 +28,7 @@
 #include "lightmesh/shadow/area_light.h"
 #include "lightmesh/shadow/light_mesh.h"
 #include "lightmesh/shadow/shadow.h"
+#include "lightmesh/settings/render_settings.h"
 #include "lightmesh/shadow/sphere_templates.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/log.h"
@@ -106,6 +107,25 @@ struct RenderCommand {
     std::optional<std::string> shadows, accel, variant, templateDir, cellSummaries;
     bool stats = false;
 };
+
+// The range of a numeric knob of the settings table, as CLI11 checks it.
+CLI::Range SettingRange(const char* key) {
+    const lm::RenderSetting& s = lm::RenderSettingFor(key);
+    if (s.kind == lm::RenderSetting::Kind::Int) return CLI::Range(static_cast<int>(s.lo), static_cast<int>(s.hi));
+    return CLI::Range(static_cast<float>(s.lo), static_cast<float>(s.hi));
+}
+
+// A `render` option from the settings table: its flag, help text and range or choices.
+template <typename T>
+CLI::Option* AddSetting(CLI::App* cmd, const char* key, T* value) {
+    const lm::RenderSetting& s = lm::RenderSettingFor(key);
+    CLI::Option* option = cmd->add_option(s.flag, *value, s.help);
+    using K = lm::RenderSetting::Kind;
+    // (A range without an upper end, light_radius's, is checked where the value is used.)
+    if ((s.kind == K::Int || s.kind == K::Float) && std::isfinite(s.hi)) option->check(SettingRange(key));
+    if (s.kind == K::Choice) option->check(CLI::IsMember(s.choices));
+    return option;
+}
 
 void PrintFigures(const char* title, const std::vector<std::pair<std::string, std::string>>& figures) {
     if (figures.empty()) return;
@@ -582,47 +602,23 @@ int main(int argc, char** argv) {
     renderCmd->add_option("-o,--output", render.output,
                           "Output image, .png (8-bit sRGB) or .exr (linear float); default: the "
                           "scene's name with .png, in the current folder");
-    renderCmd->add_option("--width", render.width, "Image width in pixels")->check(CLI::Range(1, 16384));
-    renderCmd->add_option("--height", render.height, "Image height in pixels")->check(CLI::Range(1, 16384));
-    renderCmd->add_option("--aa", render.aa, "Anti-aliasing: N x N camera rays per pixel")
-        ->check(CLI::Range(1, 16));
-    renderCmd->add_option("--max-depth", render.maxDepth, "Mirror recursion limit (1: no reflections)")
-        ->check(CLI::Range(1, 64));
-    renderCmd->add_option("--shadows", render.shadows,
-                          "Shadows: none, rt (hard: one shadow ray per light), lmm (soft: the light mesh method) or area "
-                          "(soft reference: spherical lights, --samples shadow rays each)")
-        ->check(CLI::IsMember(lm::ShadowMethodNames()));
-    renderCmd->add_option("--accel", render.accel,
-                          std::string("Ray-query back-end: brute, grid (the paper's nested grid) or embree; default ") +
-                              lm::kDefaultAccelerator)
-        ->check(CLI::IsMember(lm::AcceleratorNames()));
-    renderCmd->add_option("--grid", render.grid,
-                          "Nested grid: top-level cells along the longest side (0: automatic)")
-        ->check(CLI::Range(0, 4096));
-    renderCmd->add_option("--cc", render.cc,
-                          "Light mesh: cells across the longest side of the scene (the paper's CC; default 100)")
-        ->check(CLI::Range(1, 4096));
-    renderCmd->add_option("--ki", render.ki,
-                          "Light mesh: interpolation radius in mesh steps, r = kI*h (default 2)")
-        ->check(CLI::Range(0.01f, 16.0f));
-    renderCmd->add_option("--variant", render.variant,
-                          "Light mesh variant, as in the paper's tables: grid (Grid), templates (Ш), "
-                          "reduced (У), none (Нет), inside (СТ), object (ОТ); not in the paper: consensus "
-                          "(ОТ's image, segments only where nodes disagree; default) and grid-none. "
-                          "The paper's names are accepted too");
-    renderCmd->add_option("--ns", render.ns,
-                          "Light mesh templates: sub-steps per cell side (default 8)")
-        ->check(CLI::Range(1, 64));
-    renderCmd->add_option("--template-dir", render.templateDir,
-                          "Folder caching the sphere templates (default: $XDG_CACHE_HOME/lightmesh/templates)");
-    renderCmd->add_option("--cell-summaries", render.cellSummaries,
-                          "Light mesh: per-cell summaries (exact; ours): auto (for consensus only), on (also none, inside) or off")
-        ->check(CLI::IsMember({"auto", "on", "off"}));
-    renderCmd->add_option("--light-radius", render.lightRadius,
-                          "Area shadows: radius of the sphere each point light becomes (default 0: point lights)");
-    renderCmd->add_option("--samples", render.samples,
-                          "Area shadows: stratified shadow rays per light and shading point (default 16)")
-        ->check(CLI::Range(1, 4096));
+    // The render knobs: flag, help and check from the settings table (the scene file's
+    // "render" object is checked against the same rows).
+    AddSetting(renderCmd, "width", &render.width);
+    AddSetting(renderCmd, "height", &render.height);
+    AddSetting(renderCmd, "aa", &render.aa);
+    AddSetting(renderCmd, "max_depth", &render.maxDepth);
+    AddSetting(renderCmd, "shadows", &render.shadows);
+    AddSetting(renderCmd, "accel", &render.accel);
+    AddSetting(renderCmd, "grid", &render.grid);
+    AddSetting(renderCmd, "cc", &render.cc);
+    AddSetting(renderCmd, "ki", &render.ki);
+    AddSetting(renderCmd, "variant", &render.variant);
+    AddSetting(renderCmd, "ns", &render.ns);
+    AddSetting(renderCmd, "template_dir", &render.templateDir);
+    AddSetting(renderCmd, "cell_summaries", &render.cellSummaries);
+    AddSetting(renderCmd, "light_radius", &render.lightRadius);
+    AddSetting(renderCmd, "samples", &render.samples);
     renderCmd->add_flag("--stats", render.stats, "Print rays by kind, time by phase, back-end figures, peak memory");
 
     CommonOptions info;
@@ -632,8 +628,7 @@ int main(int argc, char** argv) {
     AddCommonOptions(infoCmd, &info);
     infoCmd->add_option("--accel", infoAccel, "Also build this back-end and print its figures")
         ->check(CLI::IsMember(lm::AcceleratorNames()));
-    infoCmd->add_option("--grid", infoGrid, "Nested grid: top-level cells (0: automatic)")
-        ->check(CLI::Range(0, 1024));
+    AddSetting(infoCmd, "grid", &infoGrid);
 
     int templatesNs = lm::kDefaultTemplateSubsteps;
     float templatesKi = 2.0f;
@@ -642,7 +637,7 @@ int main(int argc, char** argv) {
     CLI::App* templatesCmd = app.add_subcommand(
         "templates", "Build and cache the light mesh's sphere templates for (ns, kI) (the paper's section 3.1)");
     templatesCmd->add_option("--ns", templatesNs, "Sub-steps per cell side")->check(CLI::Range(1, 64));
-    templatesCmd->add_option("--ki", templatesKi, "Interpolation radius in mesh steps")->check(CLI::Range(0.01f, 16.0f));
+    templatesCmd->add_option("--ki", templatesKi, "Interpolation radius in mesh steps")->check(SettingRange("ki"));
     templatesCmd->add_option("--template-dir", templatesDir, "Cache folder (default: $XDG_CACHE_HOME/lightmesh/templates)");
     templatesCmd->add_flag("--measure", templatesMeasure,
                            "Also print, for ns = 1 … 32, how many nodes snapping P to a sub-position gets wrong");
@@ -670,9 +665,9 @@ int main(int argc, char** argv) {
     CLI::Option* benchSize =
         benchCmd->add_option("--size", bench.sizes, "Image sizes WIDTHxHEIGHT (repeat); default 1024x768");
     CLI::Option* benchCc = benchCmd->add_option("--cc", bench.matrix.cc, "Light mesh CC values, comma-separated; default 100")
-        ->delimiter(',')->check(CLI::Range(1, 4096));
+        ->delimiter(',')->check(SettingRange("cc"));
     CLI::Option* benchKi = benchCmd->add_option("--ki", bench.matrix.ki, "Light mesh kI values, comma-separated; default 2")
-        ->delimiter(',')->check(CLI::Range(0.01f, 16.0f));
+        ->delimiter(',')->check(SettingRange("ki"));
     CLI::Option* benchVariants = benchCmd->add_option("--variants", bench.matrix.variants,
                          "LMM variants, comma-separated; default grid,templates,reduced,none,inside,object,consensus")
         ->delimiter(',');

@@ -16,6 +16,7 @@
 #include "lightmesh/io/image.h"
 #include "lightmesh/render/render_job.h"
 #include "lightmesh/scene/json_reader.h"
+#include "lightmesh/settings/render_settings.h"
 #include "lightmesh/render/whitted.h"
 #include "lightmesh/scene/scene_file.h"
 #include "lightmesh/shadow/light_mesh.h"
@@ -563,19 +564,25 @@ BenchMatrix LoadBenchMatrix(const std::string& path) {
             const Json& v = (*l)[i];
             const std::string where = json::Index("/sizes", i);
             if (!v.is_array() || v.size() != 2) r.Fail(where, "expected [width, height], got " + json::Describe(v));
-            m.sizes.push_back({json::Int(r, v[0], where + "/0", 1, 16384), json::Int(r, v[1], where + "/1", 1, 16384)});
+            const RenderSetting &w = RenderSettingFor("width"), &h = RenderSettingFor("height");
+            m.sizes.push_back({json::Int(r, v[0], where + "/0", static_cast<int>(w.lo), static_cast<int>(w.hi)),
+                               json::Int(r, v[1], where + "/1", static_cast<int>(h.lo), static_cast<int>(h.hi))});
         }
     }
     if (const Json* l = list("cc")) {
         m.cc.clear();
-        for (size_t i = 0; i < l->size(); ++i) m.cc.push_back(json::Int(r, (*l)[i], json::Index("/cc", i), 1, 4096));
+        const RenderSetting& cc = RenderSettingFor("cc");
+        for (size_t i = 0; i < l->size(); ++i)
+            m.cc.push_back(json::Int(r, (*l)[i], json::Index("/cc", i), static_cast<int>(cc.lo), static_cast<int>(cc.hi)));
     }
     if (const Json* l = list("ki")) {
         m.ki.clear();
         for (size_t i = 0; i < l->size(); ++i) {
             const std::string where = json::Index("/ki", i);
             const float k = json::Float(r, (*l)[i], where);
-            if (!(k >= 0.01f && k <= 16)) r.Fail(where, StringPrintf("must be between 0.01 and 16, got %g", k));
+            const RenderSetting& ki = RenderSettingFor("ki");
+            if (!(k >= static_cast<float>(ki.lo) && k <= static_cast<float>(ki.hi)))
+                r.Fail(where, StringPrintf("must be between %g and %g, got %g", ki.lo, ki.hi, k));
             m.ki.push_back(k);
         }
     }

@@ -3,6 +3,7 @@
 
 #include <string>
 
+#include "lightmesh/settings/render_settings.h"
 #include "lightmesh/accel/accelerator.h"
 
 namespace lm {
@@ -41,11 +42,6 @@ struct AreaLightOptions {
     int samples = 16;     ///< shadow rays per light and shading point, 1 .. 4096
 };
 
-#ifdef LIGHTMESH_HAS_EMBREE
-inline constexpr const char* kDefaultAccelerator = "embree";
-#else
-inline constexpr const char* kDefaultAccelerator = "grid";
-#endif
 
 struct RenderOptions {
     int width = 640;

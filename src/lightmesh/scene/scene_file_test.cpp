@@ -1,5 +1,6 @@
 // Tests of LoadScene: the JSON scene format, its error messages, and bare-mesh framing.
 #include "lightmesh/scene/scene_file.h"
+#include "lightmesh/settings/render_settings.h"
 
 #include <gtest/gtest.h>
 
@@ -371,13 +372,13 @@ TEST(SceneFile, BadInputsGiveExactMessages) {
          .expected = "scene.json /render/cc: must be between 1 and 4096, got 100000",
          .extra = R"(, "render": {"cc": 100000})"},
         {.name = "ki_0",
-         .expected = "scene.json /render/ki: must be in (0, 16], got 0",
+         .expected = "scene.json /render/ki: must be between 0.01 and 16, got 0",
          .extra = R"(, "render": {"ki": 0})"},
         {.name = "ki_negative",
-         .expected = "scene.json /render/ki: must be in (0, 16], got -2",
+         .expected = "scene.json /render/ki: must be between 0.01 and 16, got -2",
          .extra = R"(, "render": {"ki": -2})"},
         {.name = "ki_absurd",
-         .expected = "scene.json /render/ki: must be in (0, 16], got 1000",
+         .expected = "scene.json /render/ki: must be between 0.01 and 16, got 1000",
          .extra = R"(, "render": {"ki": 1000})"},
         {.name = "ns_65",
          .expected = "scene.json /render/ns: must be between 0 and 64, got 65",
@@ -551,6 +552,38 @@ TEST(SceneFile, BadInputsGiveExactMessages) {
         else
             EXPECT_EQ(message, c.expected);
     }
+}
+
+// Every numeric knob of the "render" object takes its range from the settings table, the one
+// the CLI checks too: its ends load, just outside them is an error naming the range.
+TEST(SceneFile, RenderKnobsFollowTheSettingsTable) {
+    const std::string folder = TempFolder();
+    int checked = 0;
+    for (const RenderSetting& row : RenderSettings()) {
+        if (row.kind != RenderSetting::Kind::Int && row.kind != RenderSetting::Kind::Float) continue;
+        SCOPED_TRACE(row.key);
+        const bool integer = row.kind == RenderSetting::Kind::Int;
+        const double step = integer ? 1 : 0.005;
+        auto load = [&](double v) {
+            BadCase c;
+            c.extra = StringPrintf(R"(, "render": {"%s": %.17g})", row.key, v);
+            // Keep width·height under the pixel limit while the other one is at its end.
+            if (std::string(row.key) == "width" || std::string(row.key) == "height")
+                c.extra = StringPrintf(R"(, "render": {"width": 64, "height": 64, "%s": %.17g})", row.key, v);
+            const std::string path = WriteFile(folder, std::string(row.key) + ".json", SceneText(c));
+            return Replace(LoadError(path), path, "scene.json");
+        };
+        EXPECT_EQ(load(row.lo), "<no error>");
+        EXPECT_NE(load(row.lo - step).find(StringPrintf("scene.json /render/%s: must ", row.key)), std::string::npos);
+        if (std::isfinite(row.hi)) {
+            EXPECT_EQ(load(row.hi), "<no error>");
+            EXPECT_NE(load(row.hi + step).find(integer ? StringPrintf("must be between %g and %g, got", row.lo, row.hi)
+                                                       : StringPrintf("must be between %g and %g", row.lo, row.hi)),
+                      std::string::npos);
+        }
+        ++checked;
+    }
+    EXPECT_GE(checked, 9);
 }
 
 TEST(SceneFile, CorruptedScenesThrowOnlyErrors) {

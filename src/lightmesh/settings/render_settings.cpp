@@ -1,0 +1,50 @@
+#include "lightmesh/settings/render_settings.h"
+
+#include <limits>
+#include <stdexcept>
+
+namespace lm {
+
+const std::vector<RenderSetting>& RenderSettings() {
+    using K = RenderSetting::Kind;
+    constexpr double kNoLimit = std::numeric_limits<double>::infinity();
+    static const std::vector<RenderSetting> rows = {
+        {"width", "--width", K::Int, 1, 16384, {}, "Image width in pixels"},
+        {"height", "--height", K::Int, 1, 16384, {}, "Image height in pixels"},
+        {"aa", "--aa", K::Int, 1, 16, {}, "Anti-aliasing: N x N camera rays per pixel"},
+        {"max_depth", "--max-depth", K::Int, 1, 64, {}, "Mirror recursion limit (1: no reflections)"},
+        {"shadows", "--shadows", K::Choice, 0, 0, {"none", "rt", "lmm", "area"},
+         "Shadows: none, rt (hard: one shadow ray per light), lmm (soft: the light mesh method) or area "
+         "(soft reference: spherical lights, --samples shadow rays each)"},
+        {"accel", "--accel", K::Choice, 0, 0, {"brute", "grid", "embree"},
+         std::string("Ray-query back-end: brute, grid (the paper's nested grid) or embree; default ") +
+             kDefaultAccelerator},
+        {"grid", "--grid", K::Int, 0, 4096, {}, "Nested grid: top-level cells along the longest side (0: automatic)"},
+        {"cc", "--cc", K::Int, 1, 4096, {},
+         "Light mesh: cells across the longest side of the scene (the paper's CC; default 100)"},
+        {"ki", "--ki", K::Float, 0.01, 16, {}, "Light mesh: interpolation radius in mesh steps, r = kI*h (default 2)"},
+        {"variant", "--variant", K::String, 0, 0, {},
+         "Light mesh variant, as in the paper's tables: grid (Grid), templates (Ш), "
+         "reduced (У), none (Нет), inside (СТ), object (ОТ); not in the paper: consensus "
+         "(ОТ's image, segments only where nodes disagree; default) and grid-none. "
+         "The paper's names are accepted too"},
+        {"ns", "--ns", K::Int, 0, 64, {}, "Light mesh templates: sub-steps per cell side (default 8; 0: the default)"},
+        {"template_dir", "--template-dir", K::String, 0, 0, {},
+         "Folder caching the sphere templates (default: $XDG_CACHE_HOME/lightmesh/templates)"},
+        {"cell_summaries", "--cell-summaries", K::Choice, 0, 0, {"auto", "on", "off"},
+         "Light mesh: per-cell summaries (exact; ours): auto (for consensus only), on (also none, inside) or off"},
+        {"light_radius", "--light-radius", K::Float, 0, kNoLimit, {},
+         "Area shadows: radius of the sphere each point light becomes (default 0: point lights)"},
+        {"samples", "--samples", K::Int, 1, 4096, {},
+         "Area shadows: stratified shadow rays per light and shading point (default 16)"},
+    };
+    return rows;
+}
+
+const RenderSetting& RenderSettingFor(std::string_view key) {
+    for (const RenderSetting& s : RenderSettings())
+        if (key == s.key) return s;
+    throw std::logic_error("no render setting \"" + std::string(key) + "\"");
+}
+
+}  // namespace lm

@@ -1,0 +1,38 @@
+// render_settings.h -- the render knobs in one table: each row is one knob with its
+// scene-file key (in the "render" object), its `lightmesh render` flag, its kind, its range
+// or choices, and its help text. The scene-file reader and the CLI both take their checks
+// from it, so a knob cannot accept one range in a file and another on the command line
+// (kI, ns and the grid resolution had drifted apart); a test checks that the README lists
+// every row and that the choices are the ones the factories accept.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace lm {
+
+/// The default ray-query back-end: the fastest compiled in.
+#ifdef LIGHTMESH_HAS_EMBREE
+inline constexpr const char* kDefaultAccelerator = "embree";
+#else
+inline constexpr const char* kDefaultAccelerator = "grid";
+#endif
+
+struct RenderSetting {
+    enum class Kind { Int, Float, String, Choice };
+    const char* key;   ///< in the scene file's "render" object
+    const char* flag;  ///< of `lightmesh render`
+    Kind kind;
+    double lo = 0, hi = 0;             ///< Int, Float: the accepted range, both ends included
+    std::vector<std::string> choices;  ///< Choice: the accepted values
+    std::string help;                  ///< the CLI's help text
+};
+
+/// Every row, in the order of `lightmesh render --help`.
+const std::vector<RenderSetting>& RenderSettings();
+
+/// The row of scene-file key `key`. An unknown key is a programming error (std::logic_error).
+const RenderSetting& RenderSettingFor(std::string_view key);
+
+}  // namespace lm

@@ -1,0 +1,58 @@
+#include "lightmesh/settings/render_settings.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <iterator>
+#include <set>
+#include <stdexcept>
+
+#include "lightmesh/accel/accelerator.h"
+#include "lightmesh/shadow/shadow.h"
+
+namespace lm {
+namespace {
+
+TEST(RenderSettings, ChoicesAreTheOnesTheFactoriesAccept) {
+    EXPECT_EQ(RenderSettingFor("shadows").choices, ShadowMethodNames());
+    EXPECT_EQ(RenderSettingFor("accel").choices, AcceleratorNames());
+    EXPECT_NE(RenderSettingFor("accel").help.find(std::string("default ") + kDefaultAccelerator), std::string::npos);
+    EXPECT_THROW(RenderSettingFor("no_such_knob"), std::logic_error);
+}
+
+TEST(RenderSettings, RowsAreWellFormed) {
+    std::set<std::string> keys, flags;
+    for (const RenderSetting& s : RenderSettings()) {
+        SCOPED_TRACE(s.key);
+        EXPECT_TRUE(keys.insert(s.key).second) << "duplicate key";
+        EXPECT_TRUE(flags.insert(s.flag).second) << "duplicate flag";
+        EXPECT_EQ(std::string(s.flag).rfind("--", 0), 0u);
+        EXPECT_FALSE(s.help.empty());
+        if (s.kind == RenderSetting::Kind::Int || s.kind == RenderSetting::Kind::Float) EXPECT_LE(s.lo, s.hi);
+        EXPECT_EQ(s.kind == RenderSetting::Kind::Choice, !s.choices.empty());
+    }
+}
+
+// The README documents every knob: its flag in the table of `render` options, its key in
+// the scene file's "render" row.
+TEST(RenderSettings, TheReadmeListsEveryRow) {
+    std::ifstream in(LIGHTMESH_README);
+    ASSERT_TRUE(in) << LIGHTMESH_README;
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const size_t optionsBegin = text.find("`render` options");
+    const size_t optionsEnd = text.find("\n\n", text.find("| option | meaning |", optionsBegin));
+    ASSERT_NE(optionsBegin, std::string::npos);
+    ASSERT_NE(optionsEnd, std::string::npos);
+    const std::string options = text.substr(optionsBegin, optionsEnd - optionsBegin);
+    const size_t row = text.find("| `render` |");
+    ASSERT_NE(row, std::string::npos);
+    const std::string renderRow = text.substr(row, text.find('\n', row) - row);
+    for (const RenderSetting& s : RenderSettings()) {
+        EXPECT_NE(options.find(std::string("`") + s.flag), std::string::npos) << s.flag << " is not in the README's options";
+        EXPECT_NE(renderRow.find(std::string("`") + s.key + "`"), std::string::npos)
+            << s.key << " is not in the README's \"render\" row";
+    }
+}
+
+}  // namespace
+}  // namespace lm
