@@ -296,23 +296,15 @@ __attribute__((target("avx2,popcnt"))) bool AgreeFrontBytesAvx2(const FrontBlock
 }
 using AgreeFrontFunction = bool (*)(const FrontBlock*, const uint8_t*, uint32_t, const uint8_t*, uint32_t, uint32_t*, bool*,
                                     uint32_t*);
-AgreeFrontFunction ChooseAgreeFrontFunction(int width) {
-#ifdef LIGHTMESH_TSAN
-    (void)width;
-    return nullptr;
-#else
-    return (width == 0 || width == 8) && __builtin_cpu_supports("avx2") ? AgreeFrontBytesAvx2 : nullptr;
-#endif
-}
 using SumFrontFunction = bool (*)(const FrontBlock*, const uint8_t*, uint32_t, const uint8_t*, int, uint32_t*, uint32_t*);
-// Null where the scalar sum is used: no AVX2, a test's narrower width, or ThreadSanitizer
-// (which does not see the gather's loads as atomic).
-SumFrontFunction ChooseSumFrontFunction(int width) {
+// Whether the gathers of one-byte words above are used: not without AVX2, not for a test's
+// narrower width, not under ThreadSanitizer (which does not see their loads as atomic).
+bool UseByteGathers(int width) {
 #ifdef LIGHTMESH_TSAN
     (void)width;
-    return nullptr;
+    return false;
 #else
-    return (width == 0 || width == 8) && __builtin_cpu_supports("avx2") ? SumFrontBytesAvx2 : nullptr;
+    return (width == 0 || width == 8) && __builtin_cpu_supports("avx2");
 #endif
 }
 
@@ -335,8 +327,8 @@ class LightMesh final : public LightMeshShadows {
               const LightMeshVariant& variant, TemplateLoad templates, const LightMeshOptions& options)
         : scene_(scene), accel_(accel), lattice_(lattice), variant_(variant),
           templates_(std::move(templates)), frontMasks_(ChooseFrontFunction(options.simdWidth)),
-          cull_(ChooseCullFunction(options.simdWidth)), sumFront_(ChooseSumFrontFunction(options.simdWidth)),
-          agreeFront_(ChooseAgreeFrontFunction(options.simdWidth)),
+          cull_(ChooseCullFunction(options.simdWidth)), sumFront_(UseByteGathers(options.simdWidth) ? SumFrontBytesAvx2 : nullptr),
+          agreeFront_(UseByteGathers(options.simdWidth) ? AgreeFrontBytesAvx2 : nullptr),
           nodes_(ZeroedArray<Word>(lattice.NodeCount() + kNodePadding)) {
         const std::string& cellSummaries = options.cellSummaries;
         if (variant_.enumeration == SphereEnumeration::Templates) ConvertTemplates();
