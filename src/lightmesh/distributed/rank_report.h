@@ -4,7 +4,7 @@
 
 #include <cstdint>
 
-#include "lightmesh/render/counters.h"
+#include "lightmesh/util/counters.h"
 
 namespace lm {
 

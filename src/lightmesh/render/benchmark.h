@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "lightmesh/render/counters.h"
-#include "lightmesh/render/options.h"
+#include "lightmesh/util/counters.h"
+#include "lightmesh/settings/options.h"
 
 namespace lm {
 

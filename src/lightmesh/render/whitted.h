@@ -3,8 +3,8 @@
 
 #include "lightmesh/accel/accelerator.h"
 #include "lightmesh/io/image.h"
-#include "lightmesh/render/counters.h"
-#include "lightmesh/render/options.h"
+#include "lightmesh/util/counters.h"
+#include "lightmesh/settings/options.h"
 #include "lightmesh/scene/camera.h"
 #include "lightmesh/scene/scene.h"
 #include "lightmesh/shadow/shadow.h"

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "lightmesh/geometry/mesh.h"
-#include "lightmesh/render/options.h"
+#include "lightmesh/settings/options.h"
 
 namespace lm {
 

@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "lightmesh/accel/accelerator.h"
-#include "lightmesh/render/counters.h"
-#include "lightmesh/render/options.h"
+#include "lightmesh/util/counters.h"
+#include "lightmesh/settings/options.h"
 #include "lightmesh/scene/scene.h"
 
 namespace lm {

@@ -3,8 +3,8 @@
 
 #include <string>
 
+#include "lightmesh/settings/accel_options.h"
 #include "lightmesh/settings/render_settings.h"
-#include "lightmesh/accel/accelerator.h"
 
 namespace lm {
 
