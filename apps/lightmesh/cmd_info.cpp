@@ -1,0 +1,56 @@
+// cmd_info.cpp -- `lightmesh info`.
+#include "commands.h"
+
+#include "lightmesh/accel/accelerator.h"
+#include "lightmesh/util/log.h"
+
+namespace lm::cli {
+
+int RunInfo(const CommonOptions& common, const std::string& accelName, int grid) {
+    ApplyLogLevel(common);
+    lm::Scene scene = LoadWithWarnings(common);
+    const lm::Bounds3 b = scene.mesh.Bounds();
+    const lm::EdgeReport edges = lm::AnalyzeEdges(scene.mesh);
+    std::printf("scene      %s\n", scene.name.c_str());
+    for (const std::string& s : scene.report.sources) std::printf("source     %s\n", s.c_str());
+    std::printf("triangles  %s (removed: %s degenerate, %s duplicate; meshes excluded: %zu)\n",
+                Count(scene.mesh.TriangleCount()).c_str(), Count(scene.report.degenerateRemoved).c_str(),
+                Count(scene.report.duplicatesRemoved).c_str(), scene.report.meshesExcluded);
+    std::printf("vertices   %s%s\n", Count(scene.mesh.positions.size()).c_str(),
+                scene.mesh.normals.empty() ? "" : " (with shading normals)");
+    std::printf("bounds     [%g %g %g] - [%g %g %g], size %g x %g x %g\n", b.lo.x, b.lo.y, b.lo.z,
+                b.hi.x, b.hi.y, b.hi.z, b.Diagonal().x, b.Diagonal().y, b.Diagonal().z);
+    std::printf("edges      %s: %s open, %s non-manifold -> %s\n", Count(edges.edges).c_str(),
+                Count(edges.open).c_str(), Count(edges.nonManifold).c_str(),
+                edges.Closed() ? "every object is a closed solid"
+                               : "not all objects are closed solids (the inside-object test is unreliable there)");
+    std::printf("lights     %zu\n", scene.lights.size());
+    for (size_t i = 0; i < scene.lights.size(); ++i) {
+        const lm::PointLight& l = scene.lights[i];
+        std::printf("  light %zu  at [%g %g %g], intensity [%g %g %g], falloff %s\n", i, l.position.x,
+                    l.position.y, l.position.z, l.intensity.r, l.intensity.g, l.intensity.b,
+                    l.falloff == lm::Falloff::None ? "none" : "inverse_square");
+    }
+    std::vector<size_t> uses(scene.materials.size());
+    for (uint32_t m : scene.mesh.materialIds) ++uses[m];
+    std::printf("materials  %zu\n", scene.materials.size());
+    for (size_t i = 0; i < scene.materials.size(); ++i) {
+        const lm::Material& m = scene.materials[i];
+        std::printf("  %-12s kd [%g %g %g], ks [%g %g %g], phong %g, mirror [%g %g %g]; %s triangles\n",
+                    m.name.c_str(), m.kd.r, m.kd.g, m.kd.b, m.ks.r, m.ks.g, m.ks.b, m.phong,
+                    m.mirror.r, m.mirror.g, m.mirror.b, Count(uses[i]).c_str());
+    }
+    const lm::Camera& cam = scene.camera;
+    std::printf("camera     at [%g %g %g] looking at [%g %g %g], fov %g\n", cam.position.x,
+                cam.position.y, cam.position.z, cam.lookAt.x, cam.lookAt.y, cam.lookAt.z, cam.fovY);
+    lm::AccelOptions accelOptions = scene.render.accelOptions;
+    if (grid >= 0) accelOptions.gridResolution = grid;
+    const std::string name = accelName.empty() ? scene.render.accel : accelName;
+    const auto t = Clock::now();
+    auto accel = lm::CreateAccelerator(name, scene.mesh, accelOptions);
+    std::printf("accel      %s, built in %.3f s\n", name.c_str(), SecondsSince(t));
+    PrintFigures("  figures", accel->Figures());
+    return 0;
+}
+
+}  // namespace lm::cli

@@ -1,0 +1,231 @@
+// cmd_render.cpp -- `lightmesh render`, in one process or over MPI ranks.
+#include "commands.h"
+
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <functional>
+#include <memory>
+
+#include "lightmesh/distributed/rank_report.h"
+#ifdef LIGHTMESH_HAS_MPI
+#include "lightmesh/distributed/mpi_render.h"
+#endif
+#include "lightmesh/io/image.h"
+#include "lightmesh/render/render_job.h"
+#include "lightmesh/render/whitted.h"
+#include "lightmesh/shadow/area_light.h"
+#include "lightmesh/shadow/light_mesh.h"
+#include "lightmesh/shadow/shadow.h"
+#include "lightmesh/util/log.h"
+#include "lightmesh/util/progress.h"
+
+namespace lm::cli {
+
+/// A render ready to run: the scene loaded, options merged and checked, the output's folder
+/// checked, the back-end and the shadow method built.
+struct PreparedRender {
+    lm::Scene scene;
+    lm::RenderOptions options;
+    std::string output;
+    std::unique_ptr<lm::RenderJob> job;
+    double loadSeconds = 0;
+};
+
+std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
+    auto prepared = std::make_unique<PreparedRender>();
+    const auto t0 = Clock::now();
+    lm::Scene& scene = prepared->scene;
+    scene = LoadWithWarnings(cmd.common, cmd.width.value_or(0), cmd.height.value_or(0));
+    prepared->loadSeconds = SecondsSince(t0);
+
+    lm::RenderOptions& options = prepared->options;
+    options = scene.render;
+    if (cmd.width) options.width = *cmd.width;
+    if (cmd.height) options.height = *cmd.height;
+    if (cmd.aa) options.aa = *cmd.aa;
+    if (cmd.maxDepth) options.maxDepth = *cmd.maxDepth;
+    if (cmd.shadows) options.shadows = *cmd.shadows;
+    if (cmd.accel) options.accel = *cmd.accel;
+    if (cmd.grid) options.accelOptions.gridResolution = *cmd.grid;
+    if (cmd.cc) options.lightMesh.cc = *cmd.cc;
+    if (cmd.ki) options.lightMesh.ki = *cmd.ki;
+    if (cmd.variant) options.lightMesh.variant = *cmd.variant;
+    if (cmd.ns) options.lightMesh.ns = *cmd.ns;
+    if (cmd.templateDir) options.lightMesh.templateDir = *cmd.templateDir;
+    if (cmd.cellSummaries) options.lightMesh.cellSummaries = *cmd.cellSummaries;
+    if (cmd.lightRadius) options.areaLight.radius = *cmd.lightRadius;
+    if (cmd.samples) options.areaLight.samples = *cmd.samples;
+
+    if (cmd.variant && cmd.variant->empty())
+        lm::ThrowError("--variant: must not be empty (leave it out for the default)");
+    // Options the chosen method does not use: a warning each, as pbrt reports unused
+    // parameters.
+    auto unused = [&](bool given, const char* option, const char* usedBy) {
+        if (given)
+            lm::LogWarning(lm::StringPrintf("%s is not used by --shadows %s (only by %s); ignored",
+                                            option, options.shadows.c_str(), usedBy));
+    };
+    if (options.shadows != "lmm") {
+        unused(cmd.cc.has_value(), "--cc", "lmm");
+        unused(cmd.ki.has_value(), "--ki", "lmm");
+        unused(cmd.variant.has_value(), "--variant", "lmm");
+        unused(cmd.ns.has_value(), "--ns", "lmm");
+        unused(cmd.templateDir.has_value(), "--template-dir", "lmm");
+    }
+    if (options.shadows != "area") {
+        unused(cmd.lightRadius.has_value(), "--light-radius", "area");
+        unused(cmd.samples.has_value(), "--samples", "area");
+    }
+    if (cmd.grid && options.accel != "grid")
+        lm::LogWarning(lm::StringPrintf("--grid is not used by --accel %s (only by grid); ignored",
+                                        options.accel.c_str()));
+    if (options.shadows == "lmm") lm::ParseLightMeshVariant(options.lightMesh.variant);
+    if (options.shadows == "area" || cmd.lightRadius || cmd.samples)
+        lm::ValidateAreaLightOptions(options.areaLight);
+    if (options.shadows == "area") {
+        if (options.areaLight.radius == 0)
+            lm::LogWarning("--shadows area with light radius 0: point lights, the same image as --shadows rt "
+                           "(set --light-radius)");
+    }
+    // Check everything about the output before spending time on the render.
+    std::string& output = prepared->output;
+    output = cmd.output;
+    if (output.empty()) {
+        std::string stem = cmd.common.scene.rfind("builtin:", 0) == 0
+                               ? cmd.common.scene.substr(8)
+                               : std::filesystem::path(cmd.common.scene).stem().string();
+        output = stem + ".png";
+    }
+    lm::ImageFormatFor(output);
+    lm::CheckWritableFolder(output);
+    const uint64_t imageBytes = static_cast<uint64_t>(options.width) * options.height * sizeof(lm::Color);
+    const uint64_t physical = lm::PhysicalMemoryBytes();
+    if (physical && imageBytes > physical / 2)
+        lm::ThrowError("image %dx%d would need %s, more than half of this machine's %s",
+                       options.width, options.height, lm::FormatBytes(imageBytes).c_str(),
+                       lm::FormatBytes(physical).c_str());
+
+    prepared->job = std::make_unique<lm::RenderJob>(scene, options);
+    return prepared;
+}
+
+// The summary line, and with --stats the figures (per rank under MPI).
+void PrintRender(const RenderCommand& cmd, const PreparedRender& p, const lm::RenderResult& result,
+                 double writeSeconds, const std::vector<lm::RankReport>* ranks) {
+    const lm::RenderOptions& options = p.options;
+    std::printf("%s: %dx%d, shadows %s, accel %s, %zu triangles, %zu lights: render %.3f s\n",
+                p.output.c_str(), options.width, options.height, std::string(p.job->Shadows().Name()).c_str(),
+                std::string(p.job->Accel().Name()).c_str(), p.scene.mesh.TriangleCount(), p.scene.lights.size(),
+                result.seconds);
+    if (!cmd.stats) return;
+    const lm::RenderCounters& c = result.counters;
+    std::printf("time      load %.3f s, build %.3f s, shadow setup %.3f s, render %.3f s, write %.3f s\n",
+                p.loadSeconds, p.job->BuildSeconds(), p.job->ShadowSetupSeconds(), result.seconds, writeSeconds);
+    std::printf("threads   %d%s\n",
+                static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)),
+                ranks ? " per rank" : "");
+    if (ranks) {
+        uint64_t nodes = 0;
+        for (const lm::RankReport& r : *ranks) nodes += r.nodesEvaluated;
+        std::printf("ranks     %zu, tiles handed out in batches from a counter on rank 0 (one-sided MPI)%s\n",
+                    ranks->size(),
+                    nodes ? lm::StringPrintf("; light-mesh nodes evaluated by all ranks together %s", Count(nodes).c_str()).c_str()
+                          : "");
+        for (const lm::RankReport& r : *ranks)
+            std::printf("rank %-5d tiles %d (%d batches, %.2f ms waiting for them), render %.3f s, rays camera %s, "
+                        "shadow %s, reflection %s%s\n",
+                        r.rank, r.tiles, r.batches, r.fetchSeconds * 1e3, r.seconds, Count(r.counters.cameraRays).c_str(),
+                        Count(r.counters.shadowRays).c_str(), Count(r.counters.reflectionRays).c_str(),
+                        nodes ? (", nodes evaluated " + Count(r.nodesEvaluated)).c_str() : "");
+    }
+    std::printf("rays      camera %s, shadow %s, reflection %s; shading points %s\n",
+                Count(c.cameraRays).c_str(), Count(c.shadowRays).c_str(),
+                Count(c.reflectionRays).c_str(), Count(c.shadingPoints).c_str());
+    PrintFigures("accel", p.job->Accel().Figures());
+    if (c.interpolations + c.fallbacks > 0) {
+        const double points = static_cast<double>(c.interpolations + c.fallbacks);
+        std::printf("lmm       interpolated points %s, mean m %.1f, candidates per point %.1f, "
+                    "local-visibility segments %s, fallbacks %s (%.2f%%)\n",
+                    Count(c.interpolations).c_str(),
+                    c.interpolations ? static_cast<double>(c.nodesUsed) / static_cast<double>(c.interpolations) : 0.0,
+                    static_cast<double>(c.candidates) / points, Count(c.localSegments).c_str(),
+                    Count(c.fallbacks).c_str(), 100.0 * static_cast<double>(c.fallbacks) / points);
+        if (c.uniformCellPoints + c.planarCellPoints > 0)
+            std::printf("cells     points answered by their cell's summary %s (%.1f%%), in planar cells %s (%.1f%%), "
+                        "segments decided without a ray %s; mean m counts the other points only\n",
+                        Count(c.uniformCellPoints).c_str(), 100.0 * static_cast<double>(c.uniformCellPoints) / points,
+                        Count(c.planarCellPoints).c_str(), 100.0 * static_cast<double>(c.planarCellPoints) / points,
+                        Count(c.culledSegments).c_str());
+    }
+    PrintFigures(ranks ? "shadows (rank 0)" : "shadows", p.job->Shadows().Figures());
+    std::printf("memory    peak %s%s\n", lm::FormatBytes(lm::PeakMemoryBytes()).c_str(), ranks ? " (rank 0)" : "");
+}
+
+int RunRender(const RenderCommand& cmd) {
+    ApplyLogLevel(cmd.common);
+    lm::InstallInterruptCleanup();
+    const std::unique_ptr<PreparedRender> p = PrepareRender(cmd);
+    lm::RenderResult result;
+    {
+        lm::ProgressReporter progress(p->job->Renderer().TileCount(), "Rendering",
+                                      !cmd.common.quiet && lm::ProgressReporter::StderrIsTerminal());
+        result = p->job->Render(&progress);
+    }
+    const auto t3 = Clock::now();
+    lm::WriteImage(p->output, result.image);
+    PrintRender(cmd, *p, result, SecondsSince(t3), nullptr);
+    return 0;
+}
+
+#ifdef LIGHTMESH_HAS_MPI
+/// `mpirun -np N lightmesh render …`: every rank prepares the render; if one fails, rank 0
+/// prints the first failing rank's message and every rank exits 1. The tiles are shared out
+/// (RenderDistributed), rank 0 gathers and writes the image, and prints the figures.
+int RunRenderMpi(const RenderCommand& cmd, const lm::MpiSession& session) {
+    const bool root = session.Rank() == 0;
+    ApplyLogLevel(cmd.common);
+    if (!root) lm::SetLogLevel(lm::LogLevel::Error);  // warnings once, from rank 0
+    lm::InstallInterruptCleanup();
+    auto fail = [&](const std::string& message, int rank) {
+        if (root)
+            std::fprintf(stderr, "lightmesh: error: %s%s\n", message.c_str(),
+                         rank > 0 ? lm::StringPrintf(" (rank %d of %d)", rank, session.Size()).c_str() : "");
+        return 1;
+    };
+    std::unique_ptr<PreparedRender> p;
+    std::string error, message;
+    int failedRank = -1;
+    try {
+        p = PrepareRender(cmd);
+    } catch (...) {
+        error = lm::CurrentExceptionLine();
+    }
+    if (!session.AllSucceeded(error, &message, &failedRank)) return fail(message, failedRank);
+    // mpirun binds each of up to two ranks to one core by default: more threads than the
+    // CPUs a rank may run on only share them.
+    const int cpus = lm::AffinityCpuCount();
+    if (root && cmd.common.threads > 0 && cpus > 0 && cmd.common.threads > cpus)
+        lm::LogWarning(lm::StringPrintf("--threads %d, but each rank may run on %d CPU(s) only (mpirun's binding): "
+                                        "the threads share them; run mpirun with --bind-to none",
+                                        cmd.common.threads, cpus));
+
+    const lm::ShadowMethod& shadows = p->job->Shadows();
+    const std::function<uint64_t()> nodes = [&shadows] { return shadows.NodesEvaluated(); };
+    lm::DistributedRender d;
+    {
+        lm::ProgressReporter progress(p->job->Renderer().TileCount(), "Rendering",
+                                      root && !cmd.common.quiet && lm::ProgressReporter::StderrIsTerminal());
+        d = lm::RenderDistributed(session, p->job->Renderer(), nodes, root ? &progress : nullptr);
+    }
+    if (d.errorRank >= 0) return fail(d.error, d.errorRank);
+    if (!root) return 0;
+    const auto t3 = Clock::now();
+    lm::WriteImage(p->output, d.result.image);
+    PrintRender(cmd, *p, d.result, SecondsSince(t3), &d.ranks);
+    return 0;
+}
+#endif
+
+}  // namespace lm::cli

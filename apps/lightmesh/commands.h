@@ -1,0 +1,115 @@
+// commands.h -- the commands of the lightmesh executable, one file each (cmd_*.cpp), and
+// what they share (common.cpp). main.cpp defines the command line and dispatches.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "lightmesh/render/benchmark.h"
+#include "lightmesh/scene/scene.h"
+#include "lightmesh/settings/render_settings.h"
+#include "lightmesh/util/error.h"
+#include "lightmesh/util/system.h"
+
+namespace lm {
+class MpiSession;
+}
+
+namespace lm::cli {
+
+using Clock = std::chrono::steady_clock;
+double SecondsSince(Clock::time_point t);
+// "1,234,567": counts are easier to read with thousands separators.
+std::string Count(uint64_t n);
+
+/// Runs a command so that every exception becomes one line and exit code 1.
+template <typename F>
+int Guarded(F&& run) {
+    try {
+        return run();
+    } catch (...) {
+        std::fprintf(stderr, "lightmesh: error: %s\n", lm::CurrentExceptionLine().c_str());
+    }
+    return 1;
+}
+
+/// Options shared by the commands that load a scene.
+struct CommonOptions {
+    std::string scene;
+    bool strict = false;
+    bool quiet = false;
+    bool verbose = false;
+    int threads = 0;
+};
+void AddCommonOptions(CLI::App* cmd, CommonOptions* o);
+lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth = 0, int frameHeight = 0);
+void ApplyLogLevel(const CommonOptions& o);
+
+// The range of a numeric knob of the settings table, as CLI11 checks it.
+CLI::Range SettingRange(const char* key);
+// A `render` option from the settings table: its flag, help text and range or choices.
+template <typename T>
+CLI::Option* AddSetting(CLI::App* cmd, const char* key, T* value) {
+    const lm::RenderSetting& s = lm::RenderSettingFor(key);
+    CLI::Option* option = cmd->add_option(s.flag, *value, s.help);
+    using K = lm::RenderSetting::Kind;
+    // (A range without an upper end, light_radius's, is checked where the value is used.)
+    if ((s.kind == K::Int || s.kind == K::Float) && std::isfinite(s.hi)) option->check(SettingRange(key));
+    if (s.kind == K::Choice) option->check(CLI::IsMember(s.choices));
+    return option;
+}
+
+void PrintFigures(const char* title, const std::vector<std::pair<std::string, std::string>>& figures);
+
+/// `lightmesh render`: options as given on the command line; unset ones keep the scene's.
+struct RenderCommand {
+    CommonOptions common;
+    std::string output;
+    std::optional<int> width, height, aa, maxDepth, grid, cc, ns;
+    std::optional<float> ki, lightRadius;
+    std::optional<int> samples;
+    std::optional<std::string> shadows, accel, variant, templateDir, cellSummaries;
+    bool stats = false;
+};
+int RunRender(const RenderCommand& cmd);
+/// `mpirun -np N lightmesh render …` (built with MPI only).
+int RunRenderMpi(const RenderCommand& cmd, const lm::MpiSession& session);
+
+/// `lightmesh info`: the scene's figures, and a back-end's with --accel.
+int RunInfo(const CommonOptions& common, const std::string& accelName, int grid);
+/// `lightmesh templates`: builds (or loads) a sphere template; --measure studies ns.
+int RunTemplates(int ns, float ki, const std::string& dir, bool measure);
+
+/// `lightmesh bench`: the matrix, a progress line per cell, then the tables.
+struct BenchCommand {
+    lm::BenchMatrix matrix;
+    std::vector<std::string> sizes;
+    std::string csv, markdown, html, matrixFile;
+    int table = 0;
+    bool quick = false;
+    bool quiet = false;
+    bool noNone = false;
+    CLI::Option* repeatOption = nullptr;
+    CLI::Option* accelsOption = nullptr;
+    std::string argv0;
+};
+int RunBench(BenchCommand& cmd);
+
+/// `lightmesh compare A B`: image quality of B against A (lightmesh/io/compare.h).
+struct CompareCommand {
+    std::string a, b, mask, diff;
+    float diffScale = 0;
+    bool json = false;
+    std::optional<double> thresholdPsnr;
+};
+/// Exit codes: 0 compared (and PSNR >= --threshold-psnr), 1 error, 3 below the threshold.
+int RunCompare(const CompareCommand& cmd);
+
+}  // namespace lm::cli
