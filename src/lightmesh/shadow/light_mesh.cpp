@@ -237,6 +237,16 @@ FrontFunction ChooseFrontFunction(int width) {
 /// popcount of a movemask. False, having added nothing, if an entry in front is not yet
 /// evaluated (the scalar path evaluates it). The loads are relaxed: a node's word is all
 /// it publishes, and a byte cannot tear.
+// The words of block b's lanes in `mask` (one byte each, in the low byte of a lane; the
+// other lanes 0); false if one of them is not yet evaluated (bit 7, "initialised", clear).
+__attribute__((target("avx2"), always_inline)) inline bool GatherFrontBytes(const FrontBlock& block, int mask,
+                                                                            const uint8_t* nodes, __m256i* words) {
+    const __m256i laneBits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    const __m256i on = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(mask), laneBits), laneBits);
+    const __m256i index = _mm256_load_si256(reinterpret_cast<const __m256i*>(block.linear));
+    *words = _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), reinterpret_cast<const int*>(nodes), index, on, 1);
+    return (_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(*words, 24))) & mask) == mask;
+}
 __attribute__((target("avx2,popcnt"))) bool SumFrontBytesAvx2(const FrontBlock* blocks, const uint8_t* masks,
                                                               uint32_t count, const uint8_t* nodes, int lights,
                                                               uint32_t* visible, uint32_t* m) {
@@ -244,12 +254,8 @@ __attribute__((target("avx2,popcnt"))) bool SumFrontBytesAvx2(const FrontBlock* 
     for (uint32_t b = 0; b < count; ++b) {
         const int mask = masks[b];
         if (!mask) continue;
-        const __m256i laneBits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-        const __m256i on = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(mask), laneBits), laneBits);
-        const __m256i index = _mm256_load_si256(reinterpret_cast<const __m256i*>(blocks[b].linear));
-        const __m256i w = _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), reinterpret_cast<const int*>(nodes), index, on, 1);
-        // Bit 7 of each byte word is "initialised".
-        if ((_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(w, 24))) & mask) != mask) return false;
+        __m256i w;
+        if (!GatherFrontBytes(blocks[b], mask, nodes, &w)) return false;
         for (int l = 0; l < lights; ++l)
             sums[l] += static_cast<uint32_t>(
                 __builtin_popcount(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(w, 31 - l))) & mask));
@@ -264,8 +270,7 @@ __attribute__((target("avx2,popcnt"))) bool SumFrontBytesAvx2(const FrontBlock* 
 /// having decided nothing, if one of them is not yet evaluated.
 __attribute__((target("avx2,popcnt"))) bool AgreeFrontBytesAvx2(const FrontBlock* blocks, const uint8_t* masks,
                                                                 uint32_t count, const uint8_t* nodes, uint32_t needed,
-                                                                uint32_t* first, bool* agree, uint32_t* n) {
-    const __m256i laneBits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+                                                                bool* agree, uint32_t* n) {
     const __m256i need = _mm256_set1_epi32(static_cast<int>(needed));
     __m256i firstWord = _mm256_setzero_si256();
     bool haveFirst = false, same = true;
@@ -273,15 +278,12 @@ __attribute__((target("avx2,popcnt"))) bool AgreeFrontBytesAvx2(const FrontBlock
     for (uint32_t b = 0; b < count; ++b) {
         const int mask = masks[b];
         if (!mask) continue;
-        const __m256i on = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(mask), laneBits), laneBits);
-        const __m256i index = _mm256_load_si256(reinterpret_cast<const __m256i*>(blocks[b].linear));
-        const __m256i w = _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), reinterpret_cast<const int*>(nodes), index, on, 1);
-        if ((_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(w, 24))) & mask) != mask) return false;
+        __m256i w;
+        if (!GatherFrontBytes(blocks[b], mask, nodes, &w)) return false;
         if (!haveFirst) {
             alignas(32) uint32_t lanes[8];
             _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), w);
-            *first = lanes[__builtin_ctz(static_cast<unsigned>(mask))] & 0xFF;
-            firstWord = _mm256_set1_epi32(static_cast<int>(*first));
+            firstWord = _mm256_set1_epi32(static_cast<int>(lanes[__builtin_ctz(static_cast<unsigned>(mask))]));
             haveFirst = true;
         }
         // needed has bits below 8 only, so the bytes the 32-bit loads read past the word drop out.
@@ -294,8 +296,7 @@ __attribute__((target("avx2,popcnt"))) bool AgreeFrontBytesAvx2(const FrontBlock
     *n = used;
     return true;
 }
-using AgreeFrontFunction = bool (*)(const FrontBlock*, const uint8_t*, uint32_t, const uint8_t*, uint32_t, uint32_t*, bool*,
-                                    uint32_t*);
+using AgreeFrontFunction = bool (*)(const FrontBlock*, const uint8_t*, uint32_t, const uint8_t*, uint32_t, bool*, uint32_t*);
 using SumFrontFunction = bool (*)(const FrontBlock*, const uint8_t*, uint32_t, const uint8_t*, int, uint32_t*, uint32_t*);
 // Whether the gathers of one-byte words above are used: not without AVX2, not for a test's
 // narrower width, not under ThreadSanitizer (which does not see their loads as atomic).
@@ -1010,9 +1011,7 @@ class LightMesh final : public LightMeshShadows {
         // (n(P), x - P) with x - P = (offset - frac)·h, over the tolerance of frontEps_.
         // (offset - frac)·n = offset·n - frac·n: the second term once per point.
         const float nfrac = Dot(sp.n, frac);
-        auto node = [&](const FrontBlock& b, int k) {
-            return L.Node(ci + static_cast<int>(b.ox[k]), cj + static_cast<int>(b.oy[k]), ck + static_cast<int>(b.oz[k]));
-        };
+        auto node = [&](const FrontBlock& b, int k) { return EntryNode(ci, cj, ck, b, k); };
         // The front test of all of s's entries at once, a bit mask per block of eight.
         const uint32_t fb = frontBegin_[s], fi = frontInner_[s], fe = frontBegin_[s + 1];
         uint8_t maskBuffer[256];
@@ -1108,6 +1107,11 @@ class LightMesh final : public LightMeshShadows {
         return true;
     }
 
+    // The position of lane k of block b for a point of cell (ci, cj, ck).
+    Vec3 EntryNode(int ci, int cj, int ck, const FrontBlock& b, int k) const {
+        return lattice_.Node(ci + static_cast<int>(b.ox[k]), cj + static_cast<int>(b.oy[k]), ck + static_cast<int>(b.oz[k]));
+    }
+
     // A run of FrontBlocks with their front masks: visits the entries in front in the
     // template's order.
     struct FrontRun {
@@ -1134,14 +1138,10 @@ class LightMesh final : public LightMeshShadows {
     // instead of in *acc, which the lazy evaluation's call might change for all the
     // compiler knows.
     void UseAll(const FrontRun& run, int64_t base, Accumulator& acc) const {
-        const std::atomic<Word>* nodes = nodes_.get() + base;
-        auto word = [&](int32_t linear) {
-            const Word w = nodes[linear].load(std::memory_order_acquire);
-            return (w & kInit) ? w : EvaluateSlow(static_cast<uint64_t>(base + linear));
-        };
+        auto word = [&](int32_t linear) { return Evaluate(static_cast<uint64_t>(base + linear)); };
         if constexpr (sizeof(Word) == 1) {
             if (sumFront_ &&
-                sumFront_(run.blocks, run.masks, run.count, reinterpret_cast<const uint8_t*>(nodes),
+                sumFront_(run.blocks, run.masks, run.count, reinterpret_cast<const uint8_t*>(nodes_.get() + base),
                           static_cast<int>(scene_.lights.size()), acc.visible, &acc.m))
                 return;
             uint64_t lanes = 0;
@@ -1175,7 +1175,6 @@ class LightMesh final : public LightMeshShadows {
     void ConsensusWalk(const ShadingPoint& sp, Word neededMask, const FrontRun& all, int64_t base, int ci, int cj,
                        int ck, bool planar, const CellSummary* summary, Blockers& blockers,
                        Accumulator& acc, RenderCounters& counters) const {
-        const LightMeshLattice& L = lattice_;
         if (planar) {
             UseAll(all, base, acc);
             counters.candidates += acc.m;
@@ -1186,10 +1185,9 @@ class LightMesh final : public LightMeshShadows {
         uint32_t n = 0;
         bool agree = true;
         Word first = 0;
-        uint32_t firstWord = 0;
         if (!(sizeof(Word) == 1 && agreeFront_ &&
               agreeFront_(all.blocks, all.masks, all.count, reinterpret_cast<const uint8_t*>(nodes_.get() + base),
-                          static_cast<uint32_t>(neededMask), &firstWord, &agree, &n))) {
+                          static_cast<uint32_t>(neededMask), &agree, &n))) {
             n = 0;
             agree = true;
             all.ForEach([&](const FrontBlock& b, int k) {
@@ -1206,9 +1204,8 @@ class LightMesh final : public LightMeshShadows {
         all.Any([&](const FrontBlock& b, int k) {
             if (summary && !blockers.tried && (!agree || c == 1)) FindBlockers(*summary, base, sp, &blockers);
             ++c;
-            const Vec3 x = L.Node(ci + static_cast<int>(b.ox[k]), cj + static_cast<int>(b.oy[k]), ck + static_cast<int>(b.oz[k]));
-            if (!SeesPointCulled(x, sp, blockers, counters)) return false;
-            Use(acc, nodes_[static_cast<uint64_t>(base + b.linear[k])].load(std::memory_order_acquire));
+            if (!SeesPointCulled(EntryNode(ci, cj, ck, b, k), sp, blockers, counters)) return false;
+            Use(acc, Evaluate(static_cast<uint64_t>(base + b.linear[k])));  // evaluated by pass 1
             return agree;
         });
     }
