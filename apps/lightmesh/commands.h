@@ -25,7 +25,7 @@ class MpiSession;
 namespace lm::cli {
 
 using Clock = std::chrono::steady_clock;
-double SecondsSince(Clock::time_point t);
+using lm::SecondsSince;
 // "1,234,567": counts are easier to read with thousands separators.
 std::string Count(uint64_t n);
 

@@ -6,10 +6,6 @@
 
 namespace lm::cli {
 
-double SecondsSince(Clock::time_point t) {
-    return std::chrono::duration<double>(Clock::now() - t).count();
-}
-
 // "1,234,567": counts are easier to read with thousands separators.
 std::string Count(uint64_t n) {
     std::string s = std::to_string(n);

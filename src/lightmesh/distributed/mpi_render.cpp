@@ -260,8 +260,7 @@ DistributedRender RenderDistributed(const MpiSession& session, const WhittedRend
             const auto fetchStart = std::chrono::steady_clock::now();
             Check(MPI_Fetch_and_op(&batch, &first, MPI_INT64_T, 0, 0, MPI_SUM, window), "MPI_Fetch_and_op");
             Check(MPI_Win_flush(0, window), "MPI_Win_flush");
-            report.fetchSeconds +=
-                std::chrono::duration<double>(std::chrono::steady_clock::now() - fetchStart).count();
+            report.fetchSeconds += SecondsSince(fetchStart);
             const int64_t last = std::min(tiles, first + batch);
             if (progress && last > reported) {
                 progress->Update(last - reported);
@@ -283,7 +282,7 @@ DistributedRender RenderDistributed(const MpiSession& session, const WhittedRend
     } catch (...) {
         error = CurrentExceptionLine();
     }
-    report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    report.seconds = SecondsSince(start);
     report.tiles = static_cast<int>(mine.size());
     if (nodesEvaluated) report.nodesEvaluated = nodesEvaluated();
     MPI_Win_unlock_all(window);
@@ -308,7 +307,7 @@ DistributedRender RenderDistributed(const MpiSession& session, const WhittedRend
                      CurrentExceptionLine().c_str(), rank, size);
         MPI_Abort(MPI_COMM_WORLD, 1);
     }
-    out.result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    out.result.seconds = SecondsSince(start);
     return out;
 }
 

@@ -2,13 +2,9 @@
 
 #include <chrono>
 
-namespace lm {
+#include "lightmesh/util/system.h"
 
-namespace {
-double SecondsSince(std::chrono::steady_clock::time_point t) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-}  // namespace
+namespace lm {
 
 RenderJob::RenderJob(const Scene& scene, const RenderOptions& options, const Accelerator* accel)
     : options_(options), accel_(accel) {

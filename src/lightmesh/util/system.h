@@ -1,6 +1,7 @@
 // system.h -- files written atomically, interrupt clean-up, memory figures.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -55,6 +56,11 @@ uint64_t PhysicalMemoryBytes();
 /// are, allocation failures with the peak and the budget, file-system errors with the path.
 /// Call inside a catch block; every command (and every MPI rank) words its failure so.
 std::string CurrentExceptionLine();
+
+/// Seconds of wall time since `start` (steady clock).
+inline double SecondsSince(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
 
 /// The CPUs this process may run on (its affinity mask); 0 if unknown.
 int AffinityCpuCount();
