@@ -564,27 +564,19 @@ BenchMatrix LoadBenchMatrix(const std::string& path) {
             const Json& v = (*l)[i];
             const std::string where = json::Index("/sizes", i);
             if (!v.is_array() || v.size() != 2) r.Fail(where, "expected [width, height], got " + json::Describe(v));
-            const RenderSetting &w = RenderSettingFor("width"), &h = RenderSettingFor("height");
-            m.sizes.push_back({json::Int(r, v[0], where + "/0", static_cast<int>(w.lo), static_cast<int>(w.hi)),
-                               json::Int(r, v[1], where + "/1", static_cast<int>(h.lo), static_cast<int>(h.hi))});
+            m.sizes.push_back({json::SettingInt(r, v[0], where + "/0", RenderSettingFor("width")),
+                               json::SettingInt(r, v[1], where + "/1", RenderSettingFor("height"))});
         }
     }
     if (const Json* l = list("cc")) {
         m.cc.clear();
-        const RenderSetting& cc = RenderSettingFor("cc");
         for (size_t i = 0; i < l->size(); ++i)
-            m.cc.push_back(json::Int(r, (*l)[i], json::Index("/cc", i), static_cast<int>(cc.lo), static_cast<int>(cc.hi)));
+            m.cc.push_back(json::SettingInt(r, (*l)[i], json::Index("/cc", i), RenderSettingFor("cc")));
     }
     if (const Json* l = list("ki")) {
         m.ki.clear();
-        for (size_t i = 0; i < l->size(); ++i) {
-            const std::string where = json::Index("/ki", i);
-            const float k = json::Float(r, (*l)[i], where);
-            const RenderSetting& ki = RenderSettingFor("ki");
-            if (!(k >= static_cast<float>(ki.lo) && k <= static_cast<float>(ki.hi)))
-                r.Fail(where, StringPrintf("must be between %g and %g, got %g", ki.lo, ki.hi, k));
-            m.ki.push_back(k);
-        }
+        for (size_t i = 0; i < l->size(); ++i)
+            m.ki.push_back(json::SettingFloat(r, (*l)[i], json::Index("/ki", i), RenderSettingFor("ki")));
     }
     if (const Json* v = o.Find("repeat")) m.repeat = json::Int(r, *v, "/repeat", 1, 100);
     o.Finish();

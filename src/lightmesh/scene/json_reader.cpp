@@ -255,4 +255,21 @@ Json ParseJson(Reader& r, const std::string& text) {
     return root;
 }
 
+int SettingInt(const Reader& r, const Json& j, const std::string& path, const RenderSetting& s) {
+    return Int(r, j, path, static_cast<int>(s.lo), static_cast<int>(s.hi));
+}
+
+float SettingFloat(const Reader& r, const Json& j, const std::string& path, const RenderSetting& s) {
+    if (s.lo == 0 && std::isinf(s.hi)) return NonNegative(r, j, path);
+    const float f = Float(r, j, path);
+    // In float, as the CLI compares: 0.01 is 0.0099999998f.
+    if (!(f >= static_cast<float>(s.lo) && f <= static_cast<float>(s.hi)))
+        r.Fail(path, StringPrintf("must be between %g and %g, got %g", s.lo, s.hi, f));
+    return f;
+}
+
+std::string SettingChoice(const Reader& r, const Json& j, const std::string& path, const RenderSetting& s) {
+    return Enum(r, j, path, s.choices);
+}
+
 }  // namespace lm::json

@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "lightmesh/settings/render_settings.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/log.h"
 
@@ -158,6 +159,12 @@ std::vector<std::string> StringList(const Reader& r, const Json& j, const std::s
 /// Line and column (1-based) of byte offset `pos` of `text`.
 std::pair<size_t, size_t> LineColumn(const std::string& text, size_t pos);
 Json ParseJson(Reader& r, const std::string& text);
+
+/// A value for a row of the settings table, checked against its range (Int, Float) or its
+/// choices: the scene file's "render" object and bench matrices read their knobs so.
+int SettingInt(const Reader& r, const Json& j, const std::string& path, const RenderSetting& s);
+float SettingFloat(const Reader& r, const Json& j, const std::string& path, const RenderSetting& s);
+std::string SettingChoice(const Reader& r, const Json& j, const std::string& path, const RenderSetting& s);
 
 }  // namespace json
 }  // namespace lm

@@ -282,29 +282,14 @@ Affine ReadTransform(const Reader& r, const Json& j, const std::string& path) {
     return result;
 }
 
-// The "render" object's values, checked against the settings table (the CLI checks the
-// same rows).
-int SettingInt(const Reader& r, const Object& o, const Json& v, const char* key) {
-    const RenderSetting& s = RenderSettingFor(key);
-    return Int(r, v, o.Child(key), static_cast<int>(s.lo), static_cast<int>(s.hi));
-}
-float SettingFloat(const Reader& r, const Object& o, const Json& v, const char* key) {
-    const RenderSetting& s = RenderSettingFor(key);
-    if (s.lo == 0 && std::isinf(s.hi)) return NonNegative(r, v, o.Child(key));
-    const float f = Float(r, v, o.Child(key));
-    // In float, as the CLI compares: 0.01 is 0.0099999998f.
-    if (!(f >= static_cast<float>(s.lo) && f <= static_cast<float>(s.hi)))
-        r.Fail(o.Child(key), StringPrintf("must be between %g and %g, got %g", s.lo, s.hi, f));
-    return f;
-}
-std::string SettingChoice(const Reader& r, const Object& o, const Json& v, const char* key) {
-    return Enum(r, v, o.Child(key), RenderSettingFor(key).choices);
-}
-
 void ReadRender(const Reader& r, const Json& j, RenderOptions* ro) {
     Object o(r, j, "/render");
-    if (const Json* v = o.Find("width")) ro->width = SettingInt(r, o, *v, "width");
-    if (const Json* v = o.Find("height")) ro->height = SettingInt(r, o, *v, "height");
+    // The knobs' ranges and choices come from the settings table (the CLI checks the same rows).
+    auto integer = [&](const Json& v, const char* key) { return SettingInt(r, v, o.Child(key), RenderSettingFor(key)); };
+    auto number = [&](const Json& v, const char* key) { return SettingFloat(r, v, o.Child(key), RenderSettingFor(key)); };
+    auto choice = [&](const Json& v, const char* key) { return SettingChoice(r, v, o.Child(key), RenderSettingFor(key)); };
+    if (const Json* v = o.Find("width")) ro->width = integer(*v, "width");
+    if (const Json* v = o.Find("height")) ro->height = integer(*v, "height");
     constexpr int64_t MaxPixels = int64_t(1) << 28;
     if (int64_t(ro->width) * ro->height > MaxPixels) {
         r.Fail("/render",
@@ -312,28 +297,28 @@ void ReadRender(const Reader& r, const Json& j, RenderOptions* ro) {
                             ro->height, static_cast<long long>(int64_t(ro->width) * ro->height),
                             static_cast<long long>(MaxPixels)));
     }
-    if (const Json* v = o.Find("aa")) ro->aa = SettingInt(r, o, *v, "aa");
-    if (const Json* v = o.Find("max_depth")) ro->maxDepth = SettingInt(r, o, *v, "max_depth");
-    if (const Json* v = o.Find("shadows")) ro->shadows = SettingChoice(r, o, *v, "shadows");
-    if (const Json* v = o.Find("accel")) ro->accel = SettingChoice(r, o, *v, "accel");
-    if (const Json* v = o.Find("grid")) ro->accelOptions.gridResolution = SettingInt(r, o, *v, "grid");
-    if (const Json* v = o.Find("cc")) ro->lightMesh.cc = SettingInt(r, o, *v, "cc");
-    if (const Json* v = o.Find("ki")) ro->lightMesh.ki = SettingFloat(r, o, *v, "ki");
+    if (const Json* v = o.Find("aa")) ro->aa = integer(*v, "aa");
+    if (const Json* v = o.Find("max_depth")) ro->maxDepth = integer(*v, "max_depth");
+    if (const Json* v = o.Find("shadows")) ro->shadows = choice(*v, "shadows");
+    if (const Json* v = o.Find("accel")) ro->accel = choice(*v, "accel");
+    if (const Json* v = o.Find("grid")) ro->accelOptions.gridResolution = integer(*v, "grid");
+    if (const Json* v = o.Find("cc")) ro->lightMesh.cc = integer(*v, "cc");
+    if (const Json* v = o.Find("ki")) ro->lightMesh.ki = number(*v, "ki");
     if (const Json* v = o.Find("variant")) {
         ro->lightMesh.variant = String(r, *v, o.Child("variant"));
         if (ro->lightMesh.variant.empty())
             r.Fail(o.Child("variant"), "must not be empty (leave the key out for the default)");
     }
-    if (const Json* v = o.Find("ns")) ro->lightMesh.ns = SettingInt(r, o, *v, "ns");
+    if (const Json* v = o.Find("ns")) ro->lightMesh.ns = integer(*v, "ns");
     if (const Json* v = o.Find("template_dir"))
     {
         ro->lightMesh.templateDir = String(r, *v, o.Child("template_dir"));
         if (ro->lightMesh.templateDir.find('\0') != std::string::npos)
             r.Fail(o.Child("template_dir"), "contains a NUL byte (\\u0000), which no file name can hold");
     }
-    if (const Json* v = o.Find("cell_summaries")) ro->lightMesh.cellSummaries = SettingChoice(r, o, *v, "cell_summaries");
-    if (const Json* v = o.Find("light_radius")) ro->areaLight.radius = SettingFloat(r, o, *v, "light_radius");
-    if (const Json* v = o.Find("samples")) ro->areaLight.samples = SettingInt(r, o, *v, "samples");
+    if (const Json* v = o.Find("cell_summaries")) ro->lightMesh.cellSummaries = choice(*v, "cell_summaries");
+    if (const Json* v = o.Find("light_radius")) ro->areaLight.radius = number(*v, "light_radius");
+    if (const Json* v = o.Find("samples")) ro->areaLight.samples = integer(*v, "samples");
     o.Finish();
 }
 
