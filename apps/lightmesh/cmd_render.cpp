@@ -27,7 +27,6 @@ namespace lm::cli {
 /// checked, the back-end and the shadow method built.
 struct PreparedRender {
     lm::Scene scene;
-    lm::RenderOptions options;
     std::string output;
     std::unique_ptr<lm::RenderJob> job;
     double loadSeconds = 0;
@@ -40,8 +39,7 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
     scene = LoadWithWarnings(cmd.common, cmd.width.value_or(0), cmd.height.value_or(0));
     prepared->loadSeconds = SecondsSince(t0);
 
-    lm::RenderOptions& options = prepared->options;
-    options = scene.render;
+    lm::RenderOptions options = scene.render;
     if (cmd.width) options.width = *cmd.width;
     if (cmd.height) options.height = *cmd.height;
     if (cmd.aa) options.aa = *cmd.aa;
@@ -114,7 +112,7 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
 // The summary line, and with --stats the figures (per rank under MPI).
 void PrintRender(const RenderCommand& cmd, const PreparedRender& p, const lm::RenderResult& result,
                  double writeSeconds, const std::vector<lm::RankReport>* ranks) {
-    const lm::RenderOptions& options = p.options;
+    const lm::RenderOptions& options = p.job->Options();
     std::printf("%s: %dx%d, shadows %s, accel %s, %zu triangles, %zu lights: render %.3f s\n",
                 p.output.c_str(), options.width, options.height, std::string(p.job->Shadows().Name()).c_str(),
                 std::string(p.job->Accel().Name()).c_str(), p.scene.mesh.TriangleCount(), p.scene.lights.size(),
