@@ -33,10 +33,11 @@
 //   "render"     optional, fills Scene::render: "width", "height" (1..16384, width·height ≤
 //                2^28), "aa" (1..16), "max_depth" (1..64), "shadows" ("none" | "rt" | "lmm" |
 //                "area"), "accel" ("brute" | "grid" | "embree"), "grid" (0..4096),
-//                "cc" (1..4096), "ki" (in (0, 16]), "variant" (string), "ns" (0..64),
+//                "cc" (1..4096), "ki" (0.01..16), "variant" (string), "ns" (0..64),
 //                "template_dir" (string), "cell_summaries" ("auto" | "on" | "off"),
 //                "light_radius" (≥ 0: the sphere each point light
 //                becomes with "shadows": "area"), "samples" (1..4096, shadow rays per light).
+//                The ranges and choices are the settings table's (settings/render_settings.cpp).
 //
 // A colour is a number (grey) or [r, g, b]; all numbers must be finite and colours ≥ 0.
 // Unknown keys are warnings ("unknown key (ignored)"), errors with SceneLoadOptions::strict;
