@@ -73,7 +73,7 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
         unused(cmd.templateDir.has_value(), "--template-dir", "lmm");
     }
     if (options.shadows != "area") {
-        unused(cmd.lightRadius.has_value(), "--light-radius", "area");
+        if (options.shadows != "lmm") unused(cmd.lightRadius.has_value(), "--light-radius", "area and lmm");
         unused(cmd.samples.has_value(), "--samples", "area");
     }
     if (cmd.grid && options.accel != "grid")
@@ -156,6 +156,9 @@ void PrintRender(const RenderCommand& cmd, const PreparedRender& p, const lm::Re
                         Count(c.uniformCellPoints).c_str(), 100.0 * static_cast<double>(c.uniformCellPoints) / points,
                         Count(c.planarCellPoints).c_str(), 100.0 * static_cast<double>(c.planarCellPoints) / points,
                         Count(c.culledSegments).c_str());
+        if (c.penumbraLights > 0)
+            std::printf("penumbra  (point, light) pairs whose width followed the light radius %s (%.1f%% of points)\n",
+                        Count(c.penumbraLights).c_str(), 100.0 * static_cast<double>(c.penumbraLights) / points);
     }
     PrintFigures(ranks ? "shadows (rank 0)" : "shadows", p.job->Shadows().Figures());
     std::printf("memory    peak %s%s\n", lm::FormatBytes(lm::PeakMemoryBytes()).c_str(), ranks ? " (rank 0)" : "");

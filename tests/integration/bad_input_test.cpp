@@ -718,11 +718,16 @@ std::vector<Case> Corpus() {
          .args = "compare $D/a.png $D/b.png --threshold-psnr nan --diff $OUT",
          .expected = "lightmesh: error: --threshold-psnr: must be a finite number of dB, got nan\n"},
         {.name = "unused_option_warns",
-         .args = kRender + " --shadows lmm --light-radius 0.5",
-         .expected = "lightmesh: warning: --light-radius is not used by --shadows lmm (only by "
-                     "area); ignored\n",
+         .args = kRender + " --shadows rt --light-radius 0.5",
+         .expected = "lightmesh: warning: --light-radius is not used by --shadows rt (only by "
+                     "area and lmm); ignored\n",
          .files = {{"scene.json", good}},
          .exitCode = 0},
+        {.name = "light_radius_with_a_variant_other_than_consensus",
+         .args = kRender + " --shadows lmm --light-radius 0.5 --variant none",
+         .expected = "lightmesh: error: light mesh: a light radius (contact-hardening penumbrae) needs the "
+                     "consensus variant (the default), not none\n",
+         .files = {{"scene.json", good}}},
         {.name = "output_name_of_252_characters",
          .args = kRender,
          .expected = "out.png: 16x12",

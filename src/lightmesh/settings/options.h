@@ -31,6 +31,12 @@ struct LightMeshOptions {
     /// tests: 1 the scalar front test (the oracle of the others), 4 SSE, 8 AVX2 where the
     /// processor has it; 0 the widest available.
     int simdWidth = 0;
+    /// Contact-hardening penumbrae (ours, beyond the paper): the radius R of the spheres the
+    /// point lights stand for, in scene units. With R > 0 the interpolation radius at each
+    /// penumbra point follows the light's size and the blocker's distance (see
+    /// LightMeshShadows); 0 is the paper's fixed radius r = kI·h. Filled from the render's
+    /// "light_radius" setting (AreaLightOptions::radius), which the area reference shares.
+    float lightRadius = 0.0f;
 };
 
 /// Settings of the area-light reference ("--shadows area", issue 7): every point light

@@ -34,7 +34,8 @@ const std::vector<RenderSetting>& RenderSettings() {
         {"cell_summaries", "--cell-summaries", K::Choice, 0, 0, {"auto", "on", "off"},
          "Light mesh: per-cell summaries (exact; ours): auto (for consensus only), on (also none, inside) or off"},
         {"light_radius", "--light-radius", K::Float, 0, kNoLimit, {},
-         "Area shadows: radius of the sphere each point light becomes (default 0: point lights)"},
+         "Radius of the sphere each point light stands for: area shadows sample it, lmm sizes its "
+         "penumbrae by it (contact hardening; default 0: point lights)"},
         {"samples", "--samples", K::Int, 1, 4096, {},
          "Area shadows: stratified shadow rays per light and shading point (default 16)"},
     };

@@ -107,6 +107,11 @@ Vec3 SampleConeStratified(const Vec3& axis, float oneMinusCosMax, int index, int
 
 float SphereLightVisibility(const Accelerator& accel, const Vec3& origin, const Vec3& center,
                             float radius, int samples, uint64_t seed, int* rays) {
+    return SphereLightVisibilityAdaptive(accel, origin, center, radius, samples, samples, seed, rays);
+}
+
+float SphereLightVisibilityAdaptive(const Accelerator& accel, const Vec3& origin, const Vec3& center,
+                                    float radius, int firstRound, int samples, uint64_t seed, int* rays) {
     if (rays) *rays = 0;
     const Vec3 oc = center - origin;
     const float d2 = LengthSquared(oc);
@@ -120,8 +125,7 @@ float SphereLightVisibility(const Accelerator& accel, const Vec3& origin, const 
     const float shift0 = UnitFloat(seed >> 40), shift1 = UnitFloat(seed >> 8);
     Vec3 e1, e2;
     CoordinateSystem(axis, &e1, &e2);
-    int visible = 0;
-    for (int i = 0; i < samples; ++i) {
+    auto sees = [&](int i) {
         const Vec3 w = SampleCone(e1, e2, axis, oneMinusCosMax, i, samples, shift0, shift1);
         // The near intersection with the sphere, from the perpendicular distance of C to the
         // ray (stabler than b² − c); rounding at the cone's rim is clamped to the tangent.
@@ -129,10 +133,20 @@ float SphereLightVisibility(const Accelerator& accel, const Vec3& origin, const 
         const float h2 = r2 - LengthSquared(oc - w * b);
         const float t = b - std::sqrt(std::max(0.0f, h2));
         // Like LightVisible, stop just short of the light itself.
-        visible += !accel.Occluded(Ray{origin, w * t, 0.0f, 1.0f - 1e-5f});
+        return !accel.Occluded(Ray{origin, w * t, 0.0f, 1.0f - 1e-5f});
+    };
+    // The first round: every stride-th point of the lattice, itself spread over the cone.
+    const int stride = firstRound > 0 && firstRound < samples ? samples / firstRound : 1;
+    int visible = 0, traced = 0;
+    for (int i = 0; i < samples; i += stride, ++traced) visible += sees(i);
+    if (stride > 1 && (visible == 0 || visible == traced)) {
+        if (rays) *rays = traced;
+        return visible == 0 ? 0.0f : 1.0f;
     }
-    if (rays) *rays = samples;
-    return static_cast<float>(visible) / static_cast<float>(samples);
+    for (int i = 0; i < samples && stride > 1; ++i)
+        if (i % stride != 0) visible += sees(i), ++traced;
+    if (rays) *rays = traced;
+    return static_cast<float>(visible) / static_cast<float>(traced);
 }
 
 namespace {

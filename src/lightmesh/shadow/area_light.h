@@ -27,6 +27,15 @@ uint64_t AreaLightSeed(const ShadingPoint& sp, uint32_t light);
 float SphereLightVisibility(const Accelerator& accel, const Vec3& origin, const Vec3& center,
                             float radius, int samples, uint64_t seed, int* rays = nullptr);
 
+/// SphereLightVisibility in two rounds: first every (samples / firstRound)-th direction of
+/// the `samples`-point lattice (an even spread over the cone); if they all agree the light
+/// is taken as wholly visible or hidden (exact wherever no occluder is smaller than the
+/// gaps between them), otherwise the other directions are traced too and all are
+/// averaged. firstRound >= samples (or <= 0) is SphereLightVisibility itself.
+float SphereLightVisibilityAdaptive(const Accelerator& accel, const Vec3& origin, const Vec3& center,
+                                    float radius, int firstRound, int samples, uint64_t seed,
+                                    int* rays = nullptr);
+
 /// Direction `index` of `samples` in the cone around the unit vector `axis` whose
 /// half-angle θmax has 1 - cos θmax = `oneMinusCosMax` (in [0, 1]): uniform in solid
 /// angle and stratified, shifted by (`shift0`, `shift1`) in [0, 1)² (Cranley–Patterson

@@ -79,6 +79,14 @@ inline constexpr const char* kDefaultLightMeshVariant = "consensus";
 /// The shadow method of formula (2): V(L_i, P) is replaced by the mean of V(L_i, x_k)
 /// over the m nodes x_k within r of P, in front of the surface, and passing the local
 /// visibility test; with m = 0 it falls back to one shadow ray per light.
+///
+/// With a light radius R > 0 (LightMeshOptions::lightRadius; ours, beyond the paper) the
+/// lights stand for spheres of radius R and the penumbrae follow their size: where the
+/// candidates disagree on a light, the nodes' stored blocker distances give the
+/// penumbra's half-width w = R·(d_P − d_b)/d_b, and V is a kernel average of the nodes over
+/// a radius following w (up to r) with P's own shadow ray at its centre, or, where w is
+/// below what the lattice resolves, a few stratified rays to the light's sphere. Elsewhere
+/// V is the consensus variant's.
 class LightMeshShadows : public ShadowMethod {
   public:
     std::string_view Name() const override { return "lmm"; }
@@ -96,6 +104,11 @@ class LightMeshShadows : public ShadowMethod {
     /// Whether the node lies inside a solid (evaluating it if need be). Only the СТ variant
     /// computes this flag; the others report false.
     virtual bool NodeInside(uint64_t index) const = 0;
+    /// Penumbra mode (a light radius): the nearest blocker on the segment from node `index`
+    /// to light `light`, as its parameter t in (0, 1) along it (quantised to 1/65535),
+    /// evaluating the node if need be; 0 where the light is visible or without a light
+    /// radius.
+    virtual float NodeBlockerParameter(uint64_t index, size_t light) const = 0;
     /// The sphere templates in use (empty for the cube loop) and how they were obtained.
     virtual const TemplateLoad& Templates() const = 0;
 };

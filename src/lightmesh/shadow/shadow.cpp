@@ -54,7 +54,12 @@ std::unique_ptr<ShadowMethod> CreateShadowMethod(std::string_view name, const Sc
                                                  const RenderOptions& options) {
     if (name == "none") return std::make_unique<NoShadows>(scene.lights.size());
     if (name == "rt") return std::make_unique<HardShadows>(scene, accel);
-    if (name == "lmm") return CreateLightMeshShadows(scene, accel, options.lightMesh);
+    if (name == "lmm") {
+        // One light size for the reference and the light mesh's penumbrae.
+        LightMeshOptions lmm = options.lightMesh;
+        lmm.lightRadius = options.areaLight.radius;
+        return CreateLightMeshShadows(scene, accel, lmm);
+    }
     if (name == "area") return CreateAreaLightShadows(scene, accel, options.areaLight);
     ThrowError("unknown shadow method \"%.*s\" (choose none, rt, lmm or area)", static_cast<int>(name.size()),
                name.data());

@@ -22,6 +22,7 @@ struct RenderCounters {
     uint64_t uniformCellPoints = 0;  ///< points answered by their cell's summary (all nodes agree)
     uint64_t planarCellPoints = 0;   ///< points whose cell's geometry is one plane: no segment
     uint64_t culledSegments = 0;     ///< local-visibility segments decided without a ray
+    uint64_t penumbraLights = 0;     ///< (point, light) pairs whose radius followed the light's size
 
     RenderCounters& operator+=(const RenderCounters& o) {
         cameraRays += o.cameraRays;
@@ -36,6 +37,7 @@ struct RenderCounters {
         uniformCellPoints += o.uniformCellPoints;
         planarCellPoints += o.planarCellPoints;
         culledSegments += o.culledSegments;
+        penumbraLights += o.penumbraLights;
         return *this;
     }
 };
