@@ -100,6 +100,13 @@ struct LoadedScene {
 
 }  // namespace
 
+/// The light radius of --quality's main reference and of the penumbra cells: R = r = kI·h of
+/// the matrix's first (CC, kI), so that R follows the scene's size (about 2 % of its longest
+/// side at CC 100, kI 2).
+static float QualityRadius(const Scene& scene, const BenchMatrix& m) {
+    return m.ki.front() * scene.mesh.Bounds().MaxExtent() / static_cast<float>(m.cc.front());
+}
+
 BenchReport RunBenchmarkReport(const BenchMatrix& m,
                                const std::function<void(int, int, const BenchResult&)>& progress,
                                const std::function<void(double)>& estimate) {
@@ -110,7 +117,8 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
     for (const std::string& v : m.variants) ParseLightMeshVariant(v);  // fail before any work
     if (!m.imageDir.empty()) CheckWritableFolder((std::filesystem::path(m.imageDir) / "x.png").string());
     const int perSize = (m.noShadows ? 1 : 0) + static_cast<int>(m.accels.size()) +
-                        static_cast<int>(m.cc.size() * m.ki.size() * m.variants.size());
+                        static_cast<int>(m.cc.size() * m.ki.size() *
+                                         (m.variants.size() + (m.quality && m.penumbrae ? 1 : 0)));
     const int total = static_cast<int>(m.scenes.size() * m.sizes.size()) * perSize;
     int done = 0;
     BenchReport report;
@@ -151,8 +159,9 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
             for (const auto& size : m.sizes) {
                 const double unit = rt * (static_cast<double>(size.first) * size.second / px0) * (m.repeat + 1);
                 double cells = (m.noShadows ? 0.5 : 0.0) + static_cast<double>(m.accels.size());
+                const double lmmCells = static_cast<double>(m.variants.size()) + (m.quality && m.penumbrae ? 1.0 : 0.0);
                 for (size_t c = 0; c < m.cc.size(); ++c)
-                    for (float ki : m.ki) cells += static_cast<double>(m.variants.size()) * 0.5 * ki * ki;
+                    for (float ki : m.ki) cells += lmmCells * 0.5 * ki * ki;
                 seconds += unit * cells;
                 if (m.quality) {
                     const double once = unit / (m.repeat + 1);
@@ -193,7 +202,7 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                 r.width = width;
                 r.height = height;
                 r.accel = std::string(accel.Name());
-                options.shadows = r.method;
+                options.shadows = r.method == "penumbra" ? "lmm" : r.method;
                 cells.push_back({std::move(r), &accel, std::move(options)});
             };
             const size_t first = results.size();
@@ -226,6 +235,26 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                         options.lightMesh.cellSummaries = m.cellSummaries;
                         add(r, lmmAccel, options);
                     }
+            // Contact-hardening penumbrae: the light radius of the main quality reference.
+            if (m.quality && m.penumbrae)
+                for (int cc : m.cc)
+                    for (float ki : m.ki) {
+                        const LightMeshVariant variant = ParseLightMeshVariant(kDefaultLightMeshVariant);
+                        BenchResult r;
+                        r.method = "penumbra";
+                        r.variant = variant.name;
+                        r.paperName = variant.paperName;
+                        r.cc = cc;
+                        r.ki = ki;
+                        r.lightRadius = QualityRadius(scene, m);
+                        RenderOptions options = base;
+                        options.lightMesh.cc = cc;
+                        options.lightMesh.ki = ki;
+                        options.lightMesh.variant = variant.name;
+                        options.lightMesh.cellSummaries = m.cellSummaries;
+                        options.areaLight.radius = r.lightRadius;
+                        add(r, lmmAccel, options);
+                    }
             for (int i = -1; i < m.repeat; ++i) {  // i = -1: the warm-up pass
                 for (size_t c = 0; c < cells.size(); ++c) {
                     BenchResult& r = cells[c].r;
@@ -245,8 +274,10 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                     // The last pass: the cell is done.
                     if (!m.imageDir.empty()) {
                         std::string name = SceneStem(spec) + StringPrintf("-%dx%d-", width, height) +
-                                           (r.method == "lmm" ? StringPrintf("cc%d-ki%g-%s", r.cc, r.ki, r.variant.c_str())
-                                                              : r.method + "-" + r.accel) + ".png";
+                                           (r.method == "lmm"        ? StringPrintf("cc%d-ki%g-%s", r.cc, r.ki, r.variant.c_str())
+                                            : r.method == "penumbra" ? StringPrintf("cc%d-ki%g-%s-R%g", r.cc, r.ki,
+                                                                                    r.variant.c_str(), r.lightRadius)
+                                                                     : r.method + "-" + r.accel) + ".png";
                         r.image = (std::filesystem::path(m.imageDir) / name).string();
                         WriteImage(r.image, rr.image);
                     }
@@ -265,7 +296,7 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
             q.height = height;
             q.refSamples = m.refSamples;
             q.meshStep = scene.mesh.Bounds().MaxExtent() / static_cast<float>(m.cc.front());
-            q.radius = m.ki.front() * q.meshStep;
+            q.radius = QualityRadius(scene, m);
             const Camera& cam = scene.camera;
             const float dist = Length(cam.lookAt - cam.position);
             const float tanHalf = std::tan(0.5f * cam.fovY * 3.14159265f / 180.0f);
@@ -315,9 +346,12 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                 row.cc = r.cc;
                 row.ki = r.ki;
                 row.seconds = r.median;
-                row.label = r.method == "rt" ? "RT (" + r.accel + ")"
-                                             : StringPrintf("%s (%s) CC %d kI %g", r.paperName.c_str(),
-                                                            r.variant.c_str(), r.cc, r.ki);
+                row.label = r.method == "rt"         ? "RT (" + r.accel + ")"
+                            : r.method == "penumbra" ? StringPrintf("%s (%s) CC %d kI %g, light radius %.3g",
+                                                                    r.paperName.c_str(), r.variant.c_str(), r.cc, r.ki,
+                                                                    r.lightRadius)
+                                                     : StringPrintf("%s (%s) CC %d kI %g", r.paperName.c_str(),
+                                                                    r.variant.c_str(), r.cc, r.ki);
                 judge(row, images[i]);
             }
             for (int n : m.areaSamples) {
@@ -397,6 +431,11 @@ std::string BenchMarkdown(const std::vector<BenchResult>& rs) {
         out += StringPrintf("### %s, %dx%d\n\n", g->scene.c_str(), g->width, g->height);
         if (none) out += StringPrintf("No shadows %.3f s; ", none->median);
         out += rtLine + StringPrintf(" (median of %zu runs after a warm-up).\n\n", g->seconds.size());
+        for (const BenchResult& r : rs)
+            if (r.method == "penumbra" && r.scene == g->scene && r.width == g->width && r.height == g->height)
+                out += StringPrintf("Contact-hardening penumbrae (%s, light radius %.3g), CC %d kI %g: %.3f s%s.\n\n",
+                                    r.variant.c_str(), r.lightRadius, r.cc, r.ki, r.median,
+                                    rt && rt->median > 0 ? StringPrintf(", %.2f× RT", r.median / rt->median).c_str() : "");
         // A (CC, kI) × variant table of one figure per cell.
         auto variantTable = [&](bool longNames, const char* format, auto&& value) {
             out += "| CC | kI |";
@@ -447,12 +486,12 @@ std::string BenchCsv(const std::vector<BenchResult>& rs) {
     std::string out =
         "scene,width,height,method,variant,paper_name,accel,cc,ki,median_s,runs_s,setup_s,camera_rays,shadow_rays,"
         "reflection_rays,local_segments,interpolations,mean_m,fallbacks,nodes_evaluated,peak_memory_bytes,image,"
-        "uniform_cell_points,culled_segments\n";
+        "uniform_cell_points,culled_segments,light_radius,penumbra_lights\n";
     for (const BenchResult& r : rs) {
         std::string runs;
         for (double s : r.seconds) runs += StringPrintf("%s%.4f", runs.empty() ? "" : " ", s);
         const RenderCounters& c = r.counters;
-        out += StringPrintf("%s,%d,%d,%s,%s,%s,%s,%d,%g,%.4f,%s,%.4f,%llu,%llu,%llu,%llu,%llu,%.2f,%llu,%llu,%llu,%s,%llu,%llu\n",
+        out += StringPrintf("%s,%d,%d,%s,%s,%s,%s,%d,%g,%.4f,%s,%.4f,%llu,%llu,%llu,%llu,%llu,%.2f,%llu,%llu,%llu,%s,%llu,%llu,%g,%llu\n",
                             r.scene.c_str(), r.width, r.height, r.method.c_str(), r.variant.c_str(),
                             r.paperName.c_str(), r.accel.c_str(), r.cc, r.ki, r.median, runs.c_str(), r.setupSeconds,
                             static_cast<unsigned long long>(c.cameraRays), static_cast<unsigned long long>(c.shadowRays),
@@ -464,7 +503,8 @@ std::string BenchCsv(const std::vector<BenchResult>& rs) {
                             static_cast<unsigned long long>(r.nodesEvaluated),
                             static_cast<unsigned long long>(r.peakMemoryBytes), r.image.c_str(),
                             static_cast<unsigned long long>(c.uniformCellPoints),
-                            static_cast<unsigned long long>(c.culledSegments));
+                            static_cast<unsigned long long>(c.culledSegments), r.lightRadius,
+                            static_cast<unsigned long long>(c.penumbraLights));
     }
     return out;
 }
@@ -589,6 +629,57 @@ std::string Psnr(double v) { return v >= 99 ? "∞" : StringPrintf("%.2f", v); }
 
 }  // namespace
 
+namespace {
+
+/// PSNR (against the main reference) of naive soft shadows at `seconds`, read off the area
+/// rows' time–PSNR curve by linear interpolation; NaN outside the times measured.
+double AreaPsnrAt(const BenchQuality& q, double seconds) {
+    std::vector<std::pair<double, double>> curve;
+    for (const QualityRow& row : q.rows)
+        if (row.method == "area") curve.push_back({row.seconds, row.psnr[q.mainRadius]});
+    std::sort(curve.begin(), curve.end());
+    for (size_t i = 1; i < curve.size(); ++i)
+        if (seconds >= curve[i - 1].first && seconds <= curve[i].first && curve[i].first > curve[i - 1].first)
+            return curve[i - 1].second + (curve[i].second - curve[i - 1].second) * (seconds - curve[i - 1].first) /
+                                             (curve[i].first - curve[i - 1].first);
+    return std::nan("");
+}
+
+/// The contact-hardening rows against RT, the same (CC, kI) without a light radius and
+/// naive soft shadows at equal time: the targets of the penumbra mode, as ratios and dB
+/// differences from one run.
+std::string PenumbraQualityMarkdown(const BenchQuality& q) {
+    const size_t mr = q.mainRadius;
+    const QualityRow* rt = nullptr;
+    for (const QualityRow& row : q.rows)
+        if (row.method == "rt" && !rt) rt = &row;
+    std::string out;
+    for (const QualityRow& row : q.rows) {
+        if (row.method != "penumbra") continue;
+        if (out.empty())
+            out = StringPrintf(
+                "\n\nContact-hardening penumbrae (light radius = the main reference's R = %.4g) against RT, the "
+                "same light mesh with its fixed radius, and naive soft shadows at equal time (interpolated on "
+                "their time–PSNR curve):\n\n| Method | s | × RT | PSNR dB | SSIM | − RT dB | − fixed radius dB | "
+                "area at equal time dB |\n|---|---|---|---|---|---|---|---|\n",
+                q.radii[mr]);
+        const QualityRow* fixed = nullptr;
+        for (const QualityRow& other : q.rows)
+            if (other.method == "lmm" && other.variant == row.variant && other.cc == row.cc && other.ki == row.ki)
+                fixed = &other;
+        const double area = AreaPsnrAt(q, row.seconds);
+        out += StringPrintf("| %s | %.3f | %s | %s | %.4f | %s | %s | %s |\n", row.label.c_str(), row.seconds,
+                            rt && rt->seconds > 0 ? StringPrintf("%.2f", row.seconds / rt->seconds).c_str() : "–",
+                            Psnr(row.psnr[mr]).c_str(), row.ssim[mr],
+                            rt ? StringPrintf("%+.1f", row.psnr[mr] - rt->psnr[mr]).c_str() : "–",
+                            fixed ? StringPrintf("%+.1f", row.psnr[mr] - fixed->psnr[mr]).c_str() : "–",
+                            std::isnan(area) ? "outside the N tried" : Psnr(area).c_str());
+    }
+    return out;
+}
+
+}  // namespace
+
 std::string BenchQualityMarkdown(const BenchReport& report) {
     std::string out;
     for (const BenchQuality& q : report.quality) {
@@ -654,6 +745,7 @@ std::string BenchQualityMarkdown(const BenchReport& report) {
             else
                 out += "\nNaive soft shadows do not reach LMM's PSNR at the N tried.\n";
         }
+        out += PenumbraQualityMarkdown(q);
         out += "\n";
     }
     return out;
@@ -874,7 +966,7 @@ std::string BenchHtml(const BenchReport& report, const std::string& title) {
             const Image rtImage = ReadImage(rt->image);
             std::vector<Image> lmm;
             for (const BenchResult& r : group)
-                if (r.method == "lmm" && !r.image.empty()) lmm.push_back(ReadImage(r.image));
+                if ((r.method == "lmm" || r.method == "penumbra") && !r.image.empty()) lmm.push_back(ReadImage(r.image));
             const Window win = MostDifferent(rtImage, lmm);
             const double fullH = 240.0 * g->height / g->width;
             const double zoom = 240.0 / win.w;  // crop width 240 px
@@ -886,7 +978,10 @@ std::string BenchHtml(const BenchReport& report, const std::string& title) {
                 o += "<style>." + cls + "{background-image:url(data:image/png;base64," + Base64(ReadBytes(r.image)) +
                      ")}</style>\n";
                 const std::string caption =
-                    r.method == "lmm" ? StringPrintf("%s (%s) CC %d kI %g, %.3f s", r.paperName.c_str(), r.variant.c_str(), r.cc,
+                    r.method == "penumbra"
+                        ? StringPrintf("%s (%s) CC %d kI %g, light radius %.3g, %.3f s", r.paperName.c_str(),
+                                       r.variant.c_str(), r.cc, r.ki, r.lightRadius, r.median)
+                    : r.method == "lmm" ? StringPrintf("%s (%s) CC %d kI %g, %.3f s", r.paperName.c_str(), r.variant.c_str(), r.cc,
                                                      r.ki, r.median)
                                       : StringPrintf("%s (%s), %.3f s", r.method == "rt" ? "RT" : "no shadows",
                                                      r.accel.c_str(), r.median);

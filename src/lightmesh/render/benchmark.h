@@ -33,19 +33,24 @@ struct BenchMatrix {
     bool quality = false;
     int refSamples = 256;                             ///< samples of the reference
     std::vector<float> radiusFactors{0.5f, 1.0f, 2.0f};  ///< reference radii R = r·factor
-    std::vector<int> areaSamples{4, 16, 64};          ///< naive soft shadows timed against LMM
+    std::vector<int> areaSamples{1, 2, 4, 16, 64};    ///< naive soft shadows timed against LMM
+    /// With --quality, per (CC, kI) also the default variant with contact-hardening
+    /// penumbrae (method "penumbra": --shadows lmm with the light radius of the main
+    /// reference, R = r of the first (CC, kI)), timed like the other cells.
+    bool penumbrae = true;
 };
 
 /// One cell of the matrix, measured.
 struct BenchResult {
     std::string scene;
     int width = 0, height = 0;
-    std::string method;   ///< "none", "rt" or "lmm"
+    std::string method;   ///< "none", "rt", "lmm" or "penumbra" (lmm with a light radius)
     std::string variant;  ///< LMM variant name ("" otherwise)
     std::string paperName;  ///< "RT", "Grid", "Ш", … ("none" for no shadows)
     std::string accel;
     int cc = 0;
     float ki = 0;
+    float lightRadius = 0;        ///< "penumbra" only
     std::vector<double> seconds;  ///< render wall time of each timed run
     double median = 0;
     double setupSeconds = 0;      ///< shadow-method set-up of the last run (templates, mesh)
@@ -58,7 +63,7 @@ struct BenchResult {
 /// One image judged against the area-light references of its (scene, size).
 struct QualityRow {
     std::string label;   ///< "RT", "Grid CC 100 kI 2", "area N=16", …
-    std::string method;  ///< "rt", "lmm", "area"
+    std::string method;  ///< "rt", "lmm", "penumbra", "area"
     std::string variant;
     int cc = 0;
     float ki = 0;

@@ -122,14 +122,23 @@ TEST(RunBenchmark, QuickHtmlReport) {
     int calls = 0;
     double estimate = -1;
     const BenchReport report = RunBenchmarkReport(
-        m, [&](int done, int total, const BenchResult&) { EXPECT_EQ(done, ++calls); EXPECT_EQ(total, 6); },
+        m, [&](int done, int total, const BenchResult&) { EXPECT_EQ(done, ++calls); EXPECT_EQ(total, 8); },
         [&](double s) { estimate = s; });
-    EXPECT_EQ(calls, 6);
+    EXPECT_EQ(calls, 8);
     EXPECT_GE(estimate, 0);
-    ASSERT_EQ(report.results.size(), 6u);
+    // none, RT, 2 variants × 2 kI, and with --quality the penumbra mode per kI.
+    ASSERT_EQ(report.results.size(), 8u);
+    int penumbrae = 0;
+    for (const BenchResult& r : report.results)
+        if (r.method == "penumbra") {
+            ++penumbrae;
+            EXPECT_FLOAT_EQ(r.lightRadius, report.quality[0].radius);
+            EXPECT_GT(r.counters.penumbraLights, 0u);
+        }
+    EXPECT_EQ(penumbrae, 2);
     ASSERT_EQ(report.quality.size(), 1u);
     EXPECT_EQ(report.quality[0].radii.size(), 3u);
-    EXPECT_EQ(report.quality[0].rows.size(), 1u + 4u + 2u);  // RT, the LMM cells, area N = 1, 4
+    EXPECT_EQ(report.quality[0].rows.size(), 1u + 4u + 2u + 2u);  // RT, the LMM cells, penumbrae, area N = 1, 4
     const std::string html = BenchHtml(report);
     EXPECT_NE(html.find("<table>"), std::string::npos);
     EXPECT_NE(html.find("<svg"), std::string::npos);
@@ -138,6 +147,8 @@ TEST(RunBenchmark, QuickHtmlReport) {
     EXPECT_NE(html.find("PSNR"), std::string::npos);   // the quality table
     EXPECT_EQ(html.find("http://"), html.find("http://www.w3.org/2000/svg"));  // no network
     EXPECT_NE(BenchQualityMarkdown(report).find("Naive soft shadows"), std::string::npos);
+    EXPECT_NE(BenchQualityMarkdown(report).find("Contact-hardening penumbrae"), std::string::npos);
+    EXPECT_NE(html.find("light radius"), std::string::npos);  // the penumbra image's caption
     fs::remove_all(dir);
 }
 

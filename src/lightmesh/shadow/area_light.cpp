@@ -22,6 +22,7 @@
 // point alone, so images do not depend on threads, tile order or pixel.
 #include "lightmesh/shadow/area_light.h"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 
@@ -107,11 +108,6 @@ Vec3 SampleConeStratified(const Vec3& axis, float oneMinusCosMax, int index, int
 
 float SphereLightVisibility(const Accelerator& accel, const Vec3& origin, const Vec3& center,
                             float radius, int samples, uint64_t seed, int* rays) {
-    return SphereLightVisibilityAdaptive(accel, origin, center, radius, samples, samples, seed, rays);
-}
-
-float SphereLightVisibilityAdaptive(const Accelerator& accel, const Vec3& origin, const Vec3& center,
-                                    float radius, int firstRound, int samples, uint64_t seed, int* rays) {
     if (rays) *rays = 0;
     const Vec3 oc = center - origin;
     const float d2 = LengthSquared(oc);
@@ -125,7 +121,8 @@ float SphereLightVisibilityAdaptive(const Accelerator& accel, const Vec3& origin
     const float shift0 = UnitFloat(seed >> 40), shift1 = UnitFloat(seed >> 8);
     Vec3 e1, e2;
     CoordinateSystem(axis, &e1, &e2);
-    auto sees = [&](int i) {
+    int visible = 0;
+    for (int i = 0; i < samples; ++i) {
         const Vec3 w = SampleCone(e1, e2, axis, oneMinusCosMax, i, samples, shift0, shift1);
         // The near intersection with the sphere, from the perpendicular distance of C to the
         // ray (stabler than b² − c); rounding at the cone's rim is clamped to the tangent.
@@ -133,20 +130,40 @@ float SphereLightVisibilityAdaptive(const Accelerator& accel, const Vec3& origin
         const float h2 = r2 - LengthSquared(oc - w * b);
         const float t = b - std::sqrt(std::max(0.0f, h2));
         // Like LightVisible, stop just short of the light itself.
-        return !accel.Occluded(Ray{origin, w * t, 0.0f, 1.0f - 1e-5f});
+        visible += !accel.Occluded(Ray{origin, w * t, 0.0f, 1.0f - 1e-5f});
+    }
+    if (rays) *rays = samples;
+    return static_cast<float>(visible) / static_cast<float>(samples);
+}
+
+float DiscLightVisibility(const Accelerator& accel, const Vec3& origin, const Vec3& center, float radius,
+                          int perRing, uint64_t seed, int* rays) {
+    if (rays) *rays = 0;
+    const Vec3 oc = center - origin;
+    const float d2 = LengthSquared(oc);
+    if (d2 <= radius * radius) return 1.0f;  // inside the light: all of it is visible
+    perRing = std::clamp(perRing, 1, 32);
+    Vec3 e1, e2;
+    CoordinateSystem(oc / std::sqrt(d2), &e1, &e2);
+    const float turn = UnitFloat(seed >> 40) * (2 * Pi / static_cast<float>(perRing));
+    auto sees = [&](float ringRadius, float angle) {
+        const float r = ringRadius * radius;
+        const Vec3 to = oc + e1 * (r * std::cos(angle)) + e2 * (r * std::sin(angle));
+        // Like LightVisible, stop just short of the light itself.
+        return !accel.Occluded(Ray{origin, to, 0.0f, 1.0f - 1e-5f});
     };
-    // The first round: every stride-th point of the lattice, itself spread over the cone.
-    const int stride = firstRound > 0 && firstRound < samples ? samples / firstRound : 1;
-    int visible = 0, traced = 0;
-    for (int i = 0; i < samples; i += stride, ++traced) visible += sees(i);
-    if (stride > 1 && (visible == 0 || visible == traced)) {
-        if (rays) *rays = traced;
+    // The outer ring first (radius sqrt(3/4): the middle of the outer half of the area),
+    // then the inner (sqrt(1/4)), each point the centre of an equal share of the disc.
+    const float step = 2 * Pi / static_cast<float>(perRing);
+    int visible = 0;
+    for (int k = 0; k < perRing; ++k) visible += sees(0.8660254f, turn + step * static_cast<float>(k));
+    if (visible == 0 || visible == perRing) {
+        if (rays) *rays = perRing;
         return visible == 0 ? 0.0f : 1.0f;
     }
-    for (int i = 0; i < samples && stride > 1; ++i)
-        if (i % stride != 0) visible += sees(i), ++traced;
-    if (rays) *rays = traced;
-    return static_cast<float>(visible) / static_cast<float>(traced);
+    for (int k = 0; k < perRing; ++k) visible += sees(0.5f, turn + step * (static_cast<float>(k) + 0.5f));
+    if (rays) *rays = 2 * perRing;
+    return static_cast<float>(visible) / static_cast<float>(2 * perRing);
 }
 
 namespace {
