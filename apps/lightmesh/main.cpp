@@ -116,7 +116,7 @@ int main(int argc, char** argv) {
                          "renders the images next to it unless --images is given");
     benchCmd->add_flag("--quality", bench.matrix.quality,
                        "Also judge every cell against a converged area-light reference: PSNR/SSIM, reference "
-                       "radius sweep, naive soft shadows (N = 4, 16, 64) vs LMM, leak count");
+                       "radius sweep, naive soft shadows (N = 1, 2, 4, 16, 64) vs LMM, contact-hardening penumbrae (lmm with the reference's light radius), leak count");
     benchCmd->add_option("--ref-samples", bench.matrix.refSamples, "Samples of the --quality reference; default 256")
         ->check(CLI::Range(1, 4096));
     bench.accelsOption = benchCmd->add_option("--accels", bench.matrix.accels,

@@ -145,23 +145,36 @@ float DiscLightVisibility(const Accelerator& accel, const Vec3& origin, const Ve
     perRing = std::clamp(perRing, 1, 32);
     Vec3 e1, e2;
     CoordinateSystem(oc / std::sqrt(d2), &e1, &e2);
-    const float turn = UnitFloat(seed >> 40) * (2 * Pi / static_cast<float>(perRing));
-    auto sees = [&](float ringRadius, float angle) {
+    // The rings' directions by rotation from one sine and cosine per call: point k of the
+    // outer ring at turn + k·step, of the inner ring at turn + (k + ½)·step.
+    const float step = 2 * Pi / static_cast<float>(perRing);
+    const float turn = UnitFloat(seed >> 40) * step;
+    const float cs = std::cos(0.5f * step), sn = std::sin(0.5f * step);
+    float c = std::cos(turn), s = std::sin(turn);
+    auto advance = [&] {  // the angle += step / 2
+        const float c2 = c * cs - s * sn;
+        s = s * cs + c * sn;
+        c = c2;
+    };
+    auto sees = [&](float ringRadius) {
         const float r = ringRadius * radius;
-        const Vec3 to = oc + e1 * (r * std::cos(angle)) + e2 * (r * std::sin(angle));
+        const Vec3 to = oc + e1 * (r * c) + e2 * (r * s);
         // Like LightVisible, stop just short of the light itself.
         return !accel.Occluded(Ray{origin, to, 0.0f, 1.0f - 1e-5f});
     };
     // The outer ring first (radius sqrt(3/4): the middle of the outer half of the area),
     // then the inner (sqrt(1/4)), each point the centre of an equal share of the disc.
-    const float step = 2 * Pi / static_cast<float>(perRing);
     int visible = 0;
-    for (int k = 0; k < perRing; ++k) visible += sees(0.8660254f, turn + step * static_cast<float>(k));
+    const float c0 = c, s0 = s;
+    for (int k = 0; k < perRing; ++k, advance(), advance()) visible += sees(0.8660254f);
     if (visible == 0 || visible == perRing) {
         if (rays) *rays = perRing;
         return visible == 0 ? 0.0f : 1.0f;
     }
-    for (int k = 0; k < perRing; ++k) visible += sees(0.5f, turn + step * (static_cast<float>(k) + 0.5f));
+    c = c0;
+    s = s0;
+    advance();
+    for (int k = 0; k < perRing; ++k, advance(), advance()) visible += sees(0.5f);
     if (rays) *rays = 2 * perRing;
     return static_cast<float>(visible) / static_cast<float>(2 * perRing);
 }

@@ -1344,8 +1344,15 @@ class LightMesh final : public LightMeshShadows {
         float rho2[64];
         Word mixed = 0;
         float rhoMax2 = 0;
+        // The lights the candidates disagree on, from their words alone.
+        Word someSee = 0, allSee = kVisMask;
+        for (const PenumbraNode& c : nodes) {
+            someSee |= c.w;
+            allSee &= c.w;
+        }
+        const Word disagree = (someSee & ~allSee) & neededMask;
         for (size_t l = 0; l < nLights; ++l) {
-            if (!((neededMask >> l) & 1)) continue;
+            if (!((disagree >> l) & 1)) continue;
             const Vec3& light = scene_.lights[l].position;
             uint32_t blocked = 0;
             double sum = 0;
@@ -1355,7 +1362,6 @@ class LightMesh final : public LightMeshShadows {
                 const float t = BlockerParameter(c.index, l);
                 sum += (1.0 - t) * Length(light - c.x);
             }
-            if (blocked == 0 || blocked == n) continue;
             const double db = sum / blocked, dp = Length(light - sp.p);
             const double width = db > 0 ? lightRadius_ * std::max(dp - db, 0.0) / db : lattice_.r;
             const float rho = static_cast<float>(std::min<double>(kSupportPerWidth * width, lattice_.r));
