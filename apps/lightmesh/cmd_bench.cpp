@@ -78,8 +78,10 @@ int RunBench(BenchCommand& cmd) {
             const double elapsed = SecondsSince(start);
             std::fprintf(stderr, "[%d/%d] %s %dx%d %s%s: %.3f s (median of %zu); %.0f s elapsed, ~%.0f s left\n", done,
                          total, r.scene.c_str(), r.width, r.height, r.paperName.c_str(),
-                         r.method == "lmm" ? lm::StringPrintf(" CC %d kI %g", r.cc, r.ki).c_str()
-                                           : (" " + r.accel).c_str(),
+                         r.method == "lmm"        ? lm::StringPrintf(" CC %d kI %g", r.cc, r.ki).c_str()
+                         : r.method == "penumbra" ? lm::StringPrintf(" CC %d kI %g, light radius %g", r.cc, r.ki,
+                                                                     r.lightRadius).c_str()
+                                                  : (" " + r.accel).c_str(),
                          r.median, r.seconds.size(), elapsed, elapsed / done * (total - done));
         },
         [&](double seconds) {

@@ -157,8 +157,11 @@ void PrintRender(const RenderCommand& cmd, const PreparedRender& p, const lm::Re
                         Count(c.planarCellPoints).c_str(), 100.0 * static_cast<double>(c.planarCellPoints) / points,
                         Count(c.culledSegments).c_str());
         if (c.penumbraLights > 0)
-            std::printf("penumbra  (point, light) pairs whose width followed the light radius %s (%.1f%% of points)\n",
-                        Count(c.penumbraLights).c_str(), 100.0 * static_cast<double>(c.penumbraLights) / points);
+            std::printf("penumbra  (point, light) pairs whose width followed the light radius %s (%.1f%% of points): "
+                        "%s by the nodes' kernel, %s by rays to the light's disc, the rest by the lattice and P's "
+                        "own ray\n",
+                        Count(c.penumbraLights).c_str(), 100.0 * static_cast<double>(c.penumbraLights) / points,
+                        Count(c.penumbraKernel).c_str(), Count(c.penumbraSampled).c_str());
     }
     PrintFigures(ranks ? "shadows (rank 0)" : "shadows", p.job->Shadows().Figures());
     std::printf("memory    peak %s%s\n", lm::FormatBytes(lm::PeakMemoryBytes()).c_str(), ranks ? " (rank 0)" : "");

@@ -323,7 +323,16 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                 o.areaLight.samples = m.refSamples;
                 std::unique_ptr<RenderJob> keep;
                 RenderResult rr = render(scene, lmmAccel, o, nullptr, &keep);
-                if (f == 1.0f) q.mainRadius = q.radii.size();
+                if (f == 1.0f) {
+                    q.mainRadius = q.radii.size();
+                    if (!m.imageDir.empty()) {
+                        q.refImage = (std::filesystem::path(m.imageDir) /
+                                      (SceneStem(spec) + StringPrintf("-%dx%d-area-R%g-N%d.png", width, height,
+                                                                      o.areaLight.radius, m.refSamples)))
+                                         .string();
+                        WriteImage(q.refImage, rr.image);
+                    }
+                }
                 q.radii.push_back(o.areaLight.radius);
                 q.refSeconds.push_back(rr.seconds);
                 refs.push_back(std::move(rr.image));
@@ -668,12 +677,28 @@ std::string PenumbraQualityMarkdown(const BenchQuality& q) {
             if (other.method == "lmm" && other.variant == row.variant && other.cc == row.cc && other.ki == row.ki)
                 fixed = &other;
         const double area = AreaPsnrAt(q, row.seconds);
+        // Outside the curve: say on which side, with the nearest end's figures.
+        std::string areaText = Psnr(area);
+        if (std::isnan(area)) {
+            const QualityRow *fastest = nullptr, *slowest = nullptr;
+            for (const QualityRow& other : q.rows) {
+                if (other.method != "area") continue;
+                if (!fastest || other.seconds < fastest->seconds) fastest = &other;
+                if (!slowest || other.seconds > slowest->seconds) slowest = &other;
+            }
+            areaText = !fastest ? "–"
+                       : row.seconds < fastest->seconds
+                           ? StringPrintf("faster than N=%d (%.3f s, %s dB)", fastest->samples, fastest->seconds,
+                                          Psnr(fastest->psnr[mr]).c_str())
+                           : StringPrintf("slower than N=%d (%.3f s, %s dB)", slowest->samples, slowest->seconds,
+                                          Psnr(slowest->psnr[mr]).c_str());
+        }
         out += StringPrintf("| %s | %.3f | %s | %s | %.4f | %s | %s | %s |\n", row.label.c_str(), row.seconds,
                             rt && rt->seconds > 0 ? StringPrintf("%.2f", row.seconds / rt->seconds).c_str() : "–",
                             Psnr(row.psnr[mr]).c_str(), row.ssim[mr],
                             rt ? StringPrintf("%+.1f", row.psnr[mr] - rt->psnr[mr]).c_str() : "–",
                             fixed ? StringPrintf("%+.1f", row.psnr[mr] - fixed->psnr[mr]).c_str() : "–",
-                            std::isnan(area) ? "outside the N tried" : Psnr(area).c_str());
+                            areaText.c_str());
     }
     return out;
 }
@@ -972,19 +997,11 @@ std::string BenchHtml(const BenchReport& report, const std::string& title) {
             const double zoom = 240.0 / win.w;  // crop width 240 px
             o += "<h3>Images</h3>\n<div class=\"imgs\">\n";
             int n = 0;
-            for (const BenchResult& r : group) {
-                if (r.image.empty()) continue;
+            // One image with its crop of the window.
+            auto figure = [&](const std::string& path, const std::string& caption) {
                 const std::string cls = StringPrintf("i%zu_%d", static_cast<size_t>(g - rs.data()), n++);
-                o += "<style>." + cls + "{background-image:url(data:image/png;base64," + Base64(ReadBytes(r.image)) +
+                o += "<style>." + cls + "{background-image:url(data:image/png;base64," + Base64(ReadBytes(path)) +
                      ")}</style>\n";
-                const std::string caption =
-                    r.method == "penumbra"
-                        ? StringPrintf("%s (%s) CC %d kI %g, light radius %.3g, %.3f s", r.paperName.c_str(),
-                                       r.variant.c_str(), r.cc, r.ki, r.lightRadius, r.median)
-                    : r.method == "lmm" ? StringPrintf("%s (%s) CC %d kI %g, %.3f s", r.paperName.c_str(), r.variant.c_str(), r.cc,
-                                                     r.ki, r.median)
-                                      : StringPrintf("%s (%s), %.3f s", r.method == "rt" ? "RT" : "no shadows",
-                                                     r.accel.c_str(), r.median);
                 o += StringPrintf("<figure><div class=\"full %s\" style=\"height:%.0fpx\"><div class=\"win\" style=\"left:%.1fpx;"
                                   "top:%.1fpx;width:%.1fpx;height:%.1fpx\"></div></div>",
                                   cls.c_str(), fullH, 240.0 * win.x / g->width, 240.0 * win.y / g->width,
@@ -993,6 +1010,22 @@ std::string BenchHtml(const BenchReport& report, const std::string& title) {
                                   "background-position:%.1fpx %.1fpx\"></div>",
                                   cls.c_str(), win.h * zoom, g->width * zoom, g->height * zoom, -win.x * zoom, -win.y * zoom);
                 o += "<figcaption>" + HtmlEscape(caption) + "</figcaption></figure>\n";
+            };
+            for (const BenchQuality& q : report.quality)
+                if (q.scene == g->scene && q.width == g->width && q.height == g->height && !q.refImage.empty())
+                    figure(q.refImage, StringPrintf("area-light reference, R = %.3g, N = %d, %.2f s", q.radii[q.mainRadius],
+                                                    q.refSamples, q.refSeconds[q.mainRadius]));
+            for (const BenchResult& r : group) {
+                if (r.image.empty()) continue;
+                const std::string caption =
+                    r.method == "penumbra"
+                        ? StringPrintf("%s (%s) CC %d kI %g, light radius %.3g, %.3f s", r.paperName.c_str(),
+                                       r.variant.c_str(), r.cc, r.ki, r.lightRadius, r.median)
+                    : r.method == "lmm" ? StringPrintf("%s (%s) CC %d kI %g, %.3f s", r.paperName.c_str(), r.variant.c_str(), r.cc,
+                                                     r.ki, r.median)
+                                      : StringPrintf("%s (%s), %.3f s", r.method == "rt" ? "RT" : "no shadows",
+                                                     r.accel.c_str(), r.median);
+                figure(r.image, caption);
             }
             o += "</div>\n";
         }

@@ -95,6 +95,7 @@ struct BenchQuality {
     std::vector<float> radii;
     std::vector<double> refSeconds;  ///< per radius
     size_t mainRadius = 0;
+    std::string refImage;  ///< the main reference as PNG, when the cells' images are written
     std::vector<QualityRow> rows;
 };
 

@@ -149,6 +149,8 @@ TEST(RunBenchmark, QuickHtmlReport) {
     EXPECT_NE(BenchQualityMarkdown(report).find("Naive soft shadows"), std::string::npos);
     EXPECT_NE(BenchQualityMarkdown(report).find("Contact-hardening penumbrae"), std::string::npos);
     EXPECT_NE(html.find("light radius"), std::string::npos);  // the penumbra image's caption
+    EXPECT_NE(html.find("area-light reference, R ="), std::string::npos);  // beside the reference
+    EXPECT_TRUE(fs::exists(report.quality[0].refImage));
     fs::remove_all(dir);
 }
 

@@ -1321,6 +1321,7 @@ class LightMesh final : public LightMeshShadows {
             const bool centre = LightVisible(accel_, sp.origin, light);
             if (centre == (first != 0)) return centre ? 1.0f : 0.0f;
         }
+        ++counters.penumbraSampled;
         int rays = 0;
         const float v =
             DiscLightVisibility(accel_, sp.origin, light, lightRadius_, kNarrowPerRing, AreaLightSeed(sp, static_cast<uint32_t>(l)), &rays);
@@ -1407,6 +1408,7 @@ class LightMesh final : public LightMeshShadows {
                 acc.vis[l] = NarrowPenumbra(sp, l, std::sqrt(rho2[l]), nodes, counters);
                 continue;
             }
+            ++counters.penumbraKernel;
             ++counters.shadowRays;
             float sum = LightVisible(accel_, sp.origin, light) ? 1.0f : 0.0f, weight = 1.0f;
             if (rho2[l] > 0) {

@@ -97,14 +97,14 @@ TEST(Penumbra, NodesStoreTheirNearestBlocker) {
 // V = DiscShare(−x/w) across it. V is averaged over 19 lines across the edge (the narrow
 // penumbrae are sampled, 8 rays), and the band runs from where that mean falls through
 // 0.75 to where it falls through 0.25 (linear interpolation between samples).
-double MeasuredBand(const Penumbra& p, double w) {
+double MeasuredBand(const Penumbra& p, double w, RenderCounters* counters) {
     const double span = 2 * w + 1.0;
     const double step = std::min(w / 20, 0.01);
     std::vector<double> xs, mean;
     for (double x = -span; x <= span; x += step) {
         double sum = 0;
         int lines = 0;
-        for (int line = -9; line <= 9; ++line, ++lines) sum += p.Vis(FloorPoint(static_cast<float>(x), 0.1f * line));
+        for (int line = -9; line <= 9; ++line, ++lines) sum += p.Vis(FloorPoint(static_cast<float>(x), 0.1f * line), counters);
         xs.push_back(x);
         mean.push_back(sum / lines);
     }
@@ -134,7 +134,17 @@ TEST(Penumbra, WidthGrowsWithTheOccluderDistanceAsTheLawSays) {
         Penumbra p(s, R, 3.0f);
         const double w = R * H / (D - H);
         const double analytic = 2 * u0 * w;
-        const double measured = MeasuredBand(p, w);
+        RenderCounters c;
+        const double measured = MeasuredBand(p, w, &c);
+        // Which regime answered: rays to the light's disc below 1.5·h = 0.3 of support
+        // (1.44·w), the nodes' kernel above.
+        if (H < 3) {
+            EXPECT_GT(c.penumbraSampled, 100u) << H;
+            EXPECT_EQ(c.penumbraKernel, 0u) << H;
+        } else {
+            EXPECT_GT(c.penumbraKernel, 100u) << H;
+            EXPECT_EQ(c.penumbraSampled, 0u) << H;
+        }
         std::printf("plate at height %g: w %.3f, 25-75%% band %.4f, analytic %.4f (%+.0f%%)\n", H, w, measured,
                     analytic, 100 * (measured / analytic - 1));
         EXPECT_NEAR(measured, analytic, 0.2 * analytic) << "plate at height " << H << ", w " << w;

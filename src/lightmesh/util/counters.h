@@ -23,6 +23,8 @@ struct RenderCounters {
     uint64_t planarCellPoints = 0;   ///< points whose cell's geometry is one plane: no segment
     uint64_t culledSegments = 0;     ///< local-visibility segments decided without a ray
     uint64_t penumbraLights = 0;     ///< (point, light) pairs whose radius followed the light's size
+    uint64_t penumbraKernel = 0;     ///< … of them answered by the nodes' kernel
+    uint64_t penumbraSampled = 0;    ///< … by rays to the light's disc (the rest: the lattice and P's ray)
 
     RenderCounters& operator+=(const RenderCounters& o) {
         cameraRays += o.cameraRays;
@@ -38,6 +40,8 @@ struct RenderCounters {
         planarCellPoints += o.planarCellPoints;
         culledSegments += o.culledSegments;
         penumbraLights += o.penumbraLights;
+        penumbraKernel += o.penumbraKernel;
+        penumbraSampled += o.penumbraSampled;
         return *this;
     }
 };
