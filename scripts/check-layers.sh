@@ -11,11 +11,12 @@
 #   accel       ray queries
 #   scene       scenes, scene files, mesh import
 #   shadow      shadow methods (the light mesh)
-#   render      the renderer, the render job, the bench harness
+#   render      the renderer, the render job
 #   distributed MPI
+#   bench       the bench harness: runner, tables, HTML report (library lightmesh_bench)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
-layers=(util math io geometry settings accel scene shadow render distributed)
+layers=(util math io geometry settings accel scene shadow render distributed bench)
 rank() {
   local i
   for i in "${!layers[@]}"; do [ "${layers[$i]}" = "$1" ] && { echo "$i"; return; }; done

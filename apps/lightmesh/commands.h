@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "lightmesh/render/benchmark.h"
+#include "lightmesh/bench/benchmark.h"
 #include "lightmesh/scene/scene.h"
 #include "lightmesh/settings/render_settings.h"
 #include "lightmesh/util/error.h"

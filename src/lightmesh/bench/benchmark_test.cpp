@@ -1,4 +1,4 @@
-#include "lightmesh/render/benchmark.h"
+#include "lightmesh/bench/benchmark.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
