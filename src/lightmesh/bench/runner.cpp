@@ -220,43 +220,31 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                 r.paperName = "RT";
                 add(r, *accels[a], base);
             }
+            // An LMM cell: a variant at (CC, kI), with a light radius for the penumbra mode.
+            auto addLmm = [&](const char* method, const std::string& name, int cc, float ki, float lightRadius) {
+                const LightMeshVariant variant = ParseLightMeshVariant(name);
+                BenchResult r;
+                r.method = method;
+                r.variant = variant.name;
+                r.paperName = variant.paperName;
+                r.cc = cc;
+                r.ki = ki;
+                r.lightRadius = lightRadius;
+                RenderOptions options = base;
+                options.lightMesh.cc = cc;
+                options.lightMesh.ki = ki;
+                options.lightMesh.variant = name;
+                options.lightMesh.cellSummaries = m.cellSummaries;
+                options.areaLight.radius = lightRadius;
+                add(r, lmmAccel, options);
+            };
             for (int cc : m.cc)
                 for (float ki : m.ki)
-                    for (const std::string& v : m.variants) {
-                        const LightMeshVariant variant = ParseLightMeshVariant(v);
-                        BenchResult r;
-                        r.method = "lmm";
-                        r.variant = variant.name;
-                        r.paperName = variant.paperName;
-                        r.cc = cc;
-                        r.ki = ki;
-                        RenderOptions options = base;
-                        options.lightMesh.cc = cc;
-                        options.lightMesh.ki = ki;
-                        options.lightMesh.variant = v;
-                        options.lightMesh.cellSummaries = m.cellSummaries;
-                        add(r, lmmAccel, options);
-                    }
+                    for (const std::string& v : m.variants) addLmm("lmm", v, cc, ki, 0.0f);
             // Contact-hardening penumbrae: the light radius of the main quality reference.
             if (m.quality && m.penumbrae)
                 for (int cc : m.cc)
-                    for (float ki : m.ki) {
-                        const LightMeshVariant variant = ParseLightMeshVariant(kDefaultLightMeshVariant);
-                        BenchResult r;
-                        r.method = "penumbra";
-                        r.variant = variant.name;
-                        r.paperName = variant.paperName;
-                        r.cc = cc;
-                        r.ki = ki;
-                        r.lightRadius = QualityRadius(scene, m);
-                        RenderOptions options = base;
-                        options.lightMesh.cc = cc;
-                        options.lightMesh.ki = ki;
-                        options.lightMesh.variant = variant.name;
-                        options.lightMesh.cellSummaries = m.cellSummaries;
-                        options.areaLight.radius = r.lightRadius;
-                        add(r, lmmAccel, options);
-                    }
+                    for (float ki : m.ki) addLmm("penumbra", kDefaultLightMeshVariant, cc, ki, QualityRadius(scene, m));
             for (int i = -1; i < m.repeat; ++i) {  // i = -1: the warm-up pass
                 for (size_t c = 0; c < cells.size(); ++c) {
                     BenchResult& r = cells[c].r;
