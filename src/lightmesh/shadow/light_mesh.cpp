@@ -1285,12 +1285,13 @@ class LightMesh final : public LightMeshShadows {
     // for 15 % more time; a first round of 2 lost 3-4 dB more.
     static constexpr float kNarrow = 1.5f;
     static constexpr int kNarrowPerRing = 4;
-    // Before sampling, the lattice's own answer where it is safe: if every candidate within
-    // ρ + kDetect·h of P has the same bit for the light and P's own shadow ray agrees, no
-    // shadow edge of that light passes within the penumbra's reach of P (to the lattice's
-    // resolution: a ball of radius 1.5·h past the edge holds a node), so V is that bit.
-    // On the gazebo and the castle this keeps the PSNR within 0.05 dB for 10-20 % less
-    // time; kDetect = 1 lost 0.5 dB.
+    // Before sampling, the lattice's own answer where it is likely right: if every
+    // candidate within ρ + kDetect·h of P has the same bit for the light and P's own shadow
+    // ray agrees, no shadow edge of that light is taken to pass within the penumbra's reach
+    // of P, so V is that bit. (A ball of radius √3/2·h always holds a node; 1.5·h leaves
+    // room for the half of it behind the surface.) Measured: the castle 18 % and the garden
+    // 13 % less time for −0.04 dB; kDetect = 1 lost 0.5 dB, and trusting the nodes without
+    // P's ray 2-4.5 dB.
     static constexpr float kDetect = 1.5f;
     // Whether light sampling (not the nodes' kernel) answers a penumbra of support ρ.
     bool Sampled(float rho2) const { return !(rho2 >= kNarrow * kNarrow * lattice_.h * lattice_.h); }
