@@ -462,6 +462,7 @@ class LightMesh final : public LightMeshShadows {
     uint64_t NodeVisibility(uint64_t index) const override { return NodeWord(index) & kVisMask; }
     bool NodeInside(uint64_t index) const override { return (NodeWord(index) & kInside) != 0; }
     float NodeBlockerParameter(uint64_t index, size_t light) const override {
+        if (light >= scene_.lights.size()) return 0.0f;
         const Word w = NodeWord(index);
         if (lightRadius_ == 0 || ((w >> light) & 1)) return 0.0f;
         return BlockerParameter(index, light);
@@ -482,7 +483,7 @@ class LightMesh final : public LightMeshShadows {
         if (variant_.enumeration == SphereEnumeration::Templates) {
             Word uniform = 0;
             if (!TemplateWalk(sp, neededMask, acc, counters, &uniform)) {
-                CubeWalk(sp, acc, counters);
+                CubeWalk(sp, neededMask, acc, counters);
             } else if (uniform) {
                 // For every light needed, every node the point may use carries this bit, and
                 // the set is not empty.
@@ -492,7 +493,7 @@ class LightMesh final : public LightMeshShadows {
                 return;
             }
         } else {
-            CubeWalk(sp, acc, counters);
+            CubeWalk(sp, neededMask, acc, counters);
         }
         if (acc.weighted) {
             ++counters.interpolations;
@@ -989,10 +990,18 @@ class LightMesh final : public LightMeshShadows {
         Use(acc, Evaluate(index));
     }
 
+    // A candidate node for the penumbra mode (PenumbraInterpolate).
+    struct PenumbraNode {
+        Vec3 x;
+        float d2;  // |x − P|²
+        uint64_t index;
+        Word w;
+    };
+
     // The paper's "Grid" enumeration (§3.1 pseudocode): the cube of nodes around the
     // sphere, each tested against r. Also the fallback of the templates near the lattice's
     // border, where a template would reach outside it.
-    void CubeWalk(const ShadingPoint& sp, Accumulator& acc, RenderCounters& counters) const {
+    void CubeWalk(const ShadingPoint& sp, Word neededMask, Accumulator& acc, RenderCounters& counters) const {
         const LightMeshLattice& L = lattice_;
         const float r2 = L.r * L.r;
         auto lo = [&](float p, float o, int n) {
@@ -1004,6 +1013,8 @@ class LightMesh final : public LightMeshShadows {
         const int i0 = lo(sp.p.x, L.origin.x, L.nx), i1 = hi(sp.p.x, L.origin.x, L.nx);
         const int j0 = lo(sp.p.y, L.origin.y, L.ny), j1 = hi(sp.p.y, L.origin.y, L.ny);
         const int k0 = lo(sp.p.z, L.origin.z, L.nz), k1 = hi(sp.p.z, L.origin.z, L.nz);
+        thread_local std::vector<PenumbraNode> cubeNodes;
+        cubeNodes.clear();
         for (int k = k0; k <= k1; ++k)
             for (int j = j0; j <= j1; ++j)
                 for (int i = i0; i <= i1; ++i) {
@@ -1012,8 +1023,36 @@ class LightMesh final : public LightMeshShadows {
                     if (LengthSquared(d) > r2) continue;
                     // Behind the surface, (n(P), x - P) <= 0, or on it (see frontEps_).
                     if (Dot(sp.n, d) <= frontEps_ * L.h) continue;
+                    if (lightRadius_ > 0) {
+                        const uint64_t index = L.Index(i, j, k);
+                        cubeNodes.push_back({x, LengthSquared(d), index, Evaluate(index)});
+                        continue;
+                    }
                     Candidate(x, L.Index(i, j, k), sp, acc, counters);
                 }
+        if (lightRadius_ > 0) CubePenumbra(sp, neededMask, cubeNodes, acc, counters);
+    }
+
+    // The cube loop's candidates in penumbra mode (points whose template would reach out of
+    // the lattice: on the scene box's far faces, such as the walls of a room that bound
+    // it): consensus's rule as in ConsensusWalk — where the candidates agree on the needed
+    // lights, the first that sees P gives its bits; else the penumbra mode's answer.
+    void CubePenumbra(const ShadingPoint& sp, Word neededMask, std::vector<PenumbraNode>& nodes, Accumulator& acc,
+                      RenderCounters& counters) const {
+        counters.candidates += nodes.size();
+        bool agree = true;
+        for (const PenumbraNode& c : nodes) agree &= ((c.w ^ nodes.front().w) & neededMask) == 0;
+        if (!agree) {
+            Blockers blockers;  // no cell summary here: every segment goes to the back-end
+            blockers.tried = true;
+            PenumbraInterpolate(sp, neededMask, nodes, 0, false, nullptr, blockers, acc, counters);
+            return;
+        }
+        for (const PenumbraNode& c : nodes)
+            if (SeesPoint(c.x, sp, counters)) {
+                Use(acc, c.w);
+                return;
+            }
     }
 
     // Templates (§3.1): snap P to the nearest sub-position of its cell and walk that
@@ -1229,7 +1268,14 @@ class LightMesh final : public LightMeshShadows {
         counters.candidates += n;
         if (lightRadius_ > 0) {
             if (!agree) {
-                PenumbraInterpolate(sp, neededMask, all, base, ci, cj, ck, planar, summary, blockers, acc, counters);
+                thread_local std::vector<PenumbraNode> nodes;
+                nodes.clear();
+                all.ForEach([&](const FrontBlock& b, int k) {
+                    const uint64_t index = static_cast<uint64_t>(base + b.linear[k]);
+                    const Vec3 x = EntryNode(ci, cj, ck, b, k);
+                    nodes.push_back({x, LengthSquared(x - sp.p), index, Evaluate(index)});  // evaluated by pass 1
+                });
+                PenumbraInterpolate(sp, neededMask, nodes, base, planar, summary, blockers, acc, counters);
                 return;
             }
             if (planar) {
@@ -1295,12 +1341,6 @@ class LightMesh final : public LightMeshShadows {
     static constexpr float kDetect = 1.5f;
     // Whether light sampling (not the nodes' kernel) answers a penumbra of support ρ.
     bool Sampled(float rho2) const { return !(rho2 >= kNarrow * kNarrow * lattice_.h * lattice_.h); }
-    struct PenumbraNode {
-        Vec3 x;
-        float d2;  // |x − P|²
-        uint64_t index;
-        Word w;
-    };
     // V of light l at a point whose penumbra (support rho) is too narrow for the kernel:
     // the lattice's answer checked by P's own ray where the nodes near P agree (kDetect),
     // else the light sampled.
@@ -1329,18 +1369,13 @@ class LightMesh final : public LightMeshShadows {
         counters.shadowRays += static_cast<uint64_t>(rays);
         return v;
     }
-    void PenumbraInterpolate(const ShadingPoint& sp, Word neededMask, const FrontRun& all, int64_t base, int ci,
-                             int cj, int ck, bool planar, const CellSummary* summary, Blockers& blockers,
+    // `nodes`: the candidates, in the walk's order. `summary` (may be null) and `base` give
+    // the segment culling's blockers; `planar`: no segment can be blocked.
+    void PenumbraInterpolate(const ShadingPoint& sp, Word neededMask, const std::vector<PenumbraNode>& nodes,
+                             int64_t base, bool planar, const CellSummary* summary, Blockers& blockers,
                              Accumulator& acc, RenderCounters& counters) const {
         const size_t nLights = scene_.lights.size();
-        thread_local std::vector<PenumbraNode> nodes;
         thread_local std::vector<uint8_t> kept;
-        nodes.clear();
-        all.ForEach([&](const FrontBlock& b, int k) {
-            const uint64_t index = static_cast<uint64_t>(base + b.linear[k]);
-            const Vec3 x = EntryNode(ci, cj, ck, b, k);
-            nodes.push_back({x, LengthSquared(x - sp.p), index, Evaluate(index)});  // evaluated by pass 1
-        });
         const size_t n = nodes.size();
         // Per light: uniform over the candidates, or a penumbra with support radius ρ_l.
         float rho2[64];

@@ -180,6 +180,34 @@ TEST(Penumbra, ContactShadowsStayHardWhereTodaysMethodBlurs) {
     EXPECT_GE(points - hardFixed, 30);
 }
 
+TEST(Penumbra, PointsOnTheSceneBoxsFarFacesGetItToo) {
+    // A wall standing on the floor's far edge (z = 10, the box's largest z: the templates
+    // would reach out of the lattice there, so the cube loop takes its points) and a post
+    // in front of it, lit from the front: the post's shadow on the wall.
+    Scene s = FloorScene();
+    s.mesh.positions.insert(s.mesh.positions.end(), {{-10, 0, 10}, {10, 0, 10}, {10, 4, 10}, {-10, 4, 10}});
+    s.mesh.triangles.push_back({4, 5, 6});
+    s.mesh.triangles.push_back({4, 6, 7});
+    s.mesh.materialIds.insert(s.mesh.materialIds.end(), {0, 0});
+    AddBox(&s, {-0.25f, 0.0f, 7.0f}, {0.25f, 3.0f, 7.5f});
+    s.lights = {{{0.0f, 2.0f, -2.0f}, Color(1.0f), Falloff::None}};
+    Penumbra p(s, 0.5f), fixed(s, 0.0f);
+    RenderCounters c, cFixed;
+    int differ = 0;
+    for (float x = -1.5f; x <= 1.5f; x += 0.02f) {
+        ShadingPoint sp;
+        sp.p = Vec3(x, 1.0f, 10.0f);
+        sp.n = Vec3(0, 0, -1);
+        sp.origin = Vec3(x, 1.0f, 10.0f - 1e-4f);
+        sp.prim = 2;
+        differ += p.Vis(sp, &c) != fixed.Vis(sp, &cFixed);
+    }
+    EXPECT_GT(c.penumbraLights, 10u);
+    EXPECT_EQ(cFixed.penumbraLights, 0u);
+    EXPECT_GT(differ, 10);
+    EXPECT_EQ(c.uniformCellPoints, 0u) << "the cube loop, not the templates, must have answered";
+}
+
 TEST(Penumbra, StaysLeakFree) {
     // SegmentTestStopsLeaksThatNoTestLetsThrough's scene: a slab thinner than h just above
     // the floor, lit from high above; points deep inside its shadow must stay dark.
