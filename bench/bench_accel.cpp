@@ -33,7 +33,7 @@
 #include <vector>
 
 #include "lightmesh/accel/accelerator.h"
-#include "lightmesh/accel/test_scenes.h"
+#include "support/accel_scenes.h"
 #include "lightmesh/geometry/triangle.h"
 #include "lightmesh/scene/camera.h"
 #include "lightmesh/scene/demo_scene.h"

@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "lightmesh/accel/accelerator.h"
-#include "lightmesh/accel/test_scenes.h"
+#include "support/accel_scenes.h"
 #include "lightmesh/io/compare.h"
 #include "lightmesh/render/render_job.h"
 #include "lightmesh/scene/scene_file.h"

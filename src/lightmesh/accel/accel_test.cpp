@@ -15,7 +15,7 @@
 
 #include "lightmesh/accel/accelerator.h"
 #include "lightmesh/accel/brute_force.h"
-#include "lightmesh/accel/test_scenes.h"
+#include "support/accel_scenes.h"
 #include "lightmesh/geometry/triangle.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/parallel.h"

@@ -9,7 +9,7 @@
 
 #include "lightmesh/accel/brute_force.h"
 #include "lightmesh/geometry/triangle.h"
-#include "lightmesh/accel/test_scenes.h"
+#include "support/accel_scenes.h"
 #include "lightmesh/geometry/triangle.h"
 
 namespace lm {

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "lightmesh/render/test_scenes.h"
+#include "support/floor_scenes.h"
 #include "lightmesh/util/error.h"
 
 namespace lm {

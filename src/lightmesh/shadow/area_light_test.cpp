@@ -6,7 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "lightmesh/render/test_scenes.h"
+#include "support/floor_scenes.h"
 #include "lightmesh/render/whitted.h"
 #include "lightmesh/util/error.h"
 

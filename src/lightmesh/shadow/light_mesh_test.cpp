@@ -8,7 +8,8 @@
 #include <functional>
 #include <unordered_map>
 
-#include "lightmesh/render/test_scenes.h"
+#include "support/floor_scenes.h"
+#include "support/light_mesh_probe.h"
 #include "lightmesh/render/whitted.h"
 #include "lightmesh/scene/demo_scene.h"
 #include "lightmesh/util/error.h"
@@ -20,26 +21,10 @@ using testing::AddBox;
 using testing::FloorPoint;
 using testing::FloorScene;
 
-
-struct Lmm {
-    std::unique_ptr<Accelerator> accel;
-    std::unique_ptr<LightMeshShadows> lmm;
-    Lmm(const Scene& s, int cc, float ki, const std::string& variant = "grid") {
-        accel = CreateAccelerator("grid", s.mesh);
-        LightMeshOptions o;
-        o.cc = cc;
-        o.ki = ki;
-        o.variant = variant;
-        lmm = CreateLightMeshShadows(s, *accel, o);
-    }
-    float Vis(const ShadingPoint& sp, int light = 0) const {
-        bool needed[kMaxLights];
-        float vis[kMaxLights] = {};
-        std::fill(needed, needed + kMaxLights, true);
-        RenderCounters c;
-        lmm->Visibility(sp, needed, vis, c);
-        return vis[light];
-    }
+// The paper's variants at (CC, kI) over the nested grid.
+struct Lmm : testing::LightMeshProbe {
+    Lmm(const Scene& s, int cc, float ki, const std::string& variant = "grid")
+        : LightMeshProbe(s, testing::LightMeshSettings(cc, ki, variant)) {}
 };
 
 TEST(LightMesh, LatticeDimensionsFollowCcAndKi) {

@@ -8,7 +8,8 @@
 #include <cmath>
 #include <cstdio>
 
-#include "lightmesh/render/test_scenes.h"
+#include "support/floor_scenes.h"
+#include "support/light_mesh_probe.h"
 #include "lightmesh/render/whitted.h"
 #include "lightmesh/scene/demo_scene.h"
 #include "lightmesh/shadow/light_mesh.h"
@@ -21,24 +22,12 @@ using testing::AddBox;
 using testing::FloorPoint;
 using testing::FloorScene;
 
-struct Penumbra {
-    std::unique_ptr<Accelerator> accel;
-    std::unique_ptr<LightMeshShadows> lmm;
-    Penumbra(const Scene& s, float radius, float ki = 2.0f, const std::string& accelName = "grid") {
-        accel = CreateAccelerator(accelName, s.mesh);
-        LightMeshOptions o;
-        o.cc = 100;
-        o.ki = ki;
-        o.lightRadius = radius;
-        lmm = CreateLightMeshShadows(s, *accel, o);
-    }
+// The default variant at CC 100 with a light radius.
+struct Penumbra : testing::LightMeshProbe {
+    Penumbra(const Scene& s, float radius, float ki = 2.0f, const std::string& accelName = "grid")
+        : LightMeshProbe(s, testing::LightMeshSettings(100, ki, "", radius), accelName) {}
     float Vis(const ShadingPoint& sp, RenderCounters* counters = nullptr) const {
-        bool needed[kMaxLights];
-        float vis[kMaxLights] = {};
-        std::fill(needed, needed + kMaxLights, true);
-        RenderCounters c;
-        lmm->Visibility(sp, needed, vis, counters ? *counters : c);
-        return vis[0];
+        return LightMeshProbe::Vis(sp, 0, counters);
     }
 };
 

@@ -1,4 +1,4 @@
-// test_scenes.h -- tiny scenes built in code for the renderer's and shadow methods' tests.
+// floor_scenes.h -- tiny scenes built in code for the renderer's and shadow methods' tests.
 #pragma once
 
 #include "lightmesh/scene/scene.h"

@@ -1,4 +1,4 @@
-// test_scenes.h -- seeded scene and ray generators shared by the accelerator tests, the
+// accel_scenes.h -- seeded scene and ray generators shared by the accelerator tests, the
 // real-scene tests and bench_accel.
 //
 // Header-only and deterministic: the generators use their own integer-to-float mapping on
