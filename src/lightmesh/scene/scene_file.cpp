@@ -1,4 +1,5 @@
-// scene_file.cpp -- the JSON scene format, bare-mesh auto-framing, and scene validation.
+// scene_file.cpp -- the JSON scene format (the checks and the framing of bare meshes are
+// scene_checks.cpp and framing.cpp).
 //
 // A scene file is one JSON object (keys in any order; "name" is also allowed on lights
 // and meshes):
@@ -35,14 +36,16 @@
 //                "area"), "accel" ("brute" | "grid" | "embree"), "grid" (0..4096),
 //                "cc" (1..4096), "ki" (0.01..16), "variant" (string), "ns" (0..64),
 //                "template_dir" (string), "cell_summaries" ("auto" | "on" | "off"),
-//                "light_radius" (≥ 0: the sphere each point light
-//                becomes with "shadows": "area"), "samples" (1..4096, shadow rays per light).
+//                "light_radius" (≥ 0: the sphere each point light stands for: sampled by
+//                "shadows": "area", sizing the penumbrae of "lmm"), "samples" (1..4096,
+//                shadow rays per light).
 //                The ranges and choices are the settings table's (settings/render_settings.cpp).
 //
 // A colour is a number (grey) or [r, g, b]; all numbers must be finite and colours ≥ 0.
 // Unknown keys are warnings ("unknown key (ignored)"), errors with SceneLoadOptions::strict;
 // so are duplicate keys (the last one wins). Every error names the file and JSON pointer.
 #include "lightmesh/scene/scene_file.h"
+#include "lightmesh/scene/scene_load.h"
 
 #include <nlohmann/json.hpp>
 
@@ -72,19 +75,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace json;  // Reader, Object, the value readers
-
-std::string FormatVec(const Vec3& v) {
-    return StringPrintf("(%.4g, %.4g, %.4g)", v.x, v.y, v.z);
-}
-
-std::string DroppedMessage(const CleanReport& c) {
-    if (c.degenerate && c.duplicate)
-        return StringPrintf("dropped %zu degenerate (zero-area) and %zu duplicate triangles",
-                            c.degenerate, c.duplicate);
-    if (c.degenerate)
-        return StringPrintf("dropped %zu degenerate (zero-area) triangles", c.degenerate);
-    return StringPrintf("dropped %zu duplicate triangles", c.duplicate);
-}
+using namespace scene_load;  // the checks and the framing
 
 Vec3 ReadVec3(const Reader& r, const Json& j, const std::string& path) {
     if (!j.is_array()) r.Fail(path, "expected 3 numbers, got " + Describe(j));
@@ -112,44 +103,6 @@ std::string ReadTextFile(const Reader& r, const std::string& path) {
     } catch (const Error& e) {
         throw;
     }
-}
-
-// ---------------------------------------------------------------------------------------
-// Scene pieces
-
-// Squared distances between points must stay finite in float (max 3.4e38), and Embree
-// asserts on ray origins and directions beyond ±1.844e18: every coordinate that reaches a
-// ray (mesh, ground, camera, lights, automatic framing) stays within ±1e18.
-constexpr float kMaxCoordinate = 1e18f;
-
-float Reach(const Vec3& p) {
-    return MaxComponent(Abs(p));
-}
-
-/// "" when p can be used in a ray, else why not.
-std::string CoordinateProblem(const Vec3& p, const char* what) {
-    if (!IsFinite(p)) return StringPrintf("%s %s is not finite", what, FormatVec(p).c_str());
-    if (!(Reach(p) <= kMaxCoordinate))
-        return StringPrintf("%s %s is beyond the ±%g that single-precision rendering allows",
-                            what, FormatVec(p).c_str(), double(kMaxCoordinate));
-    return "";
-}
-
-/// Why the camera cannot form an image, or "" if it can; `*key` is the key to blame.
-/// The same criteria as CameraRays.
-std::string CameraProblem(const Camera& c, std::string* key) {
-    const Vec3 view = c.lookAt - c.position;
-    *key = "look_at";
-    if (!(LengthSquared(view) > 0) || !IsFinite(view))
-        return "equals the position, so the camera has no view direction";
-    *key = "fov";
-    if (!(c.fovY > 0 && c.fovY < 180))
-        return StringPrintf("must be between 0 and 180 degrees, got %g", c.fovY);
-    *key = "up";
-    if (!(LengthSquared(c.up) > 0)) return "must not be zero";
-    if (!(Length(Cross(Normalize(view), c.up)) > 1e-6f * Length(c.up)))
-        return "is parallel to the view direction (from position to look_at)";
-    return "";
 }
 
 Camera ReadCamera(const Reader& r, const Json& j) {
@@ -355,152 +308,6 @@ int LookUpMaterial(const Reader& r, const Json& j, const std::string& path,
     r.Fail(path, "unknown material " + Quoted(name) +
                      (defined.empty() ? " (the scene defines no materials)"
                                       : " (defined: " + list + ")"));
-}
-
-void AddGround(Scene* scene, const Bounds3& box, int axis, float height, float sizeFactor,
-               uint32_t material) {
-    // A thin closed slab whose top face is the ground, rather than a bare quad: every
-    // object stays a closed solid (the inside test, "СТ", relies on it) and nodes below
-    // the ground count as inside it. Axes u, v, up are right-handed, so faces point out.
-    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-    const Vec3 extent = box.Diagonal();
-    float side = sizeFactor * std::max(extent[u], extent[v]);
-    if (!(side > 0)) side = sizeFactor * box.MaxExtent();
-    const float thickness = 0.01f * side;
-    Vec3 centre = box.Center(), eu, ev, eup;
-    centre[axis] = height - 0.5f * thickness;
-    eu[u] = 0.5f * side;
-    ev[v] = 0.5f * side;
-    eup[axis] = 0.5f * thickness;
-    TriangleMesh slab;
-    ShapeBuilder(&slab).OrientedBox(centre, eu, ev, eup, material);
-    // Keep the scene's vertex normals (Append drops them all if one part has none); the
-    // slab's shared corners get the up normal, right for the top face that is seen.
-    if (!scene->mesh.normals.empty()) {
-        Vec3 n;
-        n[axis] = 1;
-        slab.normals.assign(slab.positions.size(), n);
-    }
-    scene->mesh.Append(slab);
-}
-
-Material GroundMaterial() {
-    Material m;
-    m.name = "ground";
-    m.kd = Color(0.7f);
-    return m;
-}
-
-/// Segments between the mesh and the lights have directions up to the span of both: it
-/// must stay below Embree's limit too (1.8e18).
-std::string SpanProblem(const Scene& scene) {
-    Bounds3 b = scene.mesh.Bounds();
-    for (const PointLight& l : scene.lights) b.Extend(l.position);
-    b.Extend(scene.camera.position);
-    const float span = MaxComponent(b.Diagonal());
-    if (!(span <= 1.8e18f))
-        return StringPrintf("the scene (meshes, ground, camera and lights) spans %g, more than the "
-                            "1.8e+18 that single-precision ray queries allow",
-                            double(span));
-    return "";
-}
-
-/// The area of the triangles lying in the plane y = box.lo.y (within 1e-5 of the model's
-/// size) and facing up (+y by their winding): a floor the model brings along.
-float UpwardAreaAtBase(const TriangleMesh& mesh, const Bounds3& box) {
-    const float eps = 1e-5f * box.MaxExtent();
-    double area = 0;
-    for (const auto& t : mesh.triangles) {
-        const Vec3 &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
-        if (std::abs(a.y - box.lo.y) > eps || std::abs(b.y - box.lo.y) > eps ||
-            std::abs(c.y - box.lo.y) > eps)
-            continue;
-        const Vec3 n = Cross(b - a, c - a);
-        if (n.y > 0) area += 0.5 * static_cast<double>(n.y);
-    }
-    return static_cast<float>(area);
-}
-
-/// Why every triangle is degenerate, when single precision is to blame.
-std::string PrecisionHint(const TriangleMesh& mesh) {
-    Bounds3 b;
-    for (const Vec3& p : mesh.positions)
-        if (IsFinite(p)) b.Extend(p);
-    if (mesh.positions.empty() || !IsFinite(b.lo) || !IsFinite(b.hi)) return "";
-    const float reach = std::max(Reach(b.lo), Reach(b.hi));
-    const float extent = b.MaxExtent();
-    if (reach > 0 && reach < 1e-30f)
-        return StringPrintf(": its coordinates are at most %g, below what single precision "
-                            "resolves (scale the model up)",
-                            double(reach));
-    // All vertices equal far from the origin, or a span below float's resolution there.
-    if ((extent == 0 && reach >= 1e6f) || (extent > 0 && extent < reach * 1e-6f))
-        return StringPrintf(": at coordinates around %g single precision cannot tell its "
-                            "vertices apart (they span %g; move the model nearer the origin)",
-                            double(reach), double(extent));
-    return "";
-}
-
-void CheckExtent(const Reader& r, const std::string& path, const Scene& scene) {
-    const Bounds3 b = scene.mesh.Bounds();
-    if (!IsFinite(b.lo) || !IsFinite(b.hi) || !IsFinite(b.Diagonal()))
-        r.Fail(path, "the scene's bounding box is not finite (coordinates too large?)");
-    if (!(b.MaxExtent() > 0)) r.Fail(path, "the scene has zero extent");
-    // Beyond ±1e18, ray set-up, light-mesh node positions and shading overflow to inf or NaN.
-    const float reach = std::max(MaxComponent(Abs(b.lo)), MaxComponent(Abs(b.hi)));
-    if (reach > kMaxCoordinate)
-        r.Fail(path, StringPrintf("the scene's coordinates reach %g, beyond the ±%g that "
-                                  "single-precision rendering allows (scale the model down)",
-                                  double(reach), double(kMaxCoordinate)));
-}
-
-/// Whether p is inside a closed solid of the mesh: the number of surfaces crossed on the
-/// way out of the scene's box is odd along each of six spread-out directions -- the parity
-/// rule of the light mesh's inside test (СТ). Unanimity, rather than a majority, keeps an
-/// open shape (a lampshade, a room without a ceiling) from being taken for a solid.
-bool InsideASolid(const Accelerator& accel, const Bounds3& box, const Vec3& p) {
-    if (!box.Contains(p)) return false;
-    const float reach = 1.01f * Length(box.Diagonal()) + 1.0f;
-    const Vec3 directions[6] = {{1, 0.37f, 0.21f},  {-0.29f, 1, 0.43f},   {0.31f, -0.23f, 1},
-                                {-1, -0.41f, 0.17f}, {0.19f, -1, -0.33f}, {-0.27f, 0.13f, -1}};
-    for (const Vec3& d : directions) {
-        const Vec3 out = p + Normalize(d) * reach;
-        if (!IsFinite(out)) return false;  // no room to test in float; assume outside
-        if ((accel.CountCrossings(Segment(p, out)) & 1) == 0) return false;
-    }
-    return true;
-}
-
-/// Fails on the first light inside a closed solid: it would light nothing, and the light
-/// mesh method (paper §4) assumes every light is outside the objects.
-void CheckLightsOutsideSolids(const Reader& r, const Scene& scene) {
-    const Bounds3 box = scene.mesh.Bounds();
-    std::unique_ptr<Accelerator> accel;
-    for (size_t i = 0; i < scene.lights.size(); ++i) {
-        if (!box.Contains(scene.lights[i].position)) continue;
-        if (!accel) accel = CreateAccelerator("brute", scene.mesh);
-        if (InsideASolid(*accel, box, scene.lights[i].position))
-            r.Fail(Index("/lights", i) + "/position",
-                   "the light " + FormatVec(scene.lights[i].position) +
-                       " is inside a closed object, so it would light nothing (lights must be "
-                       "outside solids: move it or the object)");
-    }
-}
-
-/// "no triangles", with the reason when one is known.
-std::string NoTrianglesMessage(const SceneReport& report, const TriangleMesh& mesh) {
-    if (report.degenerateRemoved > 0) {
-        if (std::string hint = PrecisionHint(mesh); !hint.empty())
-            return StringPrintf("all %zu triangles have zero area in single precision%s",
-                                report.degenerateRemoved, hint.c_str());
-        return StringPrintf(
-            "the scene has zero extent: all %zu triangles are degenerate (zero area)",
-            report.degenerateRemoved);
-    }
-    if (report.meshesExcluded > 0)
-        return StringPrintf("the scene has no triangles: all %zu meshes were excluded",
-                            report.meshesExcluded);
-    return "the scene has no triangles";
 }
 
 // ---------------------------------------------------------------------------------------
@@ -715,123 +522,6 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
     return scene;
 }
 
-/// A bare mesh: frame it with a camera, a ground plane and two lights.
-Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options,
-                   std::vector<std::string>* warnings) {
-    const Reader r(spec, SceneLoadOptions{}.strict, warnings);
-    LoadedMesh loaded = LoadMeshFile(spec);  // its errors already name the file
-    for (const std::string& w : loaded.warnings) r.Warn(w);
-
-    Scene scene;
-    scene.name = spec;
-    scene.report.sources.push_back(spec);
-    scene.mesh = std::move(loaded.mesh);
-    scene.materials = std::move(loaded.materials);
-    const CleanReport clean = CleanMesh(&scene.mesh);
-    scene.report.degenerateRemoved = clean.degenerate;
-    scene.report.duplicatesRemoved = clean.duplicate;
-    if (clean.degenerate || clean.duplicate) r.Warn(spec + ": " + DroppedMessage(clean));
-    if (scene.mesh.TriangleCount() == 0) r.Fail("", NoTrianglesMessage(scene.report, scene.mesh));
-    CheckExtent(r, "", scene);
-
-    const Bounds3 box = scene.mesh.Bounds();
-    const Vec3 center = box.Center();
-    const float radius = 0.5f * Length(box.Diagonal());  // bounding sphere of the box
-    auto& notes = scene.report.notes;
-    notes.push_back(
-        "no scene file: framing the model automatically (write a .json scene to choose)");
-    notes.push_back("up axis: +y, as in OBJ and glTF");
-
-    // Camera: a three-quarter view from the front (+z), a little right and above, looking
-    // at the box's centre from the nearest distance at which all 8 corners of the box fall
-    // inside 90% of the image (a corner c, relative to the centre, at depth d − c·back
-    // projects to |c·right| / depth ≤ 0.9·tan(half field of view)).
-    Camera& cam = scene.camera;
-    cam.fovY = 40.0f;
-    const bool hinted = options.frameWidth > 0 && options.frameHeight > 0;
-    const float aspect =
-        hinted ? static_cast<float>(options.frameWidth) / static_cast<float>(options.frameHeight)
-               : static_cast<float>(scene.render.width) / static_cast<float>(scene.render.height);
-    const float tanY = 0.9f * std::tan(0.5f * cam.fovY * Pi / 180.0f), tanX = tanY * aspect;
-    const Vec3 back = Normalize(Vec3(0.5f, 0.45f, 1.0f));  // from the centre towards the camera
-    const Vec3 right = Normalize(Cross(-back, Vec3(0, 1, 0)));
-    const Vec3 up = Cross(right, -back);
-    float distance = 0;
-    for (int k = 0; k < 8; ++k) {
-        const Vec3 c = Vec3((k & 1) ? box.hi.x : box.lo.x, (k & 2) ? box.hi.y : box.lo.y,
-                            (k & 4) ? box.hi.z : box.lo.z) -
-                       center;
-        const float depthOffset = Dot(c, back);
-        distance = std::max({distance, depthOffset + 0.05f * radius,
-                             depthOffset + std::abs(Dot(c, right)) / tanX,
-                             depthOffset + std::abs(Dot(c, up)) / tanY});
-    }
-    cam.lookAt = center;
-    cam.position = center + back * distance;
-    cam.up = Vec3(0, 1, 0);
-    notes.push_back(
-        StringPrintf("camera at %s looking at the model's centre %s, %g° vertical field of view",
-                     FormatVec(cam.position).c_str(), FormatVec(center).c_str(), cam.fovY));
-
-    if (std::string p = CoordinateProblem(cam.position, "the camera position"); !p.empty())
-        r.Fail("", "automatic framing: " + p +
-                       " (the model is too large to frame: scale it down or write a .json scene)");
-
-    // Ground: under the model's lowest point, three times its horizontal size -- unless the
-    // model has its own floor there (a playground's lawn), which a slab would meet exactly
-    // coplanar: z-fighting, and back-ends disagreeing on which of the two is hit.
-    const float floorShare = UpwardAreaAtBase(scene.mesh, box) /
-                             std::max(box.Diagonal().x * box.Diagonal().z, 1e-30f);
-    if (floorShare >= 0.5f) {
-        notes.push_back(StringPrintf(
-            "no ground plane added: the model has its own floor at y = %g (%.0f%% of its "
-            "footprint faces up there)",
-            box.lo.y, std::min(100.0f, 100.0f * floorShare)));
-    } else {
-        const uint32_t groundMaterial = static_cast<uint32_t>(scene.materials.size());
-        scene.materials.push_back(GroundMaterial());
-        if (floorShare > 0) {
-            // Some of the model's base faces up: sink the slab a little below it.
-            const float height = box.lo.y - 0.002f * box.MaxExtent();
-            AddGround(&scene, box, 1, height, 3.0f, groundMaterial);
-            notes.push_back(StringPrintf(
-                "ground plane at y = %g, just below the model's lowest point (part of its base "
-                "faces up there), 3x the model's width",
-                height));
-        } else {
-            AddGround(&scene, box, 1, box.lo.y, 3.0f, groundMaterial);
-            notes.push_back(StringPrintf(
-                "ground plane at y = %g (the model's lowest point), 3x the model's width",
-                box.lo.y));
-        }
-        const Bounds3 all = scene.mesh.Bounds();
-        if (!(std::max(Reach(all.lo), Reach(all.hi)) <= kMaxCoordinate))
-            r.Fail("", StringPrintf("automatic framing: the ground slab reaches %g, beyond the ±%g that "
-                                    "single-precision rendering allows (scale the model down or "
-                                    "write a .json scene)",
-                                    double(std::max(Reach(all.lo), Reach(all.hi))),
-                                    double(kMaxCoordinate)));
-    }
-
-    // Two lights above the model: a key light front-left, a weaker fill light right.
-    // With inverse-square falloff, intensities scale with distance² so the model receives
-    // about 0.9 and 0.3 of full irradiance whatever its size.
-    const Vec3 keyPosition = center + Vec3(-1.5f, 3.5f, 2.0f) * radius;
-    const Vec3 fillPosition = center + Vec3(2.5f, 2.5f, 0.5f) * radius;
-    scene.lights.push_back(
-        {keyPosition, Color(0.9f * LengthSquared(keyPosition - center)), Falloff::InverseSquare});
-    scene.lights.push_back(
-        {fillPosition, Color(0.3f * LengthSquared(fillPosition - center)), Falloff::InverseSquare});
-    notes.push_back(StringPrintf("key light at %s and fill light at %s, inverse-square falloff",
-                                 FormatVec(keyPosition).c_str(), FormatVec(fillPosition).c_str()));
-    for (const PointLight& l : scene.lights)
-        if (std::string p = CoordinateProblem(l.position, "a light"); !p.empty())
-            r.Fail("", "automatic framing: " + p +
-                           " (the model is too large to frame: scale it down or write a .json scene)");
-    if (std::string p = SpanProblem(scene); !p.empty()) r.Fail("", p);
-    return scene;
-}
-
 Scene LoadBuiltin(const std::string& spec, std::vector<std::string>* warnings) {
     const Reader r(spec, SceneLoadOptions{}.strict, warnings);
     Scene scene = MakeBuiltinScene(std::string_view(spec).substr(std::strlen("builtin:")));
@@ -844,32 +534,6 @@ Scene LoadBuiltin(const std::string& spec, std::vector<std::string>* warnings) {
     if (scene.mesh.TriangleCount() == 0) r.Fail("", NoTrianglesMessage(scene.report, scene.mesh));
     CheckExtent(r, "", scene);
     return scene;
-}
-
-/// Checks that hold for every scene, whatever its source.
-void Validate(const Scene& scene) {
-    const std::string& name = scene.name;
-    if (scene.lights.empty()) ThrowError("%s: the scene has no lights", name.c_str());
-    for (size_t i = 0; i < scene.lights.size(); ++i) {
-        const PointLight& l = scene.lights[i];
-        const Color& c = l.intensity;
-        if (!IsFinite(l.position) || !std::isfinite(c.r) || !std::isfinite(c.g) ||
-            !std::isfinite(c.b) || c.r < 0 || c.g < 0 || c.b < 0)
-            ThrowError(
-                "%s: light %zu has a non-finite position or a negative or non-finite intensity",
-                name.c_str(), i);
-    }
-    std::string key;
-    if (std::string problem = CameraProblem(scene.camera, &key); !problem.empty())
-        ThrowError("%s: camera %s %s", name.c_str(), key.c_str(), problem.c_str());
-    if (scene.mesh.materialIds.size() != scene.mesh.triangles.size())
-        ThrowError("%s: every triangle needs a material", name.c_str());
-    for (uint32_t id : scene.mesh.materialIds)
-        if (id >= scene.materials.size())
-            ThrowError("%s: a triangle refers to material %u, which does not exist", name.c_str(),
-                       id);
-    for (const Vec3& p : scene.mesh.positions)
-        if (!IsFinite(p)) ThrowError("%s: a vertex has a non-finite coordinate", name.c_str());
 }
 
 }  // namespace

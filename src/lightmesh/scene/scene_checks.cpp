@@ -1,0 +1,180 @@
+// scene_checks.cpp -- what every scene must satisfy before a ray is traced, whatever its
+// source: coordinates within what single precision and Embree take, a camera that forms
+// an image, lights outside closed solids, materials and triangles that agree.
+#include "lightmesh/scene/scene_load.h"
+
+#include <cmath>
+
+#include "lightmesh/accel/accelerator.h"
+#include "lightmesh/util/error.h"
+
+namespace lm::scene_load {
+
+using namespace json;  // Reader
+
+std::string FormatVec(const Vec3& v) {
+    return StringPrintf("(%.4g, %.4g, %.4g)", v.x, v.y, v.z);
+}
+
+std::string DroppedMessage(const CleanReport& c) {
+    if (c.degenerate && c.duplicate)
+        return StringPrintf("dropped %zu degenerate (zero-area) and %zu duplicate triangles",
+                            c.degenerate, c.duplicate);
+    if (c.degenerate)
+        return StringPrintf("dropped %zu degenerate (zero-area) triangles", c.degenerate);
+    return StringPrintf("dropped %zu duplicate triangles", c.duplicate);
+}
+
+float Reach(const Vec3& p) {
+    return MaxComponent(Abs(p));
+}
+
+/// "" when p can be used in a ray, else why not.
+std::string CoordinateProblem(const Vec3& p, const char* what) {
+    if (!IsFinite(p)) return StringPrintf("%s %s is not finite", what, FormatVec(p).c_str());
+    if (!(Reach(p) <= kMaxCoordinate))
+        return StringPrintf("%s %s is beyond the ±%g that single-precision rendering allows",
+                            what, FormatVec(p).c_str(), double(kMaxCoordinate));
+    return "";
+}
+
+/// Why the camera cannot form an image, or "" if it can; `*key` is the key to blame.
+/// The same criteria as CameraRays.
+std::string CameraProblem(const Camera& c, std::string* key) {
+    const Vec3 view = c.lookAt - c.position;
+    *key = "look_at";
+    if (!(LengthSquared(view) > 0) || !IsFinite(view))
+        return "equals the position, so the camera has no view direction";
+    *key = "fov";
+    if (!(c.fovY > 0 && c.fovY < 180))
+        return StringPrintf("must be between 0 and 180 degrees, got %g", c.fovY);
+    *key = "up";
+    if (!(LengthSquared(c.up) > 0)) return "must not be zero";
+    if (!(Length(Cross(Normalize(view), c.up)) > 1e-6f * Length(c.up)))
+        return "is parallel to the view direction (from position to look_at)";
+    return "";
+}
+
+/// Segments between the mesh and the lights have directions up to the span of both: it
+/// must stay below Embree's limit too (1.8e18).
+std::string SpanProblem(const Scene& scene) {
+    Bounds3 b = scene.mesh.Bounds();
+    for (const PointLight& l : scene.lights) b.Extend(l.position);
+    b.Extend(scene.camera.position);
+    const float span = MaxComponent(b.Diagonal());
+    if (!(span <= 1.8e18f))
+        return StringPrintf("the scene (meshes, ground, camera and lights) spans %g, more than the "
+                            "1.8e+18 that single-precision ray queries allow",
+                            double(span));
+    return "";
+}
+
+/// Why every triangle is degenerate, when single precision is to blame.
+std::string PrecisionHint(const TriangleMesh& mesh) {
+    Bounds3 b;
+    for (const Vec3& p : mesh.positions)
+        if (IsFinite(p)) b.Extend(p);
+    if (mesh.positions.empty() || !IsFinite(b.lo) || !IsFinite(b.hi)) return "";
+    const float reach = std::max(Reach(b.lo), Reach(b.hi));
+    const float extent = b.MaxExtent();
+    if (reach > 0 && reach < 1e-30f)
+        return StringPrintf(": its coordinates are at most %g, below what single precision "
+                            "resolves (scale the model up)",
+                            double(reach));
+    // All vertices equal far from the origin, or a span below float's resolution there.
+    if ((extent == 0 && reach >= 1e6f) || (extent > 0 && extent < reach * 1e-6f))
+        return StringPrintf(": at coordinates around %g single precision cannot tell its "
+                            "vertices apart (they span %g; move the model nearer the origin)",
+                            double(reach), double(extent));
+    return "";
+}
+
+void CheckExtent(const Reader& r, const std::string& path, const Scene& scene) {
+    const Bounds3 b = scene.mesh.Bounds();
+    if (!IsFinite(b.lo) || !IsFinite(b.hi) || !IsFinite(b.Diagonal()))
+        r.Fail(path, "the scene's bounding box is not finite (coordinates too large?)");
+    if (!(b.MaxExtent() > 0)) r.Fail(path, "the scene has zero extent");
+    // Beyond ±1e18, ray set-up, light-mesh node positions and shading overflow to inf or NaN.
+    const float reach = std::max(MaxComponent(Abs(b.lo)), MaxComponent(Abs(b.hi)));
+    if (reach > kMaxCoordinate)
+        r.Fail(path, StringPrintf("the scene's coordinates reach %g, beyond the ±%g that "
+                                  "single-precision rendering allows (scale the model down)",
+                                  double(reach), double(kMaxCoordinate)));
+}
+
+/// Whether p is inside a closed solid of the mesh: the number of surfaces crossed on the
+/// way out of the scene's box is odd along each of six spread-out directions -- the parity
+/// rule of the light mesh's inside test (СТ). Unanimity, rather than a majority, keeps an
+/// open shape (a lampshade, a room without a ceiling) from being taken for a solid.
+bool InsideASolid(const Accelerator& accel, const Bounds3& box, const Vec3& p) {
+    if (!box.Contains(p)) return false;
+    const float reach = 1.01f * Length(box.Diagonal()) + 1.0f;
+    const Vec3 directions[6] = {{1, 0.37f, 0.21f},  {-0.29f, 1, 0.43f},   {0.31f, -0.23f, 1},
+                                {-1, -0.41f, 0.17f}, {0.19f, -1, -0.33f}, {-0.27f, 0.13f, -1}};
+    for (const Vec3& d : directions) {
+        const Vec3 out = p + Normalize(d) * reach;
+        if (!IsFinite(out)) return false;  // no room to test in float; assume outside
+        if ((accel.CountCrossings(Segment(p, out)) & 1) == 0) return false;
+    }
+    return true;
+}
+
+/// Fails on the first light inside a closed solid: it would light nothing, and the light
+/// mesh method (paper §4) assumes every light is outside the objects.
+void CheckLightsOutsideSolids(const Reader& r, const Scene& scene) {
+    const Bounds3 box = scene.mesh.Bounds();
+    std::unique_ptr<Accelerator> accel;
+    for (size_t i = 0; i < scene.lights.size(); ++i) {
+        if (!box.Contains(scene.lights[i].position)) continue;
+        if (!accel) accel = CreateAccelerator("brute", scene.mesh);
+        if (InsideASolid(*accel, box, scene.lights[i].position))
+            r.Fail(Index("/lights", i) + "/position",
+                   "the light " + FormatVec(scene.lights[i].position) +
+                       " is inside a closed object, so it would light nothing (lights must be "
+                       "outside solids: move it or the object)");
+    }
+}
+
+/// "no triangles", with the reason when one is known.
+std::string NoTrianglesMessage(const SceneReport& report, const TriangleMesh& mesh) {
+    if (report.degenerateRemoved > 0) {
+        if (std::string hint = PrecisionHint(mesh); !hint.empty())
+            return StringPrintf("all %zu triangles have zero area in single precision%s",
+                                report.degenerateRemoved, hint.c_str());
+        return StringPrintf(
+            "the scene has zero extent: all %zu triangles are degenerate (zero area)",
+            report.degenerateRemoved);
+    }
+    if (report.meshesExcluded > 0)
+        return StringPrintf("the scene has no triangles: all %zu meshes were excluded",
+                            report.meshesExcluded);
+    return "the scene has no triangles";
+}
+
+/// Checks that hold for every scene, whatever its source.
+void Validate(const Scene& scene) {
+    const std::string& name = scene.name;
+    if (scene.lights.empty()) ThrowError("%s: the scene has no lights", name.c_str());
+    for (size_t i = 0; i < scene.lights.size(); ++i) {
+        const PointLight& l = scene.lights[i];
+        const Color& c = l.intensity;
+        if (!IsFinite(l.position) || !std::isfinite(c.r) || !std::isfinite(c.g) ||
+            !std::isfinite(c.b) || c.r < 0 || c.g < 0 || c.b < 0)
+            ThrowError(
+                "%s: light %zu has a non-finite position or a negative or non-finite intensity",
+                name.c_str(), i);
+    }
+    std::string key;
+    if (std::string problem = CameraProblem(scene.camera, &key); !problem.empty())
+        ThrowError("%s: camera %s %s", name.c_str(), key.c_str(), problem.c_str());
+    if (scene.mesh.materialIds.size() != scene.mesh.triangles.size())
+        ThrowError("%s: every triangle needs a material", name.c_str());
+    for (uint32_t id : scene.mesh.materialIds)
+        if (id >= scene.materials.size())
+            ThrowError("%s: a triangle refers to material %u, which does not exist", name.c_str(),
+                       id);
+    for (const Vec3& p : scene.mesh.positions)
+        if (!IsFinite(p)) ThrowError("%s: a vertex has a non-finite coordinate", name.c_str());
+}
+
+}  // namespace lm::scene_load

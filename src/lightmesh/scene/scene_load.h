@@ -1,0 +1,50 @@
+// scene_load.h -- the scene loader's pieces shared by its files (not part of the scene
+// interface): the checks every scene passes before a ray is traced (scene_checks.cpp) and
+// the automatic framing of a bare mesh with its ground slab (framing.cpp); the JSON format
+// itself is scene_file.cpp.
+#pragma once
+
+#include <string>
+
+#include "lightmesh/geometry/mesh.h"
+#include "lightmesh/scene/json_reader.h"
+#include "lightmesh/scene/scene.h"
+#include "lightmesh/scene/scene_file.h"
+
+namespace lm::scene_load {
+
+// Squared distances between points must stay finite in float (max 3.4e38), and Embree
+// asserts on ray origins and directions beyond ±1.844e18: every coordinate that reaches a
+// ray (mesh, ground, camera, lights, automatic framing) stays within ±1e18.
+inline constexpr float kMaxCoordinate = 1e18f;
+
+// ---- Checks (scene_checks.cpp) ---------------------------------------------------------
+std::string FormatVec(const Vec3& v);
+/// "dropped N degenerate (zero-area) and M duplicate triangles", for the loader's warning.
+std::string DroppedMessage(const CleanReport& c);
+/// The largest absolute coordinate of p.
+float Reach(const Vec3& p);
+/// "" when p can be used in a ray, else why not.
+std::string CoordinateProblem(const Vec3& p, const char* what);
+/// Why the camera cannot form an image, or "" if it can; `*key` is the key to blame.
+std::string CameraProblem(const Camera& c, std::string* key);
+/// Why the span of the mesh, the lights and the camera is too large for rays, or "".
+std::string SpanProblem(const Scene& scene);
+/// Fails (at JSON path `path`) when the mesh reaches beyond kMaxCoordinate.
+void CheckExtent(const json::Reader& r, const std::string& path, const Scene& scene);
+/// Fails on the first light inside a closed solid.
+void CheckLightsOutsideSolids(const json::Reader& r, const Scene& scene);
+/// "no triangles", with the reason when one is known.
+std::string NoTrianglesMessage(const SceneReport& report, const TriangleMesh& mesh);
+/// Checks that hold for every scene, whatever its source.
+void Validate(const Scene& scene);
+
+// ---- Ground slab and framing (framing.cpp) ---------------------------------------------
+/// A thin closed slab under `box` whose top face is the ground at `height` along `axis`.
+void AddGround(Scene* scene, const Bounds3& box, int axis, float height, float sizeFactor, uint32_t material);
+/// The default ground material (light grey).
+Material GroundMaterial();
+/// A bare mesh: frame it with a camera, a ground plane and two lights.
+Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options, std::vector<std::string>* warnings);
+
+}  // namespace lm::scene_load
