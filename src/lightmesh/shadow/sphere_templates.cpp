@@ -232,4 +232,43 @@ TemplateLoad LoadOrBuildSphereTemplates(int ns, float ki, const std::string& dir
     return load;
 }
 
+TemplateSnapError MeasureTemplateSnapping(int ns, float ki, int samples) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const SphereTemplates t = SphereTemplates::Build(ns, ki);
+    TemplateSnapError e;
+    e.buildSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    e.entries = t.offsets.size();
+    uint64_t state = 0x9E3779B97F4A7C15ull;  // xorshift64: the same points every run
+    auto uniform = [&state] {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        return static_cast<double>(state >> 11) * 0x1.0p-53;
+    };
+    const int reach = static_cast<int>(std::ceil(ki)) + 1;
+    double mismatched = 0, exactTotal = 0;
+    std::vector<std::array<int8_t, 3>> list;
+    for (int s = 0; s < samples; ++s) {
+        const double px = uniform(), py = uniform(), pz = uniform();
+        const int a = static_cast<int>(std::lround(px * ns)), b = static_cast<int>(std::lround(py * ns)),
+                  c = static_cast<int>(std::lround(pz * ns));
+        const int sp = t.SubPosition(a, b, c);
+        list.assign(t.offsets.begin() + t.begin[sp], t.offsets.begin() + t.begin[sp + 1]);
+        std::sort(list.begin(), list.end());
+        for (int dk = -reach; dk <= reach; ++dk)
+            for (int dj = -reach; dj <= reach; ++dj)
+                for (int di = -reach; di <= reach; ++di) {
+                    const double dx = di - px, dy = dj - py, dz = dk - pz;
+                    const bool exact = dx * dx + dy * dy + dz * dz <= static_cast<double>(ki) * ki;
+                    const std::array<int8_t, 3> o{static_cast<int8_t>(di), static_cast<int8_t>(dj), static_cast<int8_t>(dk)};
+                    const bool inTemplate = std::binary_search(list.begin(), list.end(), o);
+                    exactTotal += exact;
+                    mismatched += exact != inTemplate;
+                }
+    }
+    e.mismatchedPerPoint = samples > 0 ? mismatched / samples : 0;
+    e.mismatchedShare = exactTotal > 0 ? mismatched / exactTotal : 0;
+    return e;
+}
+
 }  // namespace lm

@@ -74,6 +74,18 @@ struct TemplateLoad {
 };
 TemplateLoad LoadOrBuildSphereTemplates(int ns, float ki, const std::string& dir);
 
+/// What snapping P to the nearest of the (ns+1)³ sub-positions costs (`templates
+/// --measure`, how the default ns was chosen): for `samples` points P uniform in a cell
+/// (a fixed xorshift sequence, so the figures repeat), the nodes where the snapped
+/// template's set and the exact set |x − P| ≤ kI·h differ.
+struct TemplateSnapError {
+    size_t entries = 0;          ///< the templates' entries (all sub-positions)
+    double mismatchedPerPoint = 0;
+    double mismatchedShare = 0;  ///< of the exact sets' nodes
+    double buildSeconds = 0;
+};
+TemplateSnapError MeasureTemplateSnapping(int ns, float ki, int samples = 20000);
+
 /// The default ns (sub-steps per cell side), chosen by measurement: see the README.
 inline constexpr int kDefaultTemplateSubsteps = 8;
 
