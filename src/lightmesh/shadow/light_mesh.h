@@ -85,8 +85,9 @@ inline constexpr const char* kDefaultLightMeshVariant = "consensus";
 /// candidates disagree on a light, the nodes' stored blocker distances give the
 /// penumbra's half-width w = R·(d_P − d_b)/d_b, and V is a kernel average of the nodes over
 /// a radius following w (up to r) with P's own shadow ray at its centre, or, where w is
-/// below what the lattice resolves, a few stratified rays to the light's sphere. Elsewhere
-/// V is the consensus variant's.
+/// below what the lattice resolves, P's own ray where the nodes near P agree with it and
+/// else 4 to 8 rays to the light's disc (DiscLightVisibility). Elsewhere V is the
+/// consensus variant's.
 class LightMeshShadows : public ShadowMethod {
   public:
     std::string_view Name() const override { return "lmm"; }
