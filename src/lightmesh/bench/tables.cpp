@@ -149,18 +149,31 @@ std::string Psnr(double v) { return v >= 99 ? "∞" : StringPrintf("%.2f", v); }
 
 namespace {
 
-/// PSNR (against the main reference) of naive soft shadows at `seconds`, read off the area
-/// rows' time–PSNR curve by linear interpolation; NaN outside the times measured.
-double AreaPsnrAt(const BenchQuality& q, double seconds) {
-    std::vector<std::pair<double, double>> curve;
+/// Naive soft shadows at `seconds`: their PSNR (against the main reference) read off the
+/// area rows' time–PSNR curve by linear interpolation; outside the times measured, on which
+/// side, with the nearest end's figures.
+std::string AreaPsnrAt(const BenchQuality& q, double seconds) {
+    struct Point {
+        double seconds, psnr;
+        int samples;
+    };
+    std::vector<Point> curve;
     for (const QualityRow& row : q.rows)
-        if (row.method == "area") curve.push_back({row.seconds, row.psnr[q.mainRadius]});
-    std::sort(curve.begin(), curve.end());
-    for (size_t i = 1; i < curve.size(); ++i)
-        if (seconds >= curve[i - 1].first && seconds <= curve[i].first && curve[i].first > curve[i - 1].first)
-            return curve[i - 1].second + (curve[i].second - curve[i - 1].second) * (seconds - curve[i - 1].first) /
-                                             (curve[i].first - curve[i - 1].first);
-    return std::nan("");
+        if (row.method == "area") curve.push_back({row.seconds, row.psnr[q.mainRadius], row.samples});
+    if (curve.empty()) return "–";
+    std::sort(curve.begin(), curve.end(), [](const Point& a, const Point& b) { return a.seconds < b.seconds; });
+    const Point &fastest = curve.front(), &slowest = curve.back();
+    if (seconds < fastest.seconds)
+        return StringPrintf("faster than N=%d (%.3f s, %s dB)", fastest.samples, fastest.seconds, Psnr(fastest.psnr).c_str());
+    if (seconds > slowest.seconds)
+        return StringPrintf("slower than N=%d (%.3f s, %s dB)", slowest.samples, slowest.seconds, Psnr(slowest.psnr).c_str());
+    for (size_t i = 1; i < curve.size(); ++i) {
+        const Point &a = curve[i - 1], &b = curve[i];
+        if (seconds <= b.seconds)
+            return Psnr(b.seconds > a.seconds ? a.psnr + (b.psnr - a.psnr) * (seconds - a.seconds) / (b.seconds - a.seconds)
+                                              : b.psnr);
+    }
+    return Psnr(fastest.psnr);  // one area row, at exactly this time
 }
 
 /// The contact-hardening rows against RT, the same (CC, kI) without a light radius and
@@ -185,29 +198,12 @@ std::string PenumbraQualityMarkdown(const BenchQuality& q) {
         for (const QualityRow& other : q.rows)
             if (other.method == "lmm" && other.variant == row.variant && other.cc == row.cc && other.ki == row.ki)
                 fixed = &other;
-        const double area = AreaPsnrAt(q, row.seconds);
-        // Outside the curve: say on which side, with the nearest end's figures.
-        std::string areaText = Psnr(area);
-        if (std::isnan(area)) {
-            const QualityRow *fastest = nullptr, *slowest = nullptr;
-            for (const QualityRow& other : q.rows) {
-                if (other.method != "area") continue;
-                if (!fastest || other.seconds < fastest->seconds) fastest = &other;
-                if (!slowest || other.seconds > slowest->seconds) slowest = &other;
-            }
-            areaText = !fastest ? "–"
-                       : row.seconds < fastest->seconds
-                           ? StringPrintf("faster than N=%d (%.3f s, %s dB)", fastest->samples, fastest->seconds,
-                                          Psnr(fastest->psnr[mr]).c_str())
-                           : StringPrintf("slower than N=%d (%.3f s, %s dB)", slowest->samples, slowest->seconds,
-                                          Psnr(slowest->psnr[mr]).c_str());
-        }
         out += StringPrintf("| %s | %.3f | %s | %s | %.4f | %s | %s | %s |\n", row.label.c_str(), row.seconds,
                             rt && rt->seconds > 0 ? StringPrintf("%.2f", row.seconds / rt->seconds).c_str() : "–",
                             Psnr(row.psnr[mr]).c_str(), row.ssim[mr],
                             rt ? StringPrintf("%+.1f", row.psnr[mr] - rt->psnr[mr]).c_str() : "–",
                             fixed ? StringPrintf("%+.1f", row.psnr[mr] - fixed->psnr[mr]).c_str() : "–",
-                            areaText.c_str());
+                            AreaPsnrAt(q, row.seconds).c_str());
     }
     return out;
 }
