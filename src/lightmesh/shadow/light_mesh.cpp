@@ -53,6 +53,10 @@ int LightMeshBytesPerNode(size_t lights) {
     return bits <= 8 ? 1 : bits <= 16 ? 2 : bits <= 32 ? 4 : 8;
 }
 
+int LightMeshStorageBytesPerNode(size_t lights, float lightRadius) {
+    return LightMeshBytesPerNode(lights) + (lightRadius > 0 ? 2 * static_cast<int>(lights) : 0);
+}
+
 namespace {
 
 struct VariantName {
@@ -452,9 +456,7 @@ class LightMesh final : public LightMeshShadows {
     const LightMeshLattice& Lattice() const override { return lattice_; }
     const LightMeshVariant& Variant() const override { return variant_; }
     const TemplateLoad& Templates() const override { return templates_; }
-    int BytesPerNode() const override {
-        return static_cast<int>(sizeof(Word) + (lightRadius_ > 0 ? 2 * scene_.lights.size() : 0));
-    }
+    int BytesPerNode() const override { return LightMeshStorageBytesPerNode(scene_.lights.size(), lightRadius_); }
     uint64_t NodesEvaluated() const override { return evaluated_.load(); }
     bool IsEvaluated(uint64_t index) const override {
         return (nodes_[index].load(std::memory_order_acquire) & kInit) != 0;
@@ -1671,8 +1673,7 @@ std::unique_ptr<LightMeshShadows> CreateLightMeshShadows(const Scene& scene, con
         ThrowError("light mesh: a light radius (contact-hardening penumbrae) needs the consensus variant (the "
                    "default), not %s",
                    variant.name.c_str());
-    // Penumbra mode: 2 bytes per node and light for the blocker distances.
-    const int bytesPerNode = bytes + (options.lightRadius > 0 ? 2 * static_cast<int>(nLights) : 0);
+    const int bytesPerNode = LightMeshStorageBytesPerNode(nLights, options.lightRadius);
     // Node words. (Cell summaries add a pointer per 4³ cells, zero pages until used, and
     // their records, about 32 bytes per cell used, lazily like the nodes.)
     const uint64_t need = lattice.NodeCount() * static_cast<uint64_t>(bytesPerNode);

@@ -94,7 +94,7 @@ class LightMeshShadows : public ShadowMethod {
 
     virtual const LightMeshLattice& Lattice() const = 0;
     virtual const LightMeshVariant& Variant() const = 0;
-    /// Bytes of node storage per node (1 for up to 6 lights).
+    /// Bytes of node storage per node (1 for up to 6 lights; LightMeshStorageBytesPerNode).
     virtual int BytesPerNode() const = 0;
     /// Distinct nodes evaluated so far.
     uint64_t NodesEvaluated() const override = 0;
@@ -122,5 +122,8 @@ std::unique_ptr<LightMeshShadows> CreateLightMeshShadows(const Scene& scene, con
 /// Bytes of node storage per node for a number of lights: visibility bits plus the
 /// "initialised" and "inside a solid" flags, rounded up to 1, 2, 4 or 8 bytes.
 int LightMeshBytesPerNode(size_t lights);
+/// All a node stores: its word and, with a light radius (penumbra mode), 2 bytes per light
+/// of blocker distance.
+int LightMeshStorageBytesPerNode(size_t lights, float lightRadius);
 
 }  // namespace lm
