@@ -152,10 +152,12 @@ void PrintRender(const RenderCommand& cmd, const PreparedRender& p, const lm::Re
                     Count(c.fallbacks).c_str(), 100.0 * static_cast<double>(c.fallbacks) / points);
         if (c.uniformCellPoints + c.planarCellPoints > 0)
             std::printf("cells     points answered by their cell's summary %s (%.1f%%), in planar cells %s (%.1f%%), "
-                        "segments decided without a ray %s; mean m counts the other points only\n",
+                        "segments decided without a ray %s (%s by the point's blockers, %s by a node that sees the "
+                        "whole cell patch); mean m counts the other points only\n",
                         Count(c.uniformCellPoints).c_str(), 100.0 * static_cast<double>(c.uniformCellPoints) / points,
                         Count(c.planarCellPoints).c_str(), 100.0 * static_cast<double>(c.planarCellPoints) / points,
-                        Count(c.culledSegments).c_str());
+                        Count(c.culledSegments + c.patchSegments).c_str(), Count(c.culledSegments).c_str(),
+                        Count(c.patchSegments).c_str());
         if (c.penumbraLights > 0)
             std::printf("penumbra  (point, light) pairs whose width followed the light radius %s (%.1f%% of points): "
                         "%s by the nodes' kernel, %s by rays to the light's disc, the rest by the lattice and P's "

@@ -1,6 +1,7 @@
 // floor_scenes.h -- tiny scenes built in code for the renderer's and shadow methods' tests.
 #pragma once
 
+#include "lightmesh/geometry/triangle.h"
 #include "lightmesh/scene/scene.h"
 #include "lightmesh/scene/shapes.h"
 #include "lightmesh/shadow/shadow.h"
@@ -37,6 +38,16 @@ inline ShadingPoint FloorPoint(float x, float z) {
     sp.p = Vec3(x, 0, z);
     sp.n = Vec3(0, 1, 0);
     sp.origin = Vec3(x, 1e-5f, z);
+    return sp;
+}
+
+/// The same point as the renderer makes it on FloorScene(half): the floor triangle it lies
+/// on, and the origin the renderer's offset away (so the light mesh's cell patches, which
+/// rely on both, are used for it).
+inline ShadingPoint RenderedFloorPoint(float x, float z, float half = 10.0f) {
+    ShadingPoint sp = FloorPoint(x, z);
+    sp.prim = x >= z ? 0 : 1;  // triangle 0 is (-h, -h), (h, h), (h, -h): the side x >= z
+    sp.origin = sp.p + sp.n * SurfaceOffset(Vec3(-half, 0, -half), Vec3(half, 0, half), Vec3(half, 0, -half));
     return sp;
 }
 

@@ -49,8 +49,8 @@ struct EmbreeRayRange {
 EmbreeRayRange ToEmbree(const Ray& r) {
     EmbreeRayRange e{r.o, r.tMin, r.tMax, 0.0f};
     if (r.tMin < 0) e = {r.At(r.tMin), 0.0f, r.tMax - r.tMin, r.tMin};
-    e.tnear = std::nextafter(e.tnear, Infinity);
-    if (e.tfar < Infinity) e.tfar = std::nextafter(e.tfar, -Infinity);
+    e.tnear = NextFloatUp(e.tnear);
+    if (e.tfar < Infinity) e.tfar = NextFloatDown(e.tfar);
     return e;
 }
 

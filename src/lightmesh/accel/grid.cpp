@@ -181,7 +181,7 @@ struct ClosestQuery {
             if (found && th.t == best.t && id > best.prim) return false;
             best = Hit{th.t, id, th.b1, th.b2};
             found = true;
-            ray.tMax = std::nextafter(th.t, Infinity);
+            ray.tMax = NextFloatUp(th.t);
             return false;
         });
         // Every triangle that could be hit before the ray leaves this cell overlaps this

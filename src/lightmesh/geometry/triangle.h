@@ -141,6 +141,17 @@ inline Vec3 TriangleNormal(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
     return Cross(p1 - p0, p2 - p0);
 }
 
+/// How far rays leaving a point of the triangle start off its surface, along the normal
+/// (the shading point's origin). The rounding errors of a hit point and of the
+/// intersection test's t both scale with the magnitude of the coordinates involved, so the
+/// offset is a few dozen ulps of the triangle's largest coordinate (a flat bound, unlike
+/// pbrt-v4's per-axis one, which is zero for a floor at y = 0 and needs a matching
+/// conservative t test). The light mesh's cell patches rely on it being the triangle's.
+inline float SurfaceOffset(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
+    const float magnitude = std::max({MaxComponent(Abs(p0)), MaxComponent(Abs(p1)), MaxComponent(Abs(p2))});
+    return magnitude * 4e-6f + 1e-30f;
+}
+
 /// Triangle/box overlap by the separating-axis theorem (Akenine-Möller, "Fast 3D
 /// Triangle-Box Overlap Testing", JGT 2001): 3 box normals, the triangle's normal and the 9
 /// edge cross products, in double; touching counts as overlapping. Everything that depends

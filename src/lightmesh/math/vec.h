@@ -2,6 +2,7 @@
 #pragma once
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -10,6 +11,18 @@ namespace lm {
 
 inline constexpr float Pi = 3.14159265358979323846f;
 inline constexpr float Infinity = std::numeric_limits<float>::infinity();
+
+/// std::nextafter(x, +∞) and (x, −∞) for floats, inline: the next representable value up
+/// or down (NaN and the infinity in that direction stay as they are; ±0 steps to the
+/// smallest denormal). Ray ranges are narrowed by one ulp per query, and libm's
+/// nextafterf is an out-of-line call on that hot path.
+inline float NextFloatUp(float x) {
+    if (!(x < Infinity)) return x;
+    if (x == 0.0f) return std::numeric_limits<float>::denorm_min();
+    const uint32_t u = std::bit_cast<uint32_t>(x);
+    return std::bit_cast<float>(x > 0.0f ? u + 1 : u - 1);
+}
+inline float NextFloatDown(float x) { return -NextFloatUp(-x); }
 
 /// A 3-component float vector, used for points, directions and normals alike
 /// (the scene is small enough that separate types cost more clarity than they buy).

@@ -1,5 +1,9 @@
 #include "lightmesh/math/vec.h"
 
+#include <bit>
+#include <cmath>
+#include <limits>
+
 #include <gtest/gtest.h>
 
 #include "lightmesh/math/bounds.h"
@@ -58,6 +62,30 @@ TEST(Ray, SegmentSpansZeroToOne) {
     const Ray r = Segment(Vec3(1, 1, 1), Vec3(3, 1, 1));
     EXPECT_EQ(r.At(r.tMax), Vec3(3, 1, 1));
     EXPECT_EQ(r.At(0.5f), Vec3(2, 1, 1));
+}
+
+// NextFloatUp/Down are std::nextafter towards ±∞, bit for bit, on every kind of float.
+TEST(Vec3, NextFloatUpAndDownAreNextafter) {
+    const float specials[] = {0.0f, -0.0f, 1.0f, -1.0f, 1e-30f, -1e-30f, std::numeric_limits<float>::denorm_min(),
+                              -std::numeric_limits<float>::denorm_min(), std::numeric_limits<float>::min(),
+                              std::numeric_limits<float>::max(), -std::numeric_limits<float>::max(), Infinity,
+                              -Infinity, 0.99999994f, 3.0e7f};
+    auto same = [](float a, float b) { return std::bit_cast<uint32_t>(a) == std::bit_cast<uint32_t>(b); };
+    for (float x : specials) {
+        EXPECT_TRUE(same(NextFloatUp(x), std::nextafter(x, Infinity))) << x;
+        EXPECT_TRUE(same(NextFloatDown(x), std::nextafter(x, -Infinity))) << x;
+    }
+    uint32_t bits = 12345;
+    for (int i = 0; i < 100000; ++i) {
+        bits = bits * 1664525u + 1013904223u;
+        const float x = std::bit_cast<float>(bits);
+        if (std::isnan(x)) {
+            EXPECT_TRUE(std::isnan(NextFloatUp(x)) && std::isnan(NextFloatDown(x)));
+            continue;
+        }
+        ASSERT_TRUE(same(NextFloatUp(x), std::nextafter(x, Infinity))) << x;
+        ASSERT_TRUE(same(NextFloatDown(x), std::nextafter(x, -Infinity))) << x;
+    }
 }
 
 }  // namespace

@@ -34,14 +34,8 @@ ShadingPoint WhittedRenderer::MakeShadingPoint(const TriangleMesh& mesh, const R
     Vec3 n = Normalize(TriangleNormal(p0, p1, p2));
     if (Dot(n, ray.d) > 0) n = -n;
     sp.n = n;
-    // Push the origin off the surface so rays leaving it never hit its own triangle. The
-    // rounding errors of the hit point and of the intersection test's t both scale with
-    // the magnitude of the coordinates involved, so the offset is a few dozen ulps of the
-    // triangle's largest coordinate (a flat bound, unlike pbrt-v4's per-axis one, which is
-    // zero for a floor at y = 0 and needs a matching conservative t test).
-    const float magnitude = std::max({MaxComponent(Abs(p0)), MaxComponent(Abs(p1)), MaxComponent(Abs(p2))});
-    const float offset = magnitude * 4e-6f + 1e-30f;
-    sp.origin = sp.p + n * offset;
+    // Push the origin off the surface so rays leaving it never hit its own triangle.
+    sp.origin = sp.p + n * SurfaceOffset(p0, p1, p2);
     return sp;
 }
 

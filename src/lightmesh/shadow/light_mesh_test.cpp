@@ -20,6 +20,7 @@ namespace {
 using testing::AddBox;
 using testing::FloorPoint;
 using testing::FloorScene;
+using testing::RenderedFloorPoint;
 
 // The paper's variants at (CC, kI) over the nested grid.
 struct Lmm : testing::LightMeshProbe {
@@ -144,6 +145,7 @@ TEST(LightMesh, SegmentTestStopsLeaksThatNoTestLetsThrough) {
     // high above); sample points deeper inside it than r.
     int leaksOt = 0, leaksNone = 0, leaksReduced = 0, leaksTemplates = 0, leaksInside = 0, leaksConsensus = 0,
         samples = 0;
+    uint64_t patchSegments = 0;
     const float inner = half * (8.0f - y0) / 8.0f - r - h;
     for (float x = -inner; x <= inner; x += h / 3) {
         for (float z = -inner; z <= inner; z += h / 3) {
@@ -155,7 +157,11 @@ TEST(LightMesh, SegmentTestStopsLeaksThatNoTestLetsThrough) {
             leaksReduced += reduced.Vis(sp) > 0;
             leaksTemplates += templates.Vis(sp) > 0;
             leaksInside += inside.Vis(sp) > 0;
+            // The default also where its cell patches apply (points as the renderer makes them).
+            RenderCounters counters;
             leaksConsensus += consensus.Vis(sp) > 0;
+            leaksConsensus += consensus.Vis(RenderedFloorPoint(x, z), 0, &counters) > 0;
+            patchSegments += counters.patchSegments;
         }
     }
     EXPECT_GT(samples, 100);
@@ -163,6 +169,16 @@ TEST(LightMesh, SegmentTestStopsLeaksThatNoTestLetsThrough) {
     EXPECT_EQ(leaksTemplates, 0);
     EXPECT_EQ(leaksReduced, 0);
     EXPECT_EQ(leaksConsensus, 0);
+    // Under the slab no node sees a whole cell patch (making them all "see" it fails the
+    // count above); just outside it, where the slab is in reach but not in the way, nodes
+    // do, and their points are lit exactly.
+    for (float x = half + h; x <= half + r + h; x += h / 3)
+        for (float z = -half; z <= half; z += h / 3) {
+            RenderCounters counters;
+            EXPECT_EQ(consensus.Vis(RenderedFloorPoint(x, z), 0, &counters), ot.Vis(RenderedFloorPoint(x, z)));
+            patchSegments += counters.patchSegments;
+        }
+    EXPECT_GT(patchSegments, 0u);
     EXPECT_GT(leaksNone, samples / 2) << "the leak test must be able to fail";
     // СТ drops nodes inside solids; the slab is thinner than h and holds none, and the
     // leaking nodes lie outside it, so СТ cannot stop this leak (by design: paper §4
@@ -302,7 +318,7 @@ RenderResult RenderLmm(Scene s, const Accelerator& accel, const std::string& var
 // back-end, and Нет and СТ with them ("on") their own images without them. The test
 // also checks that the summaries did answer points and skip segments, so it can fail.
 TEST(LightMesh, CellSummariesKeepEveryImageExactly) {
-    uint64_t uniformPoints = 0, planarPoints = 0, culledSegments = 0;
+    uint64_t uniformPoints = 0, planarPoints = 0, culledSegments = 0, patchSegments = 0;
     for (int index = 0; index < 8; ++index) {
         const Scene s = SummaryTestScene(index);
         for (const char* accelName : {"grid", "embree", "brute"}) {
@@ -325,6 +341,7 @@ TEST(LightMesh, CellSummariesKeepEveryImageExactly) {
                 uniformPoints += fast.counters.uniformCellPoints;
                 planarPoints += fast.counters.planarCellPoints;
                 culledSegments += fast.counters.culledSegments;
+                patchSegments += fast.counters.patchSegments;
                 if (ki != 2.0f) continue;
                 for (const char* variant : {"none", "inside"}) {
                     const RenderResult off = RenderLmm(s, *accel, variant, "off", ki);
@@ -339,6 +356,7 @@ TEST(LightMesh, CellSummariesKeepEveryImageExactly) {
     EXPECT_GT(uniformPoints, 0u);
     EXPECT_GT(planarPoints, 0u);
     EXPECT_GT(culledSegments, 0u);  // the blockers' culling decided segments too
+    EXPECT_GT(patchSegments, 0u);   // and so did nodes that see a whole cell patch
 }
 
 // The templates' front test runs eight entries at a time (AVX2) or four (SSE), the
@@ -367,6 +385,9 @@ TEST(LightMesh, VectorisedFrontTestAndCullingMatchTheScalarOnes) {
                     EXPECT_EQ(results[0].image.pixels, results[w].image.pixels) << what << ", width " << widths[w];
                     EXPECT_EQ(results[0].counters.candidates, results[w].counters.candidates) << what;
                     EXPECT_EQ(results[0].counters.localSegments, results[w].counters.localSegments) << what;
+                    // FindBlockers and the patch test: the AVX2 passes decide as the scalar ones.
+                    EXPECT_EQ(results[0].counters.culledSegments, results[w].counters.culledSegments) << what;
+                    EXPECT_EQ(results[0].counters.patchSegments, results[w].counters.patchSegments) << what;
                 }
                 candidates += results[0].counters.candidates;
             }
@@ -557,6 +578,7 @@ TEST(LightMesh, ImagesAreIdenticalForAnyThreadCount) {
         EXPECT_EQ(one.counters.localSegments, many.counters.localSegments) << variant;
         EXPECT_EQ(one.counters.uniformCellPoints, many.counters.uniformCellPoints) << variant;
         EXPECT_EQ(one.counters.culledSegments, many.counters.culledSegments) << variant;
+        EXPECT_EQ(one.counters.patchSegments, many.counters.patchSegments) << variant;
     }
 }
 

@@ -19,7 +19,7 @@ struct ShadingPoint {
     Vec3 p;       ///< the hit point, on the surface
     Vec3 n;       ///< unit geometric normal, on the side the ray came from
     Vec3 origin;  ///< p pushed off the surface along n: where rays leaving it start
-    uint32_t prim = 0;
+    uint32_t prim = 0;  ///< the triangle p lies on (the light mesh's cell patches rely on it)
 };
 
 /// Named figures for --stats.

@@ -22,6 +22,7 @@ struct RenderCounters {
     uint64_t uniformCellPoints = 0;  ///< points answered by their cell's summary (all nodes agree)
     uint64_t planarCellPoints = 0;   ///< points whose cell's geometry is one plane: no segment
     uint64_t culledSegments = 0;     ///< local-visibility segments decided without a ray
+    uint64_t patchSegments = 0;      ///< … of them by a node that sees a whole cell patch
     uint64_t penumbraLights = 0;     ///< (point, light) pairs whose radius followed the light's size
     uint64_t penumbraKernel = 0;     ///< … of them answered by the nodes' kernel
     uint64_t penumbraSampled = 0;    ///< … by rays to the light's disc (the rest: the lattice and P's ray)
@@ -39,6 +40,7 @@ struct RenderCounters {
         uniformCellPoints += o.uniformCellPoints;
         planarCellPoints += o.planarCellPoints;
         culledSegments += o.culledSegments;
+        patchSegments += o.patchSegments;
         penumbraLights += o.penumbraLights;
         penumbraKernel += o.penumbraKernel;
         penumbraSampled += o.penumbraSampled;
