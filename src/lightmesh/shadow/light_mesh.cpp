@@ -997,30 +997,35 @@ class LightMesh final : public LightMeshShadows {
         if (n == 0) return;
         // The origins: the polygon pushed along n by the offset, give or take 4·planeDelta_
         // (Patch lets in points within 2·planeDelta_ of it; the rest covers their rounding).
-        double q[24][3];
-        int nq = 0;
-        for (int k = 0; k < n; ++k)
-            for (const double off : {double(offset) - 4 * planeDelta_, double(offset) + 4 * planeDelta_}) {
-                for (int j = 0; j < 3; ++j) q[nq][j] = poly[cur][k][j] + double(sp.n[j]) * off;
-                ++nq;
-            }
-        double lo[3], hi[3];
-        for (int j = 0; j < 3; ++j) {
-            lo[j] = hi[j] = q[0][j];
-            for (int k = 1; k < nq; ++k) lo[j] = std::min(lo[j], q[k][j]), hi[j] = std::max(hi[j], q[k][j]);
+        // The slack along n moves a plane's value by at most 4·planeDelta_ (unit normals).
+        const double slack = 4.04 * planeDelta_;
+        double qx[12], qy[12], qz[12];
+        for (int k = 0; k < n; ++k) {
+            qx[k] = poly[cur][k][0] + double(sp.n.x) * offset;
+            qy[k] = poly[cur][k][1] + double(sp.n.y) * offset;
+            qz[k] = poly[cur][k][2] + double(sp.n.z) * offset;
         }
-        list.qlo = Vec3(NextFloatDown(float(lo[0])), NextFloatDown(float(lo[1])), NextFloatDown(float(lo[2]))) - Vec3(reachMargin_);
-        list.qhi = Vec3(NextFloatUp(float(hi[0])), NextFloatUp(float(hi[1])), NextFloatUp(float(hi[2]))) + Vec3(reachMargin_);
+        double lo[3] = {qx[0], qy[0], qz[0]}, hi[3] = {qx[0], qy[0], qz[0]};
+        for (int k = 1; k < n; ++k) {
+            lo[0] = std::min(lo[0], qx[k]), hi[0] = std::max(hi[0], qx[k]);
+            lo[1] = std::min(lo[1], qy[k]), hi[1] = std::max(hi[1], qy[k]);
+            lo[2] = std::min(lo[2], qz[k]), hi[2] = std::max(hi[2], qz[k]);
+        }
+        list.qlo = Vec3(NextFloatDown(float(lo[0] - slack)), NextFloatDown(float(lo[1] - slack)),
+                        NextFloatDown(float(lo[2] - slack))) - Vec3(reachMargin_);
+        list.qhi = Vec3(NextFloatUp(float(hi[0] + slack)), NextFloatUp(float(hi[1] + slack)),
+                        NextFloatUp(float(hi[2] + slack))) + Vec3(reachMargin_);
         FrontArrays& f = list.arrays;
         for (uint32_t i = 0; i < f.count; ++i) {
+            const double nx = f.nx[i], ny = f.ny[i], nz = f.nz[i], d = f.d[i];
             double smin = Infinity, smax = -Infinity;
-            for (int k = 0; k < nq; ++k) {
-                const double v = double(f.nx[i]) * q[k][0] + double(f.ny[i]) * q[k][1] + double(f.nz[i]) * q[k][2] - f.d[i];
+            for (int k = 0; k < n; ++k) {
+                const double v = nx * qx[k] + ny * qy[k] + nz * qz[k] - d;
                 smin = std::min(smin, v);
                 smax = std::max(smax, v);
             }
-            f.sMin[i] = NextFloatDown(float(smin));
-            f.sMax[i] = NextFloatUp(float(smax));
+            f.sMin[i] = NextFloatDown(float(smin - slack));
+            f.sMax[i] = NextFloatUp(float(smax + slack));
         }
         std::fill(list.known, list.known + cubeWords_, 0);
         list.patch = true;
