@@ -1,0 +1,325 @@
+#include "lightmesh/shadow/light_mesh_kernels.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <immintrin.h>
+
+#include "lightmesh/math/simd.h"
+#include "lightmesh/util/parallel.h"  // LIGHTMESH_TSAN
+
+namespace lm::kernels {
+namespace {
+
+/// One front triangle's blocker entry (LightMesh::FindBlockers): plane and the side o is on,
+/// the edge planes through o with their rounding margins. The scalar oracle of the AVX2
+/// pass, which performs these very operations in this order.
+inline void BlockerEntry(const FrontArrays& f, uint32_t i, const BlockerQuery& q, float so, Blockers* b, uint32_t n) {
+    b->nx[n] = f.nx[i];
+    b->ny[n] = f.ny[i];
+    b->nz[n] = f.nz[i];
+    b->d[n] = f.d[i];
+    b->side[n] = so > q.margin ? 1.0f : (so < -q.margin ? -1.0f : 0.0f);
+    // The edge planes through P's origin. Their error: a_k is exact to about planeDelta_
+    // (an ulp or two of the coordinates), so c_k to a few planeDelta_·|a| plus its own
+    // rounding; a node's d = x - origin is at most pointReach_ long.
+    const Vec3 a[3] = {Vec3(f.v0x[i], f.v0y[i], f.v0z[i]) - q.o, Vec3(f.v1x[i], f.v1y[i], f.v1z[i]) - q.o,
+                       Vec3(f.v2x[i], f.v2y[i], f.v2z[i]) - q.o};
+    float* cx[3] = {b->c0x, b->c1x, b->c2x};
+    float* cy[3] = {b->c0y, b->c1y, b->c2y};
+    float* cz[3] = {b->c0z, b->c1z, b->c2z};
+    float* mk[3] = {b->m0, b->m1, b->m2};
+    // Lengths bounded by L1 norms (no square roots; larger margins are safe).
+    auto l1 = [](const Vec3& v) { return std::abs(v.x) + std::abs(v.y) + std::abs(v.z); };
+    const float la[3] = {l1(a[0]), l1(a[1]), l1(a[2])};
+    for (int k = 0; k < 3; ++k) {
+        const int k1 = k == 2 ? 0 : k + 1;
+        const Vec3 ck = Cross(a[k], a[k1]);
+        cx[k][n] = ck.x;
+        cy[k][n] = ck.y;
+        cz[k][n] = ck.z;
+        mk[k][n] = q.reach * (q.delta8 * (la[k] + la[k1]) + 1e-5f * la[k] * la[k1]) + q.delta8 * l1(ck);
+    }
+}
+/// FindBlockers' pass over the front triangles, one at a time: those whose box meets the
+/// segments' box and whose plane passes within `far` of o become blockers. False if more
+/// than kMaxBlockers do (then the back-end decides every segment).
+bool FindBlockersScalar(const FrontArrays& f, const BlockerQuery& q, Blockers* b) {
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < f.count; ++i) {
+        if (f.hix[i] < q.lo.x || f.lox[i] > q.hi.x || f.hiy[i] < q.lo.y || f.loy[i] > q.hi.y || f.hiz[i] < q.lo.z ||
+            f.loz[i] > q.hi.z)
+            continue;
+        // A plane farther from P's origin than any node: every segment is on one side.
+        const float so = Dot(Vec3(f.nx[i], f.ny[i], f.nz[i]), q.o) - f.d[i];
+        if (std::abs(so) > q.far) continue;
+        if (n == kMaxBlockers) return false;
+        BlockerEntry(f, i, q, so, b, n++);
+    }
+    b->count = n;
+    return true;
+}
+/// The same eight front triangles at a time with AVX2: the tests and BlockerEntry's
+/// arithmetic lane by lane (-ffp-contract=off, so bit for bit the scalar pass's), then the
+/// kept lanes packed to the front of each array by a permutation from a table.
+struct CompactTable {
+    alignas(32) int32_t index[256][8];
+    CompactTable() {
+        for (int m = 0; m < 256; ++m) {
+            int n = 0;
+            for (int k = 0; k < 8; ++k)
+                if (m >> k & 1) index[m][n++] = k;
+            for (; n < 8; ++n) index[m][n] = 0;
+        }
+    }
+};
+const CompactTable kCompact;
+__attribute__((target("avx2,popcnt"))) bool FindBlockersAvx2(const FrontArrays& f, const BlockerQuery& q, Blockers* b) {
+    const __m256 lox = _mm256_set1_ps(q.lo.x), loy = _mm256_set1_ps(q.lo.y), loz = _mm256_set1_ps(q.lo.z);
+    const __m256 hix = _mm256_set1_ps(q.hi.x), hiy = _mm256_set1_ps(q.hi.y), hiz = _mm256_set1_ps(q.hi.z);
+    const __m256 ox = _mm256_set1_ps(q.o.x), oy = _mm256_set1_ps(q.o.y), oz = _mm256_set1_ps(q.o.z);
+    const __m256 far = _mm256_set1_ps(q.far), margin = _mm256_set1_ps(q.margin), negMargin = _mm256_set1_ps(-q.margin);
+    const __m256 reach = _mm256_set1_ps(q.reach), delta8 = _mm256_set1_ps(q.delta8), tiny = _mm256_set1_ps(1e-5f);
+    const __m256 one = _mm256_set1_ps(1.0f), minusOne = _mm256_set1_ps(-1.0f), zero = _mm256_setzero_ps();
+    const __m256 signBit = _mm256_set1_ps(-0.0f);
+#define LM_ABS(v) _mm256_andnot_ps(signBit, (v))
+#define LM_L1(x, y, z) _mm256_add_ps(_mm256_add_ps(LM_ABS(x), LM_ABS(y)), LM_ABS(z))
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < f.count; i += 8) {
+#define LM_LD(a) _mm256_load_ps(f.a + i)
+        __m256 skip = _mm256_or_ps(_mm256_cmp_ps(LM_LD(hix), lox, _CMP_LT_OQ), _mm256_cmp_ps(LM_LD(lox), hix, _CMP_GT_OQ));
+        skip = _mm256_or_ps(skip, _mm256_or_ps(_mm256_cmp_ps(LM_LD(hiy), loy, _CMP_LT_OQ), _mm256_cmp_ps(LM_LD(loy), hiy, _CMP_GT_OQ)));
+        skip = _mm256_or_ps(skip, _mm256_or_ps(_mm256_cmp_ps(LM_LD(hiz), loz, _CMP_LT_OQ), _mm256_cmp_ps(LM_LD(loz), hiz, _CMP_GT_OQ)));
+        const __m256 nx = LM_LD(nx), ny = LM_LD(ny), nz = LM_LD(nz), d = LM_LD(d);
+        const __m256 so = _mm256_sub_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, ox), _mm256_mul_ps(ny, oy)), _mm256_mul_ps(nz, oz)), d);
+        skip = _mm256_or_ps(skip, _mm256_cmp_ps(LM_ABS(so), far, _CMP_GT_OQ));
+        const int keep = ~_mm256_movemask_ps(skip) & 0xFF;
+        if (!keep) continue;
+        const int kept = __builtin_popcount(static_cast<unsigned>(keep));
+        if (n + kept > kMaxBlockers) return false;
+        const __m256 side = _mm256_blendv_ps(_mm256_blendv_ps(zero, minusOne, _mm256_cmp_ps(so, negMargin, _CMP_LT_OQ)), one,
+                                             _mm256_cmp_ps(so, margin, _CMP_GT_OQ));
+        const __m256 ax[3] = {_mm256_sub_ps(LM_LD(v0x), ox), _mm256_sub_ps(LM_LD(v1x), ox), _mm256_sub_ps(LM_LD(v2x), ox)};
+        const __m256 ay[3] = {_mm256_sub_ps(LM_LD(v0y), oy), _mm256_sub_ps(LM_LD(v1y), oy), _mm256_sub_ps(LM_LD(v2y), oy)};
+        const __m256 az[3] = {_mm256_sub_ps(LM_LD(v0z), oz), _mm256_sub_ps(LM_LD(v1z), oz), _mm256_sub_ps(LM_LD(v2z), oz)};
+#undef LM_LD
+        const __m256i perm = _mm256_load_si256(reinterpret_cast<const __m256i*>(kCompact.index[keep]));
+#define LM_PUT(out, v) _mm256_storeu_ps((out) + n, _mm256_permutevar8x32_ps((v), perm))
+        LM_PUT(b->nx, nx);
+        LM_PUT(b->ny, ny);
+        LM_PUT(b->nz, nz);
+        LM_PUT(b->d, d);
+        LM_PUT(b->side, side);
+        float* cx[3] = {b->c0x, b->c1x, b->c2x};
+        float* cy[3] = {b->c0y, b->c1y, b->c2y};
+        float* cz[3] = {b->c0z, b->c1z, b->c2z};
+        float* mk[3] = {b->m0, b->m1, b->m2};
+        const __m256 la[3] = {LM_L1(ax[0], ay[0], az[0]), LM_L1(ax[1], ay[1], az[1]), LM_L1(ax[2], ay[2], az[2])};
+        for (int k = 0; k < 3; ++k) {
+            const int k1 = k == 2 ? 0 : k + 1;
+            const __m256 cxk = _mm256_sub_ps(_mm256_mul_ps(ay[k], az[k1]), _mm256_mul_ps(az[k], ay[k1]));
+            const __m256 cyk = _mm256_sub_ps(_mm256_mul_ps(az[k], ax[k1]), _mm256_mul_ps(ax[k], az[k1]));
+            const __m256 czk = _mm256_sub_ps(_mm256_mul_ps(ax[k], ay[k1]), _mm256_mul_ps(ay[k], ax[k1]));
+            LM_PUT(cx[k], cxk);
+            LM_PUT(cy[k], cyk);
+            LM_PUT(cz[k], czk);
+            const __m256 inner = _mm256_add_ps(_mm256_mul_ps(delta8, _mm256_add_ps(la[k], la[k1])),
+                                               _mm256_mul_ps(_mm256_mul_ps(tiny, la[k]), la[k1]));
+            LM_PUT(mk[k], _mm256_add_ps(_mm256_mul_ps(reach, inner), _mm256_mul_ps(delta8, LM_L1(cxk, cyk, czk))));
+        }
+        n += static_cast<uint32_t>(kept);
+    }
+#undef LM_PUT
+#undef LM_L1
+#undef LM_ABS
+    b->count = n;
+    return true;
+}
+
+/// Whether no front triangle can block a segment from x to any origin of the patch: each
+/// has x and every origin clearly on one side of its plane, or a box apart from theirs.
+bool PatchSeesScalar(const FrontArrays& f, const PatchQuery& q) {
+    for (uint32_t i = 0; i < f.count; ++i) {
+        const float sx = Dot(Vec3(f.nx[i], f.ny[i], f.nz[i]), q.x) - f.d[i];
+        if ((sx > q.m && f.sMin[i] > q.mQ) || (sx < -q.m && f.sMax[i] < -q.mQ)) continue;
+        if (f.hix[i] < q.lo.x || f.lox[i] > q.hi.x || f.hiy[i] < q.lo.y || f.loy[i] > q.hi.y || f.hiz[i] < q.lo.z ||
+            f.loz[i] > q.hi.z)
+            continue;
+        return false;
+    }
+    return true;
+}
+// The same eight triangles at a time (the padding lanes' empty boxes are apart from all).
+__attribute__((target("avx2"))) bool PatchSeesAvx2(const FrontArrays& f, const PatchQuery& q) {
+    const __m256 xx = _mm256_set1_ps(q.x.x), xy = _mm256_set1_ps(q.x.y), xz = _mm256_set1_ps(q.x.z);
+    const __m256 m = _mm256_set1_ps(q.m), negM = _mm256_set1_ps(-q.m), mQ = _mm256_set1_ps(q.mQ),
+                 negMQ = _mm256_set1_ps(-q.mQ);
+    const __m256 lox = _mm256_set1_ps(q.lo.x), loy = _mm256_set1_ps(q.lo.y), loz = _mm256_set1_ps(q.lo.z);
+    const __m256 hix = _mm256_set1_ps(q.hi.x), hiy = _mm256_set1_ps(q.hi.y), hiz = _mm256_set1_ps(q.hi.z);
+    for (uint32_t i = 0; i < f.count; i += 8) {
+#define LM_LD(a) _mm256_load_ps(f.a + i)
+        const __m256 sx = _mm256_sub_ps(
+            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(LM_LD(nx), xx), _mm256_mul_ps(LM_LD(ny), xy)), _mm256_mul_ps(LM_LD(nz), xz)),
+            LM_LD(d));
+        const __m256 above = _mm256_and_ps(_mm256_cmp_ps(sx, m, _CMP_GT_OQ), _mm256_cmp_ps(LM_LD(sMin), mQ, _CMP_GT_OQ));
+        const __m256 below = _mm256_and_ps(_mm256_cmp_ps(sx, negM, _CMP_LT_OQ), _mm256_cmp_ps(LM_LD(sMax), negMQ, _CMP_LT_OQ));
+        __m256 apart = _mm256_or_ps(_mm256_cmp_ps(LM_LD(hix), lox, _CMP_LT_OQ), _mm256_cmp_ps(LM_LD(lox), hix, _CMP_GT_OQ));
+        apart = _mm256_or_ps(apart, _mm256_or_ps(_mm256_cmp_ps(LM_LD(hiy), loy, _CMP_LT_OQ), _mm256_cmp_ps(LM_LD(loy), hiy, _CMP_GT_OQ)));
+        apart = _mm256_or_ps(apart, _mm256_or_ps(_mm256_cmp_ps(LM_LD(hiz), loz, _CMP_LT_OQ), _mm256_cmp_ps(LM_LD(loz), hiz, _CMP_GT_OQ)));
+#undef LM_LD
+        if (_mm256_movemask_ps(_mm256_or_ps(_mm256_or_ps(above, below), apart)) != 0xFF) return false;
+    }
+    return true;
+}
+
+/// The culling loop of LightMesh::SeesPointCulled over W blockers at a time (GCC/clang
+/// vector extensions): 1 if a blocker is certainly hit, 0 if every blocker is certainly
+/// missed, -1 if undecided.
+template <int W>
+[[gnu::always_inline]] inline int CullSegment(const Blockers& b, const Vec3& x, const Vec3& o, float m) {
+    using VF = typename SimdVectors<W>::F;
+    using VI = typename SimdVectors<W>::I;
+    const VF zero = {};
+    const VF xx = zero + x.x, xy = zero + x.y, xz = zero + x.z, mm = zero + m;
+    const Vec3 dv = x - o;
+    const VF dx = zero + dv.x, dy = zero + dv.y, dz = zero + dv.z;
+    VI maybe = {}, hit = {};
+    for (uint32_t i = 0; i < b.count; i += W) {
+#define LM_AT(a) (*reinterpret_cast<const VF*>((a) + i))
+        // Both ends clearly on one side of the plane (miss), or on both sides (a hit if
+        // the line crosses the inside).
+        const VF sideX = (LM_AT(b.nx) * xx + LM_AT(b.ny) * xy + LM_AT(b.nz) * xz - LM_AT(b.d)) * LM_AT(b.side);
+        const VI sameSide = sideX > mm, across = sideX < -mm;
+        // The line's side of each edge plane through the origin.
+        const VF t0 = LM_AT(b.c0x) * dx + LM_AT(b.c0y) * dy + LM_AT(b.c0z) * dz;
+        const VF t1 = LM_AT(b.c1x) * dx + LM_AT(b.c1y) * dy + LM_AT(b.c1z) * dz;
+        const VF t2 = LM_AT(b.c2x) * dx + LM_AT(b.c2y) * dy + LM_AT(b.c2z) * dz;
+        const VF m0 = LM_AT(b.m0), m1 = LM_AT(b.m1), m2 = LM_AT(b.m2);
+        const VI pos0 = t0 > m0, pos1 = t1 > m1, pos2 = t2 > m2;
+        const VI neg0 = t0 < -m0, neg1 = t1 < -m1, neg2 = t2 < -m2;
+        const VI outside = (pos0 | pos1 | pos2) & (neg0 | neg1 | neg2);
+        const VI inside = (pos0 & pos1 & pos2) | (neg0 & neg1 & neg2);
+        maybe |= ~(sameSide | outside);
+        hit |= inside & across;
+#undef LM_AT
+    }
+    int anyHit = 0, anyMaybe = 0;
+    for (int k = 0; k < W; ++k) {
+        anyHit |= hit[k];
+        anyMaybe |= maybe[k];
+    }
+    return anyHit ? 1 : (anyMaybe ? -1 : 0);
+}
+int CullSegmentSse(const Blockers& b, const Vec3& x, const Vec3& o, float m) { return CullSegment<4>(b, x, o, m); }
+// The same eight at a time where the processor has AVX2 (chosen once, at run time).
+__attribute__((target("avx2"))) int CullSegmentAvx2(const Blockers& b, const Vec3& x, const Vec3& o, float m) {
+    return CullSegment<8>(b, x, o, m);
+}
+
+/// The templates' front test, (n(P), x - P) > eps·h with x - P = (offset - frac)·h, written
+/// (n, offset) - nfrac > eps with nfrac = (n, frac) once per point, over `count` blocks:
+/// bit k of masks[b] is set when lane k of block b is in front. Dot()'s operations in its
+/// order, then the subtraction (the library is built with -ffp-contract=off), so SSE, AVX2
+/// and a scalar Dot agree bit for bit; what it saves is a scalar loop's unpredictable
+/// branch per entry.
+void FrontMasksSse(const FrontBlock* blocks, uint32_t count, const Vec3& n, float nfrac, float eps, uint8_t* masks) {
+    const __m128 nx = _mm_set1_ps(n.x), ny = _mm_set1_ps(n.y), nz = _mm_set1_ps(n.z);
+    const __m128 nf = _mm_set1_ps(nfrac), e = _mm_set1_ps(eps);
+    for (uint32_t b = 0; b < count; ++b) {
+        int mask = 0;
+        for (int half = 0; half < 2; ++half) {
+            const int o = 4 * half;
+            __m128 d = _mm_add_ps(_mm_mul_ps(nx, _mm_load_ps(blocks[b].ox + o)), _mm_mul_ps(ny, _mm_load_ps(blocks[b].oy + o)));
+            d = _mm_sub_ps(_mm_add_ps(d, _mm_mul_ps(nz, _mm_load_ps(blocks[b].oz + o))), nf);
+            mask |= _mm_movemask_ps(_mm_cmpgt_ps(d, e)) << o;
+        }
+        masks[b] = static_cast<uint8_t>(mask);
+    }
+}
+__attribute__((target("avx2"))) void FrontMasksAvx2(const FrontBlock* blocks, uint32_t count, const Vec3& n, float nfrac,
+                                                    float eps, uint8_t* masks) {
+    const __m256 nx = _mm256_set1_ps(n.x), ny = _mm256_set1_ps(n.y), nz = _mm256_set1_ps(n.z);
+    const __m256 nf = _mm256_set1_ps(nfrac), e = _mm256_set1_ps(eps);
+    for (uint32_t b = 0; b < count; ++b) {
+        __m256 d = _mm256_add_ps(_mm256_mul_ps(nx, _mm256_load_ps(blocks[b].ox)), _mm256_mul_ps(ny, _mm256_load_ps(blocks[b].oy)));
+        d = _mm256_sub_ps(_mm256_add_ps(d, _mm256_mul_ps(nz, _mm256_load_ps(blocks[b].oz))), nf);
+        masks[b] = static_cast<uint8_t>(_mm256_movemask_ps(_mm256_cmp_ps(d, e, _CMP_GT_OQ)));
+    }
+}
+// One lane at a time with Dot() itself: the oracle of the other two (tests).
+void FrontMasksScalar(const FrontBlock* blocks, uint32_t count, const Vec3& n, float nfrac, float eps, uint8_t* masks) {
+    for (uint32_t b = 0; b < count; ++b) {
+        int mask = 0;
+        for (int k = 0; k < 8; ++k)
+            if (Dot(n, Vec3(blocks[b].ox[k], blocks[b].oy[k], blocks[b].oz[k])) - nfrac > eps) mask |= 1 << k;
+        masks[b] = static_cast<uint8_t>(mask);
+    }
+}
+
+/// Нет's sum (LightMesh::UseAll) for one-byte node words with AVX2: the words of a block's
+/// eight entries gathered at once (32-bit loads at byte addresses: the node array has
+/// padding after its end), then per light the entries in front whose bit is set, by
+/// popcount of a movemask. False, having added nothing, if an entry in front is not yet
+/// evaluated (the scalar path evaluates it). The loads are relaxed: a node's word is all
+/// it publishes, and a byte cannot tear.
+// The words of block b's lanes in `mask` (one byte each, in the low byte of a lane; the
+// other lanes 0); false if one of them is not yet evaluated (bit 7, "initialised", clear).
+__attribute__((target("avx2"), always_inline)) inline bool GatherFrontBytes(const FrontBlock& block, int mask,
+                                                                            const uint8_t* nodes, __m256i* words) {
+    const __m256i laneBits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    const __m256i on = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(mask), laneBits), laneBits);
+    const __m256i index = _mm256_load_si256(reinterpret_cast<const __m256i*>(block.linear));
+    *words = _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), reinterpret_cast<const int*>(nodes), index, on, 1);
+    return (_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(*words, 24))) & mask) == mask;
+}
+__attribute__((target("avx2,popcnt"))) bool SumFrontBytesAvx2(const FrontBlock* blocks, const uint8_t* masks,
+                                                              uint32_t count, const uint8_t* nodes, int lights,
+                                                              uint32_t* visible, uint32_t* m) {
+    uint32_t sums[8] = {}, used = 0;
+    for (uint32_t b = 0; b < count; ++b) {
+        const int mask = masks[b];
+        if (!mask) continue;
+        __m256i w;
+        if (!GatherFrontBytes(blocks[b], mask, nodes, &w)) return false;
+        for (int l = 0; l < lights; ++l)
+            sums[l] += static_cast<uint32_t>(
+                __builtin_popcount(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(w, 31 - l))) & mask));
+        used += static_cast<uint32_t>(__builtin_popcount(mask));
+    }
+    for (int l = 0; l < lights; ++l) visible[l] += sums[l];
+    *m += used;
+    return true;
+}
+
+}  // namespace
+
+// LightMeshOptions::simdWidth: AVX2 for the widest (and 8) where the processor has it;
+// the scalar pass otherwise (the 4-wide tests use it as their oracle).
+FindBlockersFunction ChooseFindBlockersFunction(int width) {
+    return (width == 0 || width == 8) && __builtin_cpu_supports("avx2") ? FindBlockersAvx2 : FindBlockersScalar;
+}
+
+PatchSeesFunction ChoosePatchSeesFunction(int width) {
+    return (width == 0 || width == 8) && __builtin_cpu_supports("avx2") ? PatchSeesAvx2 : PatchSeesScalar;
+}
+
+CullFunction ChooseCullFunction(int width) {
+    return (width == 0 || width == 8) && __builtin_cpu_supports("avx2") ? CullSegmentAvx2 : CullSegmentSse;
+}
+
+// LightMeshOptions::simdWidth: 0 the widest, 1 scalar, 4 SSE, 8 AVX2 if the processor has it.
+FrontFunction ChooseFrontFunction(int width) {
+    if (width == 1) return FrontMasksScalar;
+    return width != 4 && __builtin_cpu_supports("avx2") ? FrontMasksAvx2 : FrontMasksSse;
+}
+
+SumFrontFunction ChooseSumFrontFunction(int width) {
+#ifdef LIGHTMESH_TSAN
+    (void)width;
+    return nullptr;
+#else
+    return (width == 0 || width == 8) && __builtin_cpu_supports("avx2") ? SumFrontBytesAvx2 : nullptr;
+#endif
+}
+
+}  // namespace lm::kernels

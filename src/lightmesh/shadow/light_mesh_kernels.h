@@ -1,0 +1,129 @@
+// light_mesh_kernels.h -- the light mesh's inner loops, vectorised (AVX2 where the processor
+// has it, chosen at run time; SSE or scalar otherwise) over the data they read: the
+// templates' blocks of eight entries (front test, sums of node words), a cell's front
+// triangles (a point's blockers, the cell patches' test) and a point's blockers (the
+// segment culling). Each vectorised kernel performs its scalar oracle's operations in the
+// same order (the library is built with -ffp-contract=off), so every width gives the same
+// answers bit for bit; LightMeshOptions::simdWidth picks one for the tests. Internal to
+// shadow/light_mesh.cpp.
+#pragma once
+
+#include <cstdint>
+#include <cstdlib>
+#include <memory>
+#include <new>
+
+#include "lightmesh/math/vec.h"
+
+namespace lm::kernels {
+
+/// Eight entries of one sub-position's template: the nodes' offsets from the cell's corner
+/// LM0 in lattice steps, coordinate by coordinate (whole numbers, exact as floats), for the
+/// front test of eight entries at once, and their linear index offsets, so that a node's
+/// word is one load away. Padding lanes have NaN offsets, which no comparison finds in
+/// front.
+struct alignas(32) FrontBlock {
+    float ox[8], oy[8], oz[8];
+    int32_t linear[8];
+    uint16_t cube[8];  // the node's bit in a cell's neighbourhood cube (the cell patches' node states)
+};
+
+/// Consensus with cell summaries: the triangles that could block a segment from a node to
+/// one shading point P (LightMesh::FindBlockers), in arrays for the vectorised culling loop:
+/// each one's plane, the side P's origin is on (+1, -1; 0 within the margin), and the
+/// normals c_k = a_k × a_k+1 of the planes through P's origin and each edge (a_k: vertex k
+/// minus the origin) with their rounding margins. Padded to a multiple of kCullWidth with
+/// entries that never block.
+constexpr uint32_t kMaxBlockers = 256;
+constexpr uint32_t kCullWidth = 8;
+struct Blockers {
+    bool tried = false;  // FindBlockers ran for this point
+    bool known = false;  // false: test every segment with the back-end
+    uint32_t count = 0;
+    static constexpr size_t N = kMaxBlockers + kCullWidth;
+    alignas(32) float nx[N], ny[N], nz[N], d[N], side[N];
+    alignas(32) float c0x[N], c0y[N], c0z[N], c1x[N], c1y[N], c1z[N], c2x[N], c2y[N], c2z[N];
+    alignas(32) float m0[N], m1[N], m2[N];
+};
+
+/// The triangles of a cell's reach in front of one triangle's plane (LightMesh::FrontTriangles),
+/// structure of arrays for the vectorised passes over them: plane, grown bounding box,
+/// vertices and the cell patch's ranges, 21 arrays of `capacity` floats in one 32-byte
+/// aligned block. Padded to a multiple of 8 with entries whose empty box (lo > hi) no
+/// sphere meets.
+struct FrontArrays {
+    uint32_t count = 0, capacity = 0;
+    float *nx = nullptr, *ny, *nz, *d, *lox, *loy, *loz, *hix, *hiy, *hiz;
+    float *v0x, *v0y, *v0z, *v1x, *v1y, *v1z, *v2x, *v2y, *v2z;
+    // The range of (n, q) - d over the cell patch's origins q (LightMesh::Patch), per triangle.
+    float *sMin, *sMax;
+    static constexpr int kArrays = 21;
+    std::unique_ptr<float[], void (*)(float*)> block{nullptr, [](float* p) { std::free(p); }};
+    // Room for `count` entries and their padding (the contents are not kept).
+    void Reserve(uint32_t count) {
+        const uint32_t need = (count + 8) & ~7u;
+        if (need <= capacity) return;
+        capacity = std::max(need, 2 * capacity);
+        void* p = std::aligned_alloc(32, sizeof(float) * kArrays * capacity);
+        if (!p) throw std::bad_alloc();
+        block.reset(static_cast<float*>(p));
+        float** arrays[kArrays] = {&nx,  &ny,  &nz,  &d,   &lox, &loy, &loz, &hix, &hiy, &hiz, &v0x,
+                                   &v0y, &v0z, &v1x, &v1y, &v1z, &v2x, &v2y, &v2z, &sMin, &sMax};
+        for (int a = 0; a < kArrays; ++a) *arrays[a] = block.get() + static_cast<size_t>(a) * capacity;
+    }
+};
+/// What FindBlockers needs of the point: its segments' box and origin, and the margins.
+struct BlockerQuery {
+    Vec3 lo, hi;        // P ± pointReach_: every node a segment of P's ends at lies inside
+    Vec3 o;             // P's origin, where the segments end
+    float far;          // a plane farther from o than this has every segment on one side
+    float margin;       // cullMargin_
+    float reach;        // pointReach_
+    float delta8;       // 8·planeDelta_
+};
+/// Padding after the last blocker: a plane x·0 - d with d = -1e30 puts every end at 1e30
+/// on the + side, so no segment can be undecided or blocked by it.
+inline void PadBlockers(Blockers* b) {
+    for (uint32_t n = b->count; n % kCullWidth != 0; ++n) {
+        b->nx[n] = b->ny[n] = b->nz[n] = 0;
+        b->d[n] = -1e30f;
+        b->side[n] = 1;
+        b->c0x[n] = b->c0y[n] = b->c0z[n] = b->c1x[n] = b->c1y[n] = b->c1z[n] = 0;
+        b->c2x[n] = b->c2y[n] = b->c2z[n] = b->m0[n] = b->m1[n] = b->m2[n] = 0;
+    }
+}
+/// What LightMesh::PatchSees needs to decide whether node x sees every origin of a cell patch.
+struct PatchQuery {
+    Vec3 x;
+    Vec3 lo, hi;  // the box of x and the patch's origins, grown
+    float m;      // margin of x's side of a plane (cullMargin_)
+    float mQ;     // margin of the origins' side (cullMargin_ and their rounding)
+};
+/// The kernels, chosen once for a SIMD width (0: the widest the processor has; 1 scalar,
+/// 4 SSE, 8 AVX2).
+///
+/// The templates' front test over `count` blocks: bit k of masks[b] is set when lane k of
+/// block b is in front, (n, offset) - nfrac > eps.
+using FrontFunction = void (*)(const FrontBlock* blocks, uint32_t count, const Vec3& n, float nfrac, float eps,
+                               uint8_t* masks);
+FrontFunction ChooseFrontFunction(int width);
+/// Нет's sum over the entries in front for one-byte node words: per light the entries whose
+/// bit is set (added to visible[]) and their number (added to *m); false, having added
+/// nothing, if an entry in front is not yet evaluated. Null where the gathers are not used:
+/// without AVX2, for a narrower test width, and under ThreadSanitizer (which does not see
+/// their loads as atomic).
+using SumFrontFunction = bool (*)(const FrontBlock* blocks, const uint8_t* masks, uint32_t count, const uint8_t* nodes,
+                                  int lights, uint32_t* visible, uint32_t* m);
+SumFrontFunction ChooseSumFrontFunction(int width);
+/// A point's blockers from its cell's front triangles; false if more than kMaxBlockers.
+using FindBlockersFunction = bool (*)(const FrontArrays& f, const BlockerQuery& q, Blockers* b);
+FindBlockersFunction ChooseFindBlockersFunction(int width);
+/// Whether node q.x sees every origin of a cell patch (no front triangle can block).
+using PatchSeesFunction = bool (*)(const FrontArrays& f, const PatchQuery& q);
+PatchSeesFunction ChoosePatchSeesFunction(int width);
+/// The segment from node x to origin o against a point's blockers: 1 certainly blocked, 0
+/// certainly unblocked, -1 undecided (m: the plane margin).
+using CullFunction = int (*)(const Blockers& b, const Vec3& x, const Vec3& o, float m);
+CullFunction ChooseCullFunction(int width);
+
+}  // namespace lm::kernels
