@@ -722,7 +722,7 @@ class LightMesh final : public LightMeshShadows {
         if (ids.empty()) return nullptr;
         std::lock_guard<std::mutex> lock(brickMutex_);
         if (reachArena_.empty() || reachUsed_ + ids.size() > kReachChunk) {
-            reachArena_.push_back(std::make_unique<uint32_t[]>(kReachChunk));
+            reachArena_.push_back(std::make_unique_for_overwrite<uint32_t[]>(kReachChunk));  // pages as used
             reachUsed_ = 0;
         }
         uint32_t* out = reachArena_.back().get() + reachUsed_;
