@@ -118,12 +118,12 @@ std::string BenchCsv(const std::vector<BenchResult>& rs) {
     std::string out =
         "scene,width,height,method,variant,paper_name,accel,cc,ki,median_s,runs_s,setup_s,camera_rays,shadow_rays,"
         "reflection_rays,local_segments,interpolations,mean_m,fallbacks,nodes_evaluated,peak_memory_bytes,image,"
-        "uniform_cell_points,culled_segments,light_radius,penumbra_lights\n";
+        "uniform_cell_points,culled_segments,light_radius,penumbra_lights,patch_segments\n";
     for (const BenchResult& r : rs) {
         std::string runs;
         for (double s : r.seconds) runs += StringPrintf("%s%.4f", runs.empty() ? "" : " ", s);
         const RenderCounters& c = r.counters;
-        out += StringPrintf("%s,%d,%d,%s,%s,%s,%s,%d,%g,%.4f,%s,%.4f,%llu,%llu,%llu,%llu,%llu,%.2f,%llu,%llu,%llu,%s,%llu,%llu,%g,%llu\n",
+        out += StringPrintf("%s,%d,%d,%s,%s,%s,%s,%d,%g,%.4f,%s,%.4f,%llu,%llu,%llu,%llu,%llu,%.2f,%llu,%llu,%llu,%s,%llu,%llu,%g,%llu,%llu\n",
                             r.scene.c_str(), r.width, r.height, r.method.c_str(), r.variant.c_str(),
                             r.paperName.c_str(), r.accel.c_str(), r.cc, r.ki, r.median, runs.c_str(), r.setupSeconds,
                             static_cast<unsigned long long>(c.cameraRays), static_cast<unsigned long long>(c.shadowRays),
@@ -136,7 +136,8 @@ std::string BenchCsv(const std::vector<BenchResult>& rs) {
                             static_cast<unsigned long long>(r.peakMemoryBytes), r.image.c_str(),
                             static_cast<unsigned long long>(c.uniformCellPoints),
                             static_cast<unsigned long long>(c.culledSegments), r.lightRadius,
-                            static_cast<unsigned long long>(c.penumbraLights));
+                            static_cast<unsigned long long>(c.penumbraLights),
+                            static_cast<unsigned long long>(c.patchSegments));
     }
     return out;
 }

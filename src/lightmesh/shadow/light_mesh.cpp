@@ -423,7 +423,7 @@ class LightMesh final : public LightMeshShadows {
         double d = 0;
         uint8_t flags = 0;
         // Consensus: the triangles whose bounding box meets the reach box (kTooMany: more
-        // than kMaxBlockers; the back-end tests every segment), in an arena of the mesh.
+        // than kMaxReach; the back-end tests every segment), in an arena of the mesh.
         const uint32_t* reach = nullptr;
         uint32_t reachCount = 0;
     };
@@ -436,7 +436,7 @@ class LightMesh final : public LightMeshShadows {
     // the reach triangles with a vertex in front of P's triangle's plane (by more than
     // planeDelta_ / 2, measured with the triangle's own plane so the list depends on the
     // cell, the triangle and the side only): points of one triangle in one cell, which a
-    // tile shades one after another, share it, so each thread keeps the last one.
+    // tile shades one after another, share it, so each thread keeps the last few.
     struct FrontList {
         uint64_t owner = 0;  // serial_ of the light mesh it belongs to
         int64_t base = -1;
@@ -445,7 +445,7 @@ class LightMesh final : public LightMeshShadows {
         FrontArrays arrays;
         // The cell patch (Patch): computed on first use; usable when `patch` is true.
         bool patchTried = false, patch = false;
-        float offset = 0;  // the origins' distance from the surface, Dot(o - p, n)
+        Vec3 normal;       // the points' normal the patch was built with
         Vec3 qlo, qhi;     // the box of the patch's origins, grown by reachMargin_
         uint64_t known[kCubeWords], sees[kCubeWords];  // node states, by CubeBit
     };
@@ -469,8 +469,8 @@ class LightMesh final : public LightMeshShadows {
         const Vec3 n = own.n * sign;
         const float d = own.d * sign;
         FrontArrays& f = list.arrays;
-        f.Reserve(c.reachCount);
         list.owner = 0;  // invalid until filled (Reserve may throw)
+        f.Reserve(c.reachCount);
         uint32_t count = 0;
         for (uint32_t i = 0; i < c.reachCount; ++i) {
             const uint32_t t = c.reach[i];
@@ -525,26 +525,34 @@ class LightMesh final : public LightMeshShadows {
     // so whether a segment is decided by the patch depends on the point and node only,
     // never on which points a thread shaded before: --stats are the same for any thread count.
     FrontList* Patch(const CellSummary& c, int64_t base, int ci, int cj, int ck, const ShadingPoint& sp) const {
-        if (!patches_ || c.reachCount == kTooMany) return nullptr;
+        if (!patches_ || c.reachCount == kTooMany || planes_[sp.prim].n == Vec3(0.0f)) return nullptr;
         const Vec3 &v0 = scene_.mesh.Vertex(sp.prim, 0), &v1 = scene_.mesh.Vertex(sp.prim, 1),
                    &v2 = scene_.mesh.Vertex(sp.prim, 2);
         const float offset = SurfaceOffset(v0, v1, v2);
         const float measured = Dot(sp.origin - sp.p, sp.n);
         if (!(measured > 4 * planeDelta_) || !(std::abs(measured - offset) <= 2 * planeDelta_)) return nullptr;
+        // P on its triangle's plane, and the normal the patch was built with (the renderer
+        // makes it from the triangle alone; a caller's other normal gets no patch).
+        const TrianglePlane& own = planes_[sp.prim];
+        if (!(std::abs(Dot(own.n, sp.p) - own.d) <= 2 * planeDelta_)) return nullptr;
         FrontTriangles(c, base, sp);
         FrontList& list = *lastFront_;
         if (!list.patchTried) BuildPatch(list, ci, cj, ck, sp, offset);
-        return list.patch ? &list : nullptr;
+        if (!list.patch || list.normal != sp.n) return nullptr;
+        return &list;
     }
     void BuildPatch(FrontList& list, int ci, int cj, int ck, const ShadingPoint& sp, float offset) const {
         list.patchTried = true;
         list.patch = false;
-        list.offset = offset;
+        list.normal = sp.n;
         const TriangleMesh& mesh = scene_.mesh;
         // The triangle clipped to the cell's box grown by reachMargin_ (a point's cell comes
         // from rounded coordinates), in double.
         const Vec3 c0 = lattice_.Node(ci, cj, ck), c1 = lattice_.Node(ci + 1, cj + 1, ck + 1);
-        double poly[2][12][3];
+        // Six clips of a triangle leave at most 9 vertices; rounding could add crossings, so
+        // a polygon that would outgrow the buffer gets no patch (its points test as before).
+        constexpr int kMaxPoly = 16;
+        double poly[2][kMaxPoly][3];
         int n = 3;
         for (int k = 0; k < 3; ++k) {
             const Vec3& v = mesh.Vertex(sp.prim, k);
@@ -557,7 +565,8 @@ class LightMesh final : public LightMeshShadows {
                 const double bound = end == 0 ? double(c0[axis]) - reachMargin_ : double(c1[axis]) + reachMargin_;
                 const double sign = end == 0 ? -1.0 : 1.0;
                 int m = 0;
-                for (int k = 0; k < n && m < 12; ++k) {
+                for (int k = 0; k < n; ++k) {
+                    if (m + 2 > kMaxPoly) return;  // list.patch stays false
                     const double* a = poly[cur][k];
                     const double* b = poly[cur][(k + 1) % n];
                     const double da = sign * (a[axis] - bound), db = sign * (b[axis] - bound);
@@ -573,11 +582,13 @@ class LightMesh final : public LightMeshShadows {
                 cur = 1 - cur;
             }
         if (n == 0) return;
-        // The origins: the polygon pushed along n by the offset, give or take 4·planeDelta_
-        // (Patch lets in points within 2·planeDelta_ of it; the rest covers their rounding).
-        // The slack along n moves a plane's value by at most 4·planeDelta_ (unit normals).
-        const double slack = 4.04 * planeDelta_;
-        double qx[12], qy[12], qz[12];
+        // The origins: the polygon pushed along n by the offset, give or take 8·planeDelta_
+        // along n: Patch lets in points whose origin lies within 2·planeDelta_ of that offset
+        // from P and whose P lies within 2·planeDelta_ of the triangle's plane; the rest covers
+        // the rounding of P and of the origin. The slack moves a plane's value by at most as
+        // much (unit normals).
+        const double slack = 8.08 * planeDelta_;
+        double qx[kMaxPoly], qy[kMaxPoly], qz[kMaxPoly];
         for (int k = 0; k < n; ++k) {
             qx[k] = poly[cur][k][0] + double(sp.n.x) * offset;
             qy[k] = poly[cur][k][1] + double(sp.n.y) * offset;
@@ -645,7 +656,10 @@ class LightMesh final : public LightMeshShadows {
     void FindBlockers(const CellSummary& c, int64_t base, const ShadingPoint& sp, Blockers* b) const {
         b->tried = true;
         b->known = false;
-        if (c.reachCount == kTooMany || !(Dot(sp.origin - sp.p, sp.n) > 4 * planeDelta_)) return;
+        // (A degenerate own triangle has no plane to put the others in front of: no blockers.)
+        if (c.reachCount == kTooMany || !(Dot(sp.origin - sp.p, sp.n) > 4 * planeDelta_) ||
+            planes_[sp.prim].n == Vec3(0.0f))
+            return;
         const FrontArrays& front = FrontTriangles(c, base, sp);
         BlockerQuery q;
         // The segments of this P lie within pointReach_ of it.
@@ -901,7 +915,8 @@ class LightMesh final : public LightMeshShadows {
         bool weighted = false;
         float vis[64];
         explicit Accumulator(size_t lights) {
-            for (size_t l = 0; l < lights; ++l) visible[l] = 0;
+            // Flush adds all eight byte lanes, so the first eight are always zeroed.
+            for (size_t l = 0; l < std::max<size_t>(lights, 8); ++l) visible[l] = 0;
         }
         void Flush() {
             for (int b = 0; b < 8; ++b) visible[b] += static_cast<uint32_t>((lanes >> (8 * b)) & 0xFF);
@@ -1193,8 +1208,9 @@ class LightMesh final : public LightMeshShadows {
     // If every candidate carries the same bits, the average over any non-empty subset is
     // those bits, so it is enough to find one candidate that sees P; only if none does
     // (m = 0) does the result change to the fallback, exactly as with ОТ. Where the
-    // candidates disagree (penumbrae, edges of objects) every segment is traced as in ОТ.
-    // The image is identical to ОТ's; only the mean m in --stats differs.
+    // candidates disagree (penumbrae, edges of objects) MinorityFirst decides as few
+    // segments as ОТ's average allows. The image is identical to ОТ's; only the mean m in
+    // --stats differs.
     //
     // In a planar cell (cell summaries) no segment is traced at all: every candidate sees P.
     void ConsensusWalk(const ShadingPoint& sp, Word neededMask, const FrontRun& all, int64_t base, int ci, int cj,
@@ -1245,8 +1261,9 @@ class LightMesh final : public LightMeshShadows {
         // patch, else, in the template's order, by segments. The blockers (cell summaries)
         // pay when several segments are to be decided; for the first one a ray is cheaper.
         if (summary) {
-            if (const FrontBlock* b = PatchWitness(*summary, base, ci, cj, ck, sp, all, counters, &witnessLane_)) {
-                Use(acc, Evaluate(static_cast<uint64_t>(base + b->linear[witnessLane_])));  // evaluated by pass 1
+            int lane = 0;
+            if (const FrontBlock* b = PatchWitness(*summary, base, ci, cj, ck, sp, all, counters, &lane)) {
+                Use(acc, Evaluate(static_cast<uint64_t>(base + b->linear[lane])));  // evaluated by pass 1
                 return;
             }
         }
@@ -1640,7 +1657,6 @@ class LightMesh final : public LightMeshShadows {
     int cubeSide_ = 0;
     uint32_t cubeWords_ = 0;
     static inline thread_local FrontList* lastFront_ = nullptr;  // FrontTriangles' last answer
-    static inline thread_local int witnessLane_ = 0;
     SumFrontFunction sumFront_ = nullptr;  // for one-byte words
     static constexpr uint64_t kNodePadding = 8;  // words after the last node, for SumFrontBytesAvx2's loads
     const uint64_t serial_ = NextSerial();  // tells this mesh's thread-local caches from others'

@@ -64,16 +64,18 @@ bool FindBlockersScalar(const FrontArrays& f, const BlockerQuery& q, Blockers* b
 /// kept lanes packed to the front of each array by a permutation from a table.
 struct CompactTable {
     alignas(32) int32_t index[256][8];
-    CompactTable() {
-        for (int m = 0; m < 256; ++m) {
-            int n = 0;
-            for (int k = 0; k < 8; ++k)
-                if (m >> k & 1) index[m][n++] = k;
-            for (; n < 8; ++n) index[m][n] = 0;
-        }
-    }
 };
-const CompactTable kCompact;
+constexpr CompactTable MakeCompactTable() {
+    CompactTable t{};
+    for (int m = 0; m < 256; ++m) {
+        int n = 0;
+        for (int k = 0; k < 8; ++k)
+            if (m >> k & 1) t.index[m][n++] = k;
+        for (; n < 8; ++n) t.index[m][n] = 0;
+    }
+    return t;
+}
+constexpr CompactTable kCompact = MakeCompactTable();
 __attribute__((target("avx2,popcnt"))) bool FindBlockersAvx2(const FrontArrays& f, const BlockerQuery& q, Blockers* b) {
     const __m256 lox = _mm256_set1_ps(q.lo.x), loy = _mm256_set1_ps(q.lo.y), loz = _mm256_set1_ps(q.lo.z);
     const __m256 hix = _mm256_set1_ps(q.hi.x), hiy = _mm256_set1_ps(q.hi.y), hiz = _mm256_set1_ps(q.hi.z);

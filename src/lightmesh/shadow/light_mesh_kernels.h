@@ -8,6 +8,7 @@
 // shadow/light_mesh.cpp.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdlib>
 #include <memory>
@@ -63,10 +64,11 @@ struct FrontArrays {
     void Reserve(uint32_t count) {
         const uint32_t need = (count + 8) & ~7u;
         if (need <= capacity) return;
-        capacity = std::max(need, 2 * capacity);
-        void* p = std::aligned_alloc(32, sizeof(float) * kArrays * capacity);
+        const uint32_t grown = std::max(need, 2 * capacity);  // a multiple of 8: the size is of 32
+        void* p = std::aligned_alloc(32, sizeof(float) * kArrays * grown);
         if (!p) throw std::bad_alloc();
         block.reset(static_cast<float*>(p));
+        capacity = grown;
         float** arrays[kArrays] = {&nx,  &ny,  &nz,  &d,   &lox, &loy, &loz, &hix, &hiy, &hiz, &v0x,
                                    &v0y, &v0z, &v1x, &v1y, &v1z, &v2x, &v2y, &v2z, &sMin, &sMax};
         for (int a = 0; a < kArrays; ++a) *arrays[a] = block.get() + static_cast<size_t>(a) * capacity;

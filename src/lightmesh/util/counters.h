@@ -21,8 +21,8 @@ struct RenderCounters {
     uint64_t fallbacks = 0;        ///< points with m = 0 that used a shadow ray
     uint64_t uniformCellPoints = 0;  ///< points answered by their cell's summary (all nodes agree)
     uint64_t planarCellPoints = 0;   ///< points whose cell's geometry is one plane: no segment
-    uint64_t culledSegments = 0;     ///< local-visibility segments decided without a ray
-    uint64_t patchSegments = 0;      ///< … of them by a node that sees a whole cell patch
+    uint64_t culledSegments = 0;     ///< local-visibility segments decided without a ray by a point's blockers
+    uint64_t patchSegments = 0;      ///< … and without a ray by a node that sees a whole cell patch
     uint64_t penumbraLights = 0;     ///< (point, light) pairs whose radius followed the light's size
     uint64_t penumbraKernel = 0;     ///< … of them answered by the nodes' kernel
     uint64_t penumbraSampled = 0;    ///< … by rays to the light's disc (the rest: the lattice and P's ray)

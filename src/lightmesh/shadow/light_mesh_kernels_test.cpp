@@ -1,0 +1,99 @@
+#include "lightmesh/shadow/light_mesh_kernels.h"
+
+#include <bit>
+#include <cstring>
+#include <random>
+
+#include <gtest/gtest.h>
+
+namespace lm::kernels {
+namespace {
+
+// Random triangles near the origin as a cell's front list (structure of arrays, padded as
+// LightMesh::FrontTriangles pads it), with patch ranges.
+FrontArrays RandomFrontList(std::mt19937& rng, uint32_t count) {
+    std::uniform_real_distribution<float> coord(-2.0f, 2.0f), size(0.05f, 1.5f), unit(-1.0f, 1.0f);
+    FrontArrays f;
+    f.Reserve(count);
+    for (uint32_t i = 0; i < count; ++i) {
+        const Vec3 a(coord(rng), coord(rng), coord(rng));
+        const Vec3 b = a + Vec3(unit(rng), unit(rng), unit(rng)) * size(rng);
+        const Vec3 c = a + Vec3(unit(rng), unit(rng), unit(rng)) * size(rng);
+        const Vec3 n = Normalize(Cross(b - a, c - a));
+        f.nx[i] = n.x, f.ny[i] = n.y, f.nz[i] = n.z, f.d[i] = Dot(n, a);
+        const Vec3 lo = Min(a, Min(b, c)) - Vec3(1e-4f), hi = Max(a, Max(b, c)) + Vec3(1e-4f);
+        f.lox[i] = lo.x, f.loy[i] = lo.y, f.loz[i] = lo.z, f.hix[i] = hi.x, f.hiy[i] = hi.y, f.hiz[i] = hi.z;
+        f.v0x[i] = a.x, f.v0y[i] = a.y, f.v0z[i] = a.z, f.v1x[i] = b.x, f.v1y[i] = b.y, f.v1z[i] = b.z;
+        f.v2x[i] = c.x, f.v2y[i] = c.y, f.v2z[i] = c.z;
+        const float s0 = unit(rng) * 2, s1 = unit(rng) * 2;
+        f.sMin[i] = std::min(s0, s1), f.sMax[i] = std::max(s0, s1);
+    }
+    f.count = count;
+    for (uint32_t i = count; i % 8 != 0; ++i) {
+        f.nx[i] = f.ny[i] = f.nz[i] = f.d[i] = f.sMin[i] = f.sMax[i] = 0;
+        f.lox[i] = f.loy[i] = f.loz[i] = Infinity;
+        f.hix[i] = f.hiy[i] = f.hiz[i] = -Infinity;
+        f.v0x[i] = f.v0y[i] = f.v0z[i] = f.v1x[i] = f.v1y[i] = f.v1z[i] = f.v2x[i] = f.v2y[i] = f.v2z[i] = 0;
+    }
+    return f;
+}
+
+bool SameBits(float a, float b) { return std::bit_cast<uint32_t>(a) == std::bit_cast<uint32_t>(b); }
+
+// The vectorised passes over a front list decide exactly as their scalar oracles: a point's
+// blockers array by array, bit for bit (so the culling that reads them cannot tell which
+// pass built them), the patch test and the culling answer by answer.
+TEST(LightMeshKernels, VectorisedPassesEqualTheScalarOnesBitForBit) {
+    if (!__builtin_cpu_supports("avx2")) GTEST_SKIP() << "no AVX2 on this processor: only the scalar passes run";
+    std::mt19937 rng(20261202);
+    std::uniform_real_distribution<float> coord(-2.0f, 2.0f), reach(0.2f, 1.5f);
+    const FindBlockersFunction scalarBlockers = ChooseFindBlockersFunction(1), wideBlockers = ChooseFindBlockersFunction(8);
+    const PatchSeesFunction scalarPatch = ChoosePatchSeesFunction(1), widePatch = ChoosePatchSeesFunction(8);
+    const CullFunction sseCull = ChooseCullFunction(4), wideCull = ChooseCullFunction(8);
+    ASSERT_NE(scalarBlockers, wideBlockers);
+    ASSERT_NE(scalarPatch, widePatch);
+    uint64_t kept = 0, sees = 0, decided = 0, queries = 0;
+    for (uint32_t count : {1u, 7u, 8u, 9u, 40u, 200u}) {
+        const FrontArrays f = RandomFrontList(rng, count);
+        for (int q = 0; q < 300; ++q) {
+            BlockerQuery bq;
+            const Vec3 p(coord(rng), coord(rng), coord(rng));
+            const float r = reach(rng);
+            bq.lo = p - Vec3(r), bq.hi = p + Vec3(r), bq.o = p + Vec3(0, 1e-3f, 0);
+            bq.margin = 1e-5f, bq.far = r + 2e-5f, bq.reach = r, bq.delta8 = 2e-5f;
+            Blockers a, b;
+            const bool okA = scalarBlockers(f, bq, &a), okB = wideBlockers(f, bq, &b);
+            ASSERT_EQ(okA, okB);
+            if (!okA) continue;
+            ASSERT_EQ(a.count, b.count);
+            kept += a.count;
+            const float* arraysA[] = {a.nx, a.ny, a.nz, a.d, a.side, a.c0x, a.c0y, a.c0z, a.c1x,
+                                      a.c1y, a.c1z, a.c2x, a.c2y, a.c2z, a.m0, a.m1, a.m2};
+            const float* arraysB[] = {b.nx, b.ny, b.nz, b.d, b.side, b.c0x, b.c0y, b.c0z, b.c1x,
+                                      b.c1y, b.c1z, b.c2x, b.c2y, b.c2z, b.m0, b.m1, b.m2};
+            for (int k = 0; k < 17; ++k)
+                for (uint32_t i = 0; i < a.count; ++i) ASSERT_TRUE(SameBits(arraysA[k][i], arraysB[k][i])) << k << " " << i;
+            PadBlockers(&a);
+            for (int s = 0; s < 8; ++s) {
+                const Vec3 x = p + Vec3(coord(rng), coord(rng), coord(rng)) * (r / 2);
+                const int c4 = sseCull(a, x, bq.o, bq.margin), c8 = wideCull(a, x, bq.o, bq.margin);
+                ASSERT_EQ(c4, c8);
+                decided += c8 >= 0;
+                PatchQuery pq;
+                pq.x = x, pq.lo = Min(x, p - Vec3(0.1f)), pq.hi = Max(x, p + Vec3(0.1f)), pq.m = 1e-5f, pq.mQ = 2e-5f;
+                const bool s1 = scalarPatch(f, pq), s8 = widePatch(f, pq);
+                ASSERT_EQ(s1, s8);
+                sees += s8;
+                ++queries;
+            }
+        }
+    }
+    // The cases are not all alike: blockers were kept, segments decided, patches seen and not.
+    EXPECT_GT(kept, 0u);
+    EXPECT_GT(decided, 0u);
+    EXPECT_GT(sees, 0u);
+    EXPECT_LT(sees, queries);
+}
+
+}  // namespace
+}  // namespace lm::kernels
