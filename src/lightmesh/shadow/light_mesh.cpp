@@ -452,18 +452,14 @@ class LightMesh final : public LightMeshShadows {
     // A few lists per thread, replaced in turn: a tile's row of pixels crosses cells and
     // triangles back and forth, and its next row comes back to them.
     static constexpr int kFrontLists = 8;
-    const FrontArrays& FrontTriangles(const CellSummary& c, int64_t base, const ShadingPoint& sp) const {
+    FrontList& FrontTriangles(const CellSummary& c, int64_t base, const ShadingPoint& sp) const {
         thread_local FrontList lists[kFrontLists];
         thread_local int next = 0;
         const TrianglePlane& own = planes_[sp.prim];
         const float sign = Dot(own.n, sp.n) >= 0 ? 1.0f : -1.0f;
         for (FrontList& list : lists)
-            if (list.owner == serial_ && list.base == base && list.prim == sp.prim && list.sign == sign) {
-                lastFront_ = &list;
-                return list.arrays;
-            }
+            if (list.owner == serial_ && list.base == base && list.prim == sp.prim && list.sign == sign) return list;
         FrontList& list = lists[next];
-        lastFront_ = &list;
         next = (next + 1) % kFrontLists;
         const TriangleMesh& mesh = scene_.mesh;
         const Vec3 n = own.n * sign;
@@ -489,18 +485,17 @@ class LightMesh final : public LightMeshShadows {
         }
         f.count = count;
         for (uint32_t i = count; i % 8 != 0; ++i) {  // padding: an empty box
-            f.nx[i] = f.ny[i] = f.nz[i] = f.d[i] = 0;
+            f.nx[i] = f.ny[i] = f.nz[i] = f.d[i] = f.sMin[i] = f.sMax[i] = 0;
             f.lox[i] = f.loy[i] = f.loz[i] = Infinity;
             f.hix[i] = f.hiy[i] = f.hiz[i] = -Infinity;
             f.v0x[i] = f.v0y[i] = f.v0z[i] = f.v1x[i] = f.v1y[i] = f.v1z[i] = f.v2x[i] = f.v2y[i] = f.v2z[i] = 0;
         }
-        for (uint32_t i = count; i % 8 != 0; ++i) f.sMin[i] = f.sMax[i] = 0;
         list.owner = serial_;
         list.base = base;
         list.prim = sp.prim;
         list.sign = sign;
         list.patchTried = list.patch = false;
-        return f;
+        return list;
     }
 
     // ---- Cell patches (ours, exact) -------------------------------------------------
@@ -518,12 +513,11 @@ class LightMesh final : public LightMeshShadows {
     // behind edges) are tested point by point as before.
     //
     // The patch of `sp` (with its front list), or null where it cannot be used: no front
-    // list (crowded cell), P's origin not clearly off the surface, or an origin whose offset
-    // is not the one the patch was built for.
-    // The patch's origins lie SurfaceOffset() off the triangle, as the renderer puts them
-    // (a point whose origin lies elsewhere, within 2·planeDelta_, is not given the patch),
-    // so whether a segment is decided by the patch depends on the point and node only,
-    // never on which points a thread shaded before: --stats are the same for any thread count.
+    // list (crowded cell), a degenerate triangle, or a point not made as the renderer makes
+    // it — its origin SurfaceOffset() off P (within 2·planeDelta_), P on its triangle's
+    // plane, the normal the patch was built with. So whether a segment is decided by the
+    // patch depends on the point and node only, never on which points a thread shaded
+    // before: --stats are the same for any thread count.
     FrontList* Patch(const CellSummary& c, int64_t base, int ci, int cj, int ck, const ShadingPoint& sp) const {
         if (!patches_ || c.reachCount == kTooMany || planes_[sp.prim].n == Vec3(0.0f)) return nullptr;
         const Vec3 &v0 = scene_.mesh.Vertex(sp.prim, 0), &v1 = scene_.mesh.Vertex(sp.prim, 1),
@@ -535,8 +529,7 @@ class LightMesh final : public LightMeshShadows {
         // makes it from the triangle alone; a caller's other normal gets no patch).
         const TrianglePlane& own = planes_[sp.prim];
         if (!(std::abs(Dot(own.n, sp.p) - own.d) <= 2 * planeDelta_)) return nullptr;
-        FrontTriangles(c, base, sp);
-        FrontList& list = *lastFront_;
+        FrontList& list = FrontTriangles(c, base, sp);
         if (!list.patchTried) BuildPatch(list, ci, cj, ck, sp, offset);
         if (!list.patch || list.normal != sp.n) return nullptr;
         return &list;
@@ -660,7 +653,7 @@ class LightMesh final : public LightMeshShadows {
         if (c.reachCount == kTooMany || !(Dot(sp.origin - sp.p, sp.n) > 4 * planeDelta_) ||
             planes_[sp.prim].n == Vec3(0.0f))
             return;
-        const FrontArrays& front = FrontTriangles(c, base, sp);
+        const FrontArrays& front = FrontTriangles(c, base, sp).arrays;
         BlockerQuery q;
         // The segments of this P lie within pointReach_ of it.
         q.lo = sp.p - Vec3(pointReach_);
@@ -1503,12 +1496,12 @@ class LightMesh final : public LightMeshShadows {
         if (linear(reach, reach, reach) > std::numeric_limits<int32_t>::max())
             ThrowError("light mesh %dx%dx%d: too many nodes for the templates' 32-bit offsets: lower --cc", lattice_.nx,
                        lattice_.ny, lattice_.nz);
-        cubeSide_ = maxOffset_ - minOffset_ + 1;
-        const uint64_t cubeNodes = static_cast<uint64_t>(cubeSide_) * cubeSide_ * cubeSide_;
+        const int cubeSide = maxOffset_ - minOffset_ + 1;
+        const uint64_t cubeNodes = static_cast<uint64_t>(cubeSide) * cubeSide * cubeSide;
         cubeWords_ = static_cast<uint32_t>(std::min<uint64_t>((cubeNodes + 63) / 64, kCubeWords));
         const bool cubeFits = cubeNodes <= 64 * kCubeWords;
         auto cubeBit = [&](const std::array<int8_t, 3>& o) {
-            return cubeFits ? static_cast<uint16_t>((o[0] - minOffset_) + cubeSide_ * ((o[1] - minOffset_) + cubeSide_ * (o[2] - minOffset_)))
+            return cubeFits ? static_cast<uint16_t>((o[0] - minOffset_) + cubeSide * ((o[1] - minOffset_) + cubeSide * (o[2] - minOffset_)))
                             : uint16_t(0);
         };
         auto pack = [&](uint32_t from, uint32_t to) {
@@ -1654,9 +1647,7 @@ class LightMesh final : public LightMeshShadows {
     // Cell patches: on for consensus with summaries when the neighbourhood cube of a cell
     // (the nodes any of its points may use) has at most kCubeWords·64 nodes.
     bool patches_ = false, patchesFit_ = false;
-    int cubeSide_ = 0;
     uint32_t cubeWords_ = 0;
-    static inline thread_local FrontList* lastFront_ = nullptr;  // FrontTriangles' last answer
     SumFrontFunction sumFront_ = nullptr;  // for one-byte words
     static constexpr uint64_t kNodePadding = 8;  // words after the last node, for SumFrontBytesAvx2's loads
     const uint64_t serial_ = NextSerial();  // tells this mesh's thread-local caches from others'
