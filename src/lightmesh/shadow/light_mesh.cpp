@@ -404,7 +404,7 @@ class LightMesh final : public LightMeshShadows {
     // A summary belongs to a mesh cell (the cell whose lower corner is node (ci, cj, ck))
     // and to its main plane Π: the plane of the largest triangle meeting the cell (ties:
     // the lower id, so it does not depend on the lists' order). It is used by the points of
-    // the cell that lie on Π (within planeDelta_, normal within kPlaneEps), which is most
+    // the cell that lie on Π (within the cell's tolerance delta, normal within kPlaneEps), which is most
     // points of floors, walls and other flat faces. For each side s of Π:
     //  - uniform_s: every node a point of the cell may use (cellNodes_) that lies on side
     //    s of Π has the same visibility bits bits_s (and, for СТ, the same inside flag).
@@ -413,7 +413,7 @@ class LightMesh final : public LightMeshShadows {
     //    tolerances of Π), so any non-empty subset averages to exactly bits_s: formula (2)
     //    needs neither the walk nor the node words.
     //  - clear_s (consensus): no triangle meeting the cell grown by the sphere's reach has
-    //    a vertex more than planeDelta_ on side s. A local-visibility segment runs from a
+    //    a vertex more than delta / 2 on side s. A local-visibility segment runs from a
     //    node to P's origin, both clearly on side s, inside that box, so nothing can block
     //    it: no segment is traced.
     // Summaries are computed on first use and published like the nodes: the values depend
@@ -422,6 +422,11 @@ class LightMesh final : public LightMeshShadows {
         float n[3] = {0, 0, 0};  // Π: unit normal and offset, (n, x) = d on Π
         double d = 0;
         uint8_t flags = 0;
+        // The cell's tolerance: planeDelta_'s rule at the largest coordinate the cell's
+        // computations meet (its reach box and its reach's vertices), at most planeDelta_.
+        // Every margin of the summaries, patches and culling of this cell scales with it, so
+        // a small object near the coordinates' origin in a large scene keeps them.
+        float delta = 0;
         // Consensus: the triangles whose bounding box meets the reach box (kTooMany: more
         // than kMaxReach; the back-end tests every segment), in an arena of the mesh.
         const uint32_t* reach = nullptr;
@@ -434,7 +439,7 @@ class LightMesh final : public LightMeshShadows {
     // triangles can block it; of those, one whose vertices all lie on or behind P's plane
     // cannot (the segment runs clearly in front of it, like the planar argument). So:
     // the reach triangles with a vertex in front of P's triangle's plane (by more than
-    // planeDelta_ / 2, measured with the triangle's own plane so the list depends on the
+    // the cell's delta / 2, measured with the triangle's own plane so the list depends on the
     // cell, the triangle and the side only): points of one triangle in one cell, which a
     // tile shades one after another, share it, so each thread keeps the last few.
     struct FrontList {
@@ -445,6 +450,7 @@ class LightMesh final : public LightMeshShadows {
         FrontArrays arrays;
         // The cell patch (Patch): computed on first use; usable when `patch` is true.
         bool patchTried = false, patch = false;
+        float delta = 0;   // the cell's tolerance (CellSummary::delta)
         Vec3 normal;       // the points' normal the patch was built with
         Vec3 qlo, qhi;     // the box of the patch's origins, grown by reachMargin_
         uint64_t known[kCubeWords], sees[kCubeWords];  // node states, by CubeBit
@@ -471,7 +477,7 @@ class LightMesh final : public LightMeshShadows {
         for (uint32_t i = 0; i < c.reachCount; ++i) {
             const uint32_t t = c.reach[i];
             bool front = false;
-            for (int k = 0; k < 3 && !front; ++k) front = Dot(n, mesh.Vertex(t, k)) - d > 0.5f * planeDelta_;
+            for (int k = 0; k < 3 && !front; ++k) front = Dot(n, mesh.Vertex(t, k)) - d > 0.5f * c.delta;
             if (!front) continue;
             const TrianglePlane& pl = planes_[t];
             const Vec3 &v0 = mesh.Vertex(t, 0), &v1 = mesh.Vertex(t, 1), &v2 = mesh.Vertex(t, 2);
@@ -491,6 +497,7 @@ class LightMesh final : public LightMeshShadows {
             f.v0x[i] = f.v0y[i] = f.v0z[i] = f.v1x[i] = f.v1y[i] = f.v1z[i] = f.v2x[i] = f.v2y[i] = f.v2z[i] = 0;
         }
         list.owner = serial_;
+        list.delta = c.delta;
         list.base = base;
         list.prim = sp.prim;
         list.sign = sign;
@@ -514,7 +521,7 @@ class LightMesh final : public LightMeshShadows {
     //
     // The patch of `sp` (with its front list), or null where it cannot be used: no front
     // list (crowded cell), a degenerate triangle, or a point not made as the renderer makes
-    // it — its origin SurfaceOffset() off P (within 2·planeDelta_), P on its triangle's
+    // it — its origin SurfaceOffset() off P (within 2·delta, the cell's), P on its triangle's
     // plane, the normal the patch was built with. So whether a segment is decided by the
     // patch depends on the point and node only, never on which points a thread shaded
     // before: --stats are the same for any thread count.
@@ -524,11 +531,11 @@ class LightMesh final : public LightMeshShadows {
                    &v2 = scene_.mesh.Vertex(sp.prim, 2);
         const float offset = SurfaceOffset(v0, v1, v2);
         const float measured = Dot(sp.origin - sp.p, sp.n);
-        if (!(measured > 4 * planeDelta_) || !(std::abs(measured - offset) <= 2 * planeDelta_)) return nullptr;
+        if (!(measured > 4 * c.delta) || !(std::abs(measured - offset) <= 2 * c.delta)) return nullptr;
         // P on its triangle's plane, and the normal the patch was built with (the renderer
         // makes it from the triangle alone; a caller's other normal gets no patch).
         const TrianglePlane& own = planes_[sp.prim];
-        if (!(std::abs(Dot(own.n, sp.p) - own.d) <= 2 * planeDelta_)) return nullptr;
+        if (!(std::abs(Dot(own.n, sp.p) - own.d) <= 2 * c.delta)) return nullptr;
         FrontList& list = FrontTriangles(c, base, sp);
         if (!list.patchTried) BuildPatch(list, ci, cj, ck, sp, offset);
         if (!list.patch || list.normal != sp.n) return nullptr;
@@ -575,12 +582,12 @@ class LightMesh final : public LightMeshShadows {
                 cur = 1 - cur;
             }
         if (n == 0) return;
-        // The origins: the polygon pushed along n by the offset, give or take 8·planeDelta_
-        // along n: Patch lets in points whose origin lies within 2·planeDelta_ of that offset
-        // from P and whose P lies within 2·planeDelta_ of the triangle's plane; the rest covers
+        // The origins: the polygon pushed along n by the offset, give or take 8·delta
+        // along n: Patch lets in points whose origin lies within 2·delta of that offset
+        // from P and whose P lies within 2·delta of the triangle's plane; the rest covers
         // the rounding of P and of the origin. The slack moves a plane's value by at most as
         // much (unit normals).
-        const double slack = 8.08 * planeDelta_;
+        const double slack = 8.08 * list.delta;
         double qx[kMaxPoly], qy[kMaxPoly], qz[kMaxPoly];
         for (int k = 0; k < n; ++k) {
             qx[k] = poly[cur][k][0] + double(sp.n.x) * offset;
@@ -622,8 +629,8 @@ class LightMesh final : public LightMeshShadows {
         q.x = x;
         q.lo = Min(x, list.qlo);
         q.hi = Max(x, list.qhi);
-        q.m = cullMargin_;
-        q.mQ = cullMargin_ + 4 * planeDelta_;
+        q.m = 4 * list.delta;  // cullMargin_'s rule with the cell's tolerance
+        q.mQ = q.m + 4 * list.delta;
         const bool sees = patchSees_(list.arrays, q);
         list.known[word] |= mask;
         list.sees[word] = sees ? list.sees[word] | mask : list.sees[word] & ~mask;
@@ -650,7 +657,7 @@ class LightMesh final : public LightMeshShadows {
         b->tried = true;
         b->known = false;
         // (A degenerate own triangle has no plane to put the others in front of: no blockers.)
-        if (c.reachCount == kTooMany || !(Dot(sp.origin - sp.p, sp.n) > 4 * planeDelta_) ||
+        if (c.reachCount == kTooMany || !(Dot(sp.origin - sp.p, sp.n) > 4 * c.delta) ||
             planes_[sp.prim].n == Vec3(0.0f))
             return;
         const FrontArrays& front = FrontTriangles(c, base, sp).arrays;
@@ -659,10 +666,11 @@ class LightMesh final : public LightMeshShadows {
         q.lo = sp.p - Vec3(pointReach_);
         q.hi = sp.p + Vec3(pointReach_);
         q.o = sp.origin;
-        q.far = pointReach_ + 2 * cullMargin_;
-        q.margin = cullMargin_;
+        q.margin = 4 * c.delta;  // cullMargin_'s rule with the cell's tolerance
+        q.far = pointReach_ + 2 * q.margin;
         q.reach = pointReach_;
-        q.delta8 = 8 * planeDelta_;
+        q.delta8 = 8 * c.delta;
+        b->margin = q.margin;
         if (!findBlockers_(front, q, b)) return;  // too many: the back-end decides
         PadBlockers(b);
         b->known = true;
@@ -677,7 +685,7 @@ class LightMesh final : public LightMeshShadows {
     // otherwise the back-end decides, as for ОТ. The image is ОТ's either way.
     bool SeesPointCulled(const Vec3& x, const ShadingPoint& sp, const Blockers& b, RenderCounters& counters) const {
         if (b.known) {
-            const int decided = cull_(b, x, sp.origin, cullMargin_);
+            const int decided = cull_(b, x, sp.origin, b.margin);
             if (decided >= 0) {
                 ++counters.culledSegments;
                 return decided == 0;
@@ -765,6 +773,7 @@ class LightMesh final : public LightMeshShadows {
 
     CellSummary ComputeSummary(int ci, int cj, int ck, const SummaryBrick& brick) const {
         CellSummary c;
+        c.delta = planeDelta_;
         const LightMeshLattice& L = lattice_;
         const TriangleMesh& mesh = scene_.mesh;
         thread_local std::vector<uint32_t> tris;
@@ -791,6 +800,12 @@ class LightMesh final : public LightMeshShadows {
             reach.push_back(t);
             if (meets(pl, cellBox)) tris.push_back(t);
         }
+        // The cell's tolerance: every coordinate its tests compute with lies in the reach box
+        // (nodes, points, origins) or is a vertex of a reach triangle (planes, patches).
+        float magnitude = std::max(MaxComponent(Abs(reachBox.lo)), MaxComponent(Abs(reachBox.hi)));
+        for (const uint32_t t : reach)
+            for (int k = 0; k < 3; ++k) magnitude = std::max(magnitude, MaxComponent(Abs(mesh.Vertex(t, k))));
+        c.delta = std::min(planeDelta_, 2e-7f * magnitude);
         if (variant_.local == LocalVisibility::Consensus) {
             if (reach.size() > kMaxReach) {
                 c.reachCount = kTooMany;
@@ -826,9 +841,9 @@ class LightMesh final : public LightMeshShadows {
             // clear_s: the extreme heights of the vertices of the triangles in reach (of all
             // whose bounding box is in reach: more triangles can only make it stricter).
             // In float from a vertex of Π: v - v0 is short and exact to half an ulp of the
-            // coordinates, so the error stays far below the planeDelta_ / 2 compared with.
+            // coordinates, so the error stays below the delta / 2 compared with.
             const Vec3 np(c.n[0], c.n[1], c.n[2]);
-            const float limit = 0.5f * planeDelta_;
+            const float limit = 0.5f * c.delta;
             bool up = false, down = false;  // a vertex above Π (side 0), below (side 1)
             for (size_t i = 0; i < reach.size() && !(up && down); ++i)
                 for (int k = 0; k < 3; ++k) {
@@ -1088,6 +1103,7 @@ class LightMesh final : public LightMeshShadows {
             const CellSummary& c = Summary(ci, cj, ck, &scratch, &brick, &slot);
             summary = &c;
             int side = -1;
+            bool onPlane = false;
             if (c.flags & kHasPlane) {
                 // Is P on Π? Its point within planeDelta_ (twice, for the rounding of this
                 // test), its normal within kPlaneEps.
@@ -1095,10 +1111,13 @@ class LightMesh final : public LightMeshShadows {
                 const Vec3 np(c.n[0], c.n[1], c.n[2]);
                 if (std::abs(hp) <= 2 * planeDelta_ && LengthSquared(Cross(sp.n, np)) <= kPlaneEps * kPlaneEps)
                     side = Dot(sp.n, np) > 0 ? 0 : 1;
+                onPlane = std::abs(hp) <= 2 * c.delta;
             }
             if (side >= 0) {
-                // The planar argument also needs P's own origin clearly off the plane.
-                planar = (c.flags & (side == 0 ? kClear0 : kClear1)) && Dot(sp.origin - sp.p, sp.n) > 4 * planeDelta_;
+                // The planar argument needs P on Π and its own origin clearly off it by the
+                // cell's tolerance (the uniform one only needs the nodes' side of Π).
+                planar = onPlane && (c.flags & (side == 0 ? kClear0 : kClear1)) &&
+                         Dot(sp.origin - sp.p, sp.n) > 4 * c.delta;
                 if (planar) ++counters.planarCellPoints;
             }
             const SideSummary sideSummary = side >= 0 ? Side(c, brick, slot, side, ci, cj, ck) : SideSummary{};

@@ -41,6 +41,7 @@ struct Blockers {
     bool tried = false;  // FindBlockers ran for this point
     bool known = false;  // false: test every segment with the back-end
     uint32_t count = 0;
+    float margin = 0;    // the plane margin of the culling (the cell's cullMargin_)
     static constexpr size_t N = kMaxBlockers + kCullWidth;
     alignas(32) float nx[N], ny[N], nz[N], d[N], side[N];
     alignas(32) float c0x[N], c0y[N], c0z[N], c1x[N], c1y[N], c1z[N], c2x[N], c2y[N], c2z[N];
