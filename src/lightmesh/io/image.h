@@ -5,13 +5,15 @@
 #include <vector>
 
 #include "lightmesh/math/vec.h"
+#include "lightmesh/util/huge_pages.h"
 
 namespace lm {
 
-/// Linear RGB pixels, row-major from the top-left corner.
+/// Linear RGB pixels, row-major from the top-left corner. (On huge pages from 1 MiB up,
+/// 512×512 and larger: the first touch of each 4 KiB page would cost a page fault.)
 struct Image {
     int width = 0, height = 0;
-    std::vector<Color> pixels;
+    std::vector<Color, HugePageAllocator<Color>> pixels;
 
     Image() = default;
     Image(int w, int h) : width(w), height(h), pixels(static_cast<size_t>(w) * h) {}

@@ -20,6 +20,7 @@
 #include "lightmesh/shadow/area_light.h"
 #include "lightmesh/shadow/light_mesh_kernels.h"
 #include "lightmesh/util/error.h"
+#include "lightmesh/util/huge_pages.h"
 #include "lightmesh/util/log.h"
 #include "lightmesh/util/parallel.h"
 #include "lightmesh/util/system.h"
@@ -210,9 +211,8 @@ class LightMesh final : public LightMeshShadows {
     uint64_t BinBudget() const { return 64 * static_cast<uint64_t>(planes_.size()) + (uint64_t(1) << 22); }
 
     // Every brick's candidate list: the triangles whose bounding box meets the box of all
-    // that its cells' summaries look at (their reach). Built once, in parallel, in two
-    // passes (count, fill); the order within a list is the fill's, which nothing depends
-    // on (the uses are order-free: a maximum, extreme heights, a filter).
+    // that its cells' summaries look at (their reach), in triangle order. Built once, in
+    // parallel, in two passes (count, fill).
     // False, having stored nothing, when the lists would exceed BinBudget().
     bool BinTrianglesByBrick(uint64_t bricksZ) {
         const LightMeshLattice& L = lattice_;
@@ -243,7 +243,15 @@ class LightMesh final : public LightMeshShadows {
         });
         binPairs_ = pairs.load();
         if (binPairs_ > BinBudget()) return false;
-        std::vector<std::atomic<uint32_t>> count(bricks);
+        // Count and fill by contiguous runs of triangles, each with its own counts per brick:
+        // no atomics (two threads incrementing one array's counters spend most of their
+        // time trading its cache lines), and every list comes out in triangle order. Runs
+        // are fewer for a lattice with many bricks, so their counts stay within about
+        // 16 M entries.
+        const uint64_t runs = std::clamp<uint64_t>((uint64_t(1) << 24) / std::max<uint64_t>(bricks, 1), 1,
+                                                   std::min<uint64_t>(16, std::max<size_t>(planes_.size() / 4096, 1)));
+        const uint64_t perRun = (planes_.size() + runs - 1) / runs;
+        std::vector<uint64_t, HugePageAllocator<uint64_t>> at(runs * bricks, 0);  // run r's count, then its next slot, in brick b: at[r·bricks + b]
         auto each = [&](size_t t, auto&& visit) {
             int64_t b0[3], b1[3];
             for (int a = 0; a < 3; ++a) range(planes_[t], a, &b0[a], &b1[a]);
@@ -251,17 +259,30 @@ class LightMesh final : public LightMeshShadows {
                 for (int64_t y = b0[1]; y <= b1[1]; ++y)
                     for (int64_t x = b0[0]; x <= b1[0]; ++x) visit((static_cast<uint64_t>(z) * bricksY_ + y) * bricksX_ + x);
         };
-        ParallelFor(size_t(0), planes_.size(), [&](size_t t) {
-            each(t, [&](uint64_t b) { count[b].fetch_add(1, std::memory_order_relaxed); });
-        });
-        brickStart_.assign(bricks + 1, 0);
-        for (uint64_t b = 0; b < bricks; ++b) brickStart_[b + 1] = brickStart_[b] + count[b].load(std::memory_order_relaxed);
-        brickTris_.resize(brickStart_[bricks]);
-        for (uint64_t b = 0; b < bricks; ++b) count[b].store(0, std::memory_order_relaxed);
-        ParallelFor(size_t(0), planes_.size(), [&](size_t t) {
-            each(t, [&](uint64_t b) {
-                brickTris_[brickStart_[b] + count[b].fetch_add(1, std::memory_order_relaxed)] = static_cast<uint32_t>(t);
+        auto forRuns = [&](auto&& body) {
+            ParallelFor(uint64_t(0), runs, [&](uint64_t r) {
+                uint64_t* mine = at.data() + r * bricks;
+                const size_t end = std::min<size_t>(planes_.size(), (r + 1) * perRun);
+                for (size_t t = r * perRun; t < end; ++t) body(t, mine);
             });
+        };
+        forRuns([&](size_t t, uint64_t* mine) { each(t, [&](uint64_t b) { ++mine[b]; }); });
+        // Brick b's list holds run 0's triangles, then run 1's, …: each run's slots start
+        // where the previous run's end.
+        brickStart_.assign(bricks + 1, 0);
+        uint64_t total = 0;
+        for (uint64_t b = 0; b < bricks; ++b) {
+            brickStart_[b] = total;
+            for (uint64_t r = 0; r < runs; ++r) {
+                const uint64_t n = at[r * bricks + b];
+                at[r * bricks + b] = total;
+                total += n;
+            }
+        }
+        brickStart_[bricks] = total;
+        brickTris_.resize(total);
+        forRuns([&](size_t t, uint64_t* mine) {
+            each(t, [&](uint64_t b) { brickTris_[mine[b]++] = static_cast<uint32_t>(t); });
         });
         return true;
     }
@@ -708,6 +729,7 @@ class LightMesh final : public LightMeshShadows {
         std::atomic<uint8_t> sideState[kBrick * kBrick * kBrick][2];  // like state, per side of Π
         SideSummary side[kBrick * kBrick * kBrick][2];
     };
+    static_assert(std::is_trivially_destructible_v<SummaryBrick>);  // freed with its chunk
     static constexpr uint32_t kMaxBrickNear = 16384;
 
     // The summary of cell (ci, cj, ck): the stored one, or one computed into `scratch`.
@@ -737,7 +759,8 @@ class LightMesh final : public LightMeshShadows {
         if (ids.empty()) return nullptr;
         std::lock_guard<std::mutex> lock(brickMutex_);
         if (reachArena_.empty() || reachUsed_ + ids.size() > kReachChunk) {
-            reachArena_.push_back(std::make_unique_for_overwrite<uint32_t[]>(kReachChunk));  // pages as used
+            // Pages as used, huge ones (see AllocateBrick).
+            reachArena_.emplace_back(static_cast<uint32_t*>(AllocateLarge(kReachChunk * sizeof(uint32_t))));
             reachUsed_ = 0;
         }
         uint32_t* out = reachArena_.back().get() + reachUsed_;
@@ -756,17 +779,27 @@ class LightMesh final : public LightMeshShadows {
     }
 
     SummaryBrick* AllocateBrick(uint64_t brick) const {
-        auto fresh = std::make_unique<SummaryBrick>();
+        SummaryBrick* fresh = nullptr;
+        {
+            // From chunks of kBricksPerChunk (on huge pages: a brick is 3.5 KiB, and a first
+            // touch of each fresh 4 KiB page would cost a page fault). A brick that loses the
+            // race below stays unused in its chunk.
+            std::lock_guard<std::mutex> lock(brickMutex_);
+            if (brickChunks_.empty() || brickChunkUsed_ == kBricksPerChunk) {
+                brickChunks_.emplace_back(static_cast<SummaryBrick*>(AllocateLarge(kBricksPerChunk * sizeof(SummaryBrick))));
+                brickChunkUsed_ = 0;
+            }
+            fresh = new (brickChunks_.back().get() + brickChunkUsed_++) SummaryBrick();
+        }
         for (auto& st : fresh->state) st.store(0, std::memory_order_relaxed);
         for (auto& st : fresh->sideState) st[0].store(0, std::memory_order_relaxed), st[1].store(0, std::memory_order_relaxed);
         const uint64_t begin = brickStart_[brick], end = brickStart_[brick + 1];
         fresh->nearCount = end - begin > kMaxBrickNear ? kTooMany : static_cast<uint32_t>(end - begin);
         fresh->near = brickTris_.data() + begin;
         SummaryBrick* expected = nullptr;
-        if (bricks_[brick].compare_exchange_strong(expected, fresh.get(), std::memory_order_acq_rel)) {
-            std::lock_guard<std::mutex> lock(brickMutex_);
-            brickPool_.push_back(std::move(fresh));
-            return brickPool_.back().get();
+        if (bricks_[brick].compare_exchange_strong(expected, fresh, std::memory_order_acq_rel)) {
+            bricksUsed_.fetch_add(1, std::memory_order_relaxed);
+            return fresh;
         }
         return expected;  // another thread's brick
     }
@@ -906,7 +939,7 @@ class LightMesh final : public LightMeshShadows {
 
     uint64_t SummaryBytes() const {
         std::lock_guard<std::mutex> lock(brickMutex_);
-        return brickPool_.size() * sizeof(SummaryBrick) + reachBytes_ + planes_.size() * sizeof(TrianglePlane) +
+        return bricksUsed_.load() * sizeof(SummaryBrick) + reachBytes_ + planes_.size() * sizeof(TrianglePlane) +
                brickTris_.size() * sizeof(uint32_t) + brickStart_.size() * sizeof(uint64_t) +
                bricksX_ * bricksY_ * sizeof(void*) * ((lattice_.nz + kBrick - 1) / kBrick);
     }
@@ -1539,6 +1572,10 @@ class LightMesh final : public LightMeshShadows {
                 frontBlocks_.push_back(b);
             }
         };
+        size_t blocks = 0;
+        for (size_t sp = 0; sp + 1 < t.begin.size(); ++sp)
+            blocks += (t.boundaryCount[sp] + 7) / 8 + (t.begin[sp + 1] - t.begin[sp] - t.boundaryCount[sp] + 7) / 8;
+        frontBlocks_.reserve(blocks);
         for (size_t sp = 0; sp + 1 < t.begin.size(); ++sp) {
             frontBegin_.push_back(static_cast<uint32_t>(frontBlocks_.size()));
             pack(t.begin[sp], t.begin[sp] + t.boundaryCount[sp]);
@@ -1686,7 +1723,7 @@ class LightMesh final : public LightMeshShadows {
     const float lightRadius_;
     ZeroedPtr<std::atomic<uint16_t>> blockerT_;
     static constexpr size_t kReachChunk = 1 << 18;
-    mutable std::vector<std::unique_ptr<uint32_t[]>> reachArena_;
+    mutable std::vector<std::unique_ptr<uint32_t[], FreeDeleter>> reachArena_;
     mutable size_t reachUsed_ = 0, reachBytes_ = 0;
     // Cell summaries: each triangle's plane (unit normal, offset) and bounding box (grown
     // by cullMargin_), for the binning, the reach lists and the segment culling.
@@ -1695,13 +1732,17 @@ class LightMesh final : public LightMeshShadows {
         float d;
         Vec3 lo, hi;
     };
-    std::vector<TrianglePlane> planes_;
-    std::vector<uint64_t> brickStart_;  // CSR of the bricks' candidate triangles
-    std::vector<uint32_t> brickTris_;
+    // (These two on huge pages: on the garden 18 and 15 MiB, filled at once.)
+    std::vector<TrianglePlane, HugePageAllocator<TrianglePlane>> planes_;
+    std::vector<uint64_t, HugePageAllocator<uint64_t>> brickStart_;  // CSR of the bricks' candidate triangles
+    std::vector<uint32_t, HugePageAllocator<uint32_t>> brickTris_;
     uint64_t bricksX_ = 0, bricksY_ = 0;
     ZeroedPtr<std::atomic<SummaryBrick*>> bricks_;  // per brick of cells, allocated on first use
     mutable std::mutex brickMutex_;
-    mutable std::vector<std::unique_ptr<SummaryBrick>> brickPool_;
+    static constexpr size_t kBricksPerChunk = 512;  // 1.8 MiB
+    mutable std::vector<std::unique_ptr<SummaryBrick, FreeDeleter>> brickChunks_;
+    mutable size_t brickChunkUsed_ = 0;
+    mutable std::atomic<uint64_t> bricksUsed_{0};
     mutable std::atomic<uint64_t> evaluated_{0}, summarized_{0}, uniformCells_{0}, planarCells_{0};
 };
 

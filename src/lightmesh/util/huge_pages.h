@@ -1,0 +1,41 @@
+// huge_pages.h -- an allocator that asks the kernel for 2 MiB pages for large buffers.
+//
+// Why: a first touch of a fresh 4 KiB page costs a page fault, and on the virtual machines
+// this project is measured on a fault costs about 11 µs (64 MiB zero-filled through 4 KiB
+// pages: 183 ms; through transparent huge pages: 5.5 ms). A 1024×768 float image is 2,300
+// faults, 25 ms of a 90 ms render; the light mesh's setup on a 451k-triangle scene touches
+// 33 MiB. Linux's default transparent-huge-page mode is "madvise": only regions marked with
+// MADV_HUGEPAGE get them, so large buffers are allocated 2 MiB aligned and marked. Small
+// ones, and every buffer on systems without the advice, behave as std::allocator's.
+#pragma once
+
+#include <cstddef>
+#include <cstdlib>
+#include <new>
+
+namespace lm {
+
+/// Allocates `bytes` (any size; from 1 MiB up rounded up to whole 2 MiB pages, 2 MiB
+/// aligned and marked for huge pages: at most 1 MiB of address space more, and a buffer
+/// that big is filled soon). Free with std::free. Throws std::bad_alloc.
+void* AllocateLarge(size_t bytes);
+
+/// std::allocator's interface over AllocateLarge, for std::vector of big buffers (images,
+/// the light mesh's per-triangle tables). Values are default-initialised by the vector as
+/// usual; only where the pages come from changes.
+template <typename T>
+struct HugePageAllocator {
+    using value_type = T;
+    HugePageAllocator() noexcept = default;
+    template <typename U>
+    HugePageAllocator(const HugePageAllocator<U>&) noexcept {}
+    T* allocate(size_t n) {
+        if (n > static_cast<size_t>(-1) / sizeof(T)) throw std::bad_alloc();
+        return static_cast<T*>(AllocateLarge(n * sizeof(T)));
+    }
+    void deallocate(T* p, size_t) noexcept { std::free(p); }
+    template <typename U>
+    bool operator==(const HugePageAllocator<U>&) const noexcept { return true; }
+};
+
+}  // namespace lm
