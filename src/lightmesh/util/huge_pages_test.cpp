@@ -1,0 +1,59 @@
+#include "lightmesh/util/huge_pages.h"
+
+#include <gtest/gtest.h>
+#include <sys/resource.h>
+
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace lm {
+namespace {
+
+TEST(HugePages, LargeBuffersAreAlignedToHugePagesAndSmallOnesWork) {
+    for (size_t bytes : {size_t(0), size_t(1), size_t(4096), size_t(1) << 19, size_t(1) << 20, (size_t(5) << 20) + 3}) {
+        void* p = AllocateLarge(bytes);
+        ASSERT_NE(p, nullptr) << bytes;
+        std::memset(p, 0xAB, bytes);
+        if (bytes >= (size_t(1) << 20)) EXPECT_EQ(reinterpret_cast<uintptr_t>(p) % (size_t(2) << 20), 0u) << bytes;
+        std::free(p);
+    }
+    std::vector<int, HugePageAllocator<int>> a(1 << 20, 7), b(1 << 20, 7);
+    EXPECT_EQ(a, b);
+    a.push_back(8);
+    EXPECT_EQ(a.back(), 8);
+    EXPECT_EQ(a.size(), (size_t(1) << 20) + 1);
+}
+
+// Where the kernel gives huge pages on request (transparent huge pages "madvise" or
+// "always"), filling a 16 MiB buffer must fault far fewer times than its 4,096 small pages.
+TEST(HugePages, FillingALargeBufferTakesFewPageFaults) {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+    GTEST_SKIP() << "a sanitizer's shadow memory takes faults of its own";
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+    GTEST_SKIP() << "a sanitizer's shadow memory takes faults of its own";
+#endif
+#endif
+    std::ifstream mode("/sys/kernel/mm/transparent_hugepage/enabled");
+    std::string line;
+    if (!std::getline(mode, line) || line.find("[never]") != std::string::npos)
+        GTEST_SKIP() << "no transparent huge pages here";
+    auto faults = [] {
+        rusage u{};
+        getrusage(RUSAGE_SELF, &u);
+        return u.ru_minflt;
+    };
+    const size_t bytes = size_t(16) << 20;
+    void* p = AllocateLarge(bytes);
+    const long before = faults();
+    std::memset(p, 1, bytes);
+    const long taken = faults() - before;
+    std::free(p);
+    EXPECT_LT(taken, 3 * 4096 / 4) << "page faults filling 16 MiB";
+}
+
+}  // namespace
+}  // namespace lm
