@@ -1,6 +1,8 @@
 #include "lightmesh/geometry/mesh.h"
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cstring>
 #include <unordered_map>
 
@@ -31,26 +33,52 @@ void TriangleMesh::Append(const TriangleMesh& other, uint32_t materialOffset) {
 
 namespace {
 
-struct Vec3Hash {
-    size_t operator()(const Vec3& v) const {
-        auto h = [](float f) {
-            if (f == 0.0f) f = 0.0f;  // +0 and -0 weld together
-            uint32_t u;
-            std::memcpy(&u, &f, 4);
-            return static_cast<size_t>(u) * 0x9E3779B97F4A7C15ull;
-        };
-        return h(v.x) ^ (h(v.y) >> 1) ^ (h(v.z) << 1);
-    }
-};
+// Open addressing over one array (a table of indices, linear probing): a mesh of a
+// million vertices would otherwise cost a million node allocations of a std::unordered_map
+// and their page faults — most of the time of loading a large model.
+size_t TableSize(size_t entries) { return std::bit_ceil(std::max<size_t>(2 * entries, 16)); }
+constexpr uint32_t kEmpty = UINT32_MAX;
 
-// Welds vertices by exact position: returns a canonical id per position index.
+uint64_t Mix(uint64_t h) {  // a 64-bit finaliser (splitmix64)
+    h ^= h >> 30;
+    h *= 0xBF58476D1CE4E5B9ull;
+    h ^= h >> 27;
+    h *= 0x94D049BB133111EBull;
+    return h ^ (h >> 31);
+}
+
+// Welds vertices by exact position (+0 and -0 together, a NaN coordinate with nothing):
+// a canonical id per position index, numbered in order of first appearance.
 std::vector<uint32_t> WeldIds(const std::vector<Vec3>& positions) {
-    std::unordered_map<Vec3, uint32_t, Vec3Hash> ids;
-    ids.reserve(positions.size());
+    auto bits = [](float f) {
+        if (f == 0.0f) f = 0.0f;  // +0 and -0 weld together
+        uint32_t u;
+        std::memcpy(&u, &f, 4);
+        return u;
+    };
+    std::vector<uint32_t> table(TableSize(positions.size()), kEmpty);
+    const size_t mask = table.size() - 1;
     std::vector<uint32_t> out(positions.size());
+    uint32_t next = 0;
     for (size_t i = 0; i < positions.size(); ++i) {
-        auto [it, inserted] = ids.try_emplace(positions[i], static_cast<uint32_t>(ids.size()));
-        out[i] = it->second;
+        const Vec3& p = positions[i];
+        if (!(p == p)) {  // NaN equals nothing, itself included
+            out[i] = next++;
+            continue;
+        }
+        size_t slot = Mix((uint64_t(bits(p.x)) << 32 | bits(p.y)) ^ Mix(bits(p.z))) & mask;
+        for (;; slot = (slot + 1) & mask) {
+            const uint32_t j = table[slot];
+            if (j == kEmpty) {
+                table[slot] = static_cast<uint32_t>(i);
+                out[i] = next++;
+                break;
+            }
+            if (positions[j] == p) {
+                out[i] = out[j];
+                break;
+            }
+        }
     }
     return out;
 }
@@ -60,18 +88,22 @@ std::vector<uint32_t> WeldIds(const std::vector<Vec3>& positions) {
 CleanReport CleanMesh(TriangleMesh* mesh) {
     CleanReport report;
     const std::vector<uint32_t> weld = WeldIds(mesh->positions);
-    struct Key {
-        uint32_t a, b, c;
-        bool operator==(const Key&) const = default;
-    };
-    struct KeyHash {
-        size_t operator()(const Key& k) const {
-            return (static_cast<size_t>(k.a) * 0x9E3779B97F4A7C15ull) ^
-                   (static_cast<size_t>(k.b) * 0xC2B2AE3D27D4EB4Full) ^ k.c;
+    // The kept triangles' welded ids, sorted, by a table of indices into `keys`.
+    std::vector<std::array<uint32_t, 3>> keys;
+    keys.reserve(mesh->triangles.size());
+    std::vector<uint32_t> table(TableSize(mesh->triangles.size()), kEmpty);
+    const size_t mask = table.size() - 1;
+    auto insert = [&](const std::array<uint32_t, 3>& k) {  // false if already there
+        size_t slot = Mix((uint64_t(k[0]) << 32 | k[1]) ^ Mix(k[2])) & mask;
+        for (;; slot = (slot + 1) & mask) {
+            if (table[slot] == kEmpty) {
+                table[slot] = static_cast<uint32_t>(keys.size());
+                keys.push_back(k);
+                return true;
+            }
+            if (keys[table[slot]] == k) return false;
         }
     };
-    std::unordered_map<Key, uint32_t, KeyHash> seen;
-    seen.reserve(mesh->triangles.size());
     size_t out = 0;
     for (size_t i = 0; i < mesh->triangles.size(); ++i) {
         const auto& t = mesh->triangles[i];
@@ -83,9 +115,9 @@ CleanReport CleanMesh(TriangleMesh* mesh) {
             ++report.degenerate;
             continue;
         }
-        uint32_t ids[3] = {weld[t[0]], weld[t[1]], weld[t[2]]};
-        std::sort(ids, ids + 3);
-        if (!seen.emplace(Key{ids[0], ids[1], ids[2]}, 0).second) {
+        std::array<uint32_t, 3> ids = {weld[t[0]], weld[t[1]], weld[t[2]]};
+        std::sort(ids.begin(), ids.end());
+        if (!insert(ids)) {
             ++report.duplicate;
             continue;
         }
