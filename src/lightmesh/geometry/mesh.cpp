@@ -101,7 +101,8 @@ CleanReport CleanMesh(TriangleMesh* mesh) {
                 keys.push_back(k);
                 return true;
             }
-            if (keys[table[slot]] == k) return false;
+            const std::array<uint32_t, 3>& e = keys[table[slot]];
+            if (e[0] == k[0] && e[1] == k[1] && e[2] == k[2]) return false;  // (not a memcmp call)
         }
     };
     size_t out = 0;
