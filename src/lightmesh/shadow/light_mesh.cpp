@@ -102,20 +102,22 @@ namespace {
 
 using namespace kernels;
 
-/// Zero-filled storage from calloc: the kernel hands out zero pages on first touch, so a
-/// large lattice costs nothing until its nodes are used (lazy, like the nodes themselves).
-/// std::atomic of an integer is a standard-layout type whose zero bytes are the value 0.
+/// Zero-filled storage whose pages the kernel hands out on first touch (AllocateZeroed: on
+/// huge pages from 1 to 64 MiB), so a large lattice costs nothing until its nodes are used
+/// (lazy, like the nodes themselves). std::atomic of an integer is a standard-layout type
+/// whose zero bytes are the value 0.
 struct FreeDeleter {
     void operator()(void* p) const { std::free(p); }
 };
 template <typename T>
-using ZeroedPtr = std::unique_ptr<T[], FreeDeleter>;
+using ZeroedPtr = std::unique_ptr<T[], ZeroedDeleter>;
 template <typename T>
 ZeroedPtr<std::atomic<T>> ZeroedArray(uint64_t count) {
     static_assert(std::atomic<T>::is_always_lock_free && sizeof(std::atomic<T>) == sizeof(T));
-    void* p = std::calloc(std::max<uint64_t>(count, 1), sizeof(T));
-    if (!p) throw std::bad_alloc();
-    return ZeroedPtr<std::atomic<T>>(static_cast<std::atomic<T>*>(p));
+    if (count > std::numeric_limits<size_t>::max() / sizeof(T)) throw std::bad_alloc();
+    ZeroedDeleter deleter;
+    void* p = AllocateZeroed(std::max<uint64_t>(count, 1) * sizeof(T), &deleter);
+    return ZeroedPtr<std::atomic<T>>(static_cast<std::atomic<T>*>(p), deleter);
 }
 
 // The most triangles a cell's reach list keeps (more: every segment of its points goes to

@@ -3,10 +3,15 @@
 
 #include <sys/mman.h>
 
+#include <algorithm>
+#include <cstdint>
+
 namespace lm {
+namespace {
+constexpr size_t kHugePage = size_t(2) << 20;
+}  // namespace
 
 void* AllocateLarge(size_t bytes) {
-    constexpr size_t kHugePage = size_t(2) << 20;
     if (bytes >= kHugePage / 2) {
         const size_t rounded = (bytes + kHugePage - 1) & ~(kHugePage - 1);
         void* p = std::aligned_alloc(kHugePage, rounded);
@@ -18,6 +23,35 @@ void* AllocateLarge(size_t bytes) {
     void* p = std::malloc(bytes ? bytes : 1);
     if (!p) throw std::bad_alloc();
     return p;
+}
+
+void* AllocateZeroed(size_t bytes, ZeroedDeleter* deleter) {
+    deleter->mapped = 0;
+    if (bytes >= kHugePage / 2 && bytes <= kZeroedHugeLimit) {
+        const size_t length = (bytes + kHugePage - 1) & ~(kHugePage - 1);
+        // Map a huge page more than needed and unmap the slack on both sides of the 2 MiB
+        // aligned part.
+        void* raw = mmap(nullptr, length + kHugePage, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+        if (raw != MAP_FAILED) {
+            const uintptr_t begin = reinterpret_cast<uintptr_t>(raw);
+            const uintptr_t aligned = (begin + kHugePage - 1) & ~(kHugePage - 1);
+            if (aligned > begin) munmap(raw, aligned - begin);
+            const size_t tail = begin + length + kHugePage - (aligned + length);
+            if (tail) munmap(reinterpret_cast<void*>(aligned + length), tail);
+            madvise(reinterpret_cast<void*>(aligned), length, MADV_HUGEPAGE);
+            deleter->mapped = length;
+            return reinterpret_cast<void*>(aligned);
+        }
+    }
+    void* p = std::calloc(std::max<size_t>(bytes, 1), 1);
+    if (!p) throw std::bad_alloc();
+    return p;
+}
+
+void ZeroedDeleter::operator()(void* p) const noexcept {
+    if (!p) return;
+    if (mapped) munmap(p, mapped);
+    else std::free(p);
 }
 
 }  // namespace lm

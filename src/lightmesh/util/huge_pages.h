@@ -20,6 +20,17 @@ namespace lm {
 /// that big is filled soon). Free with std::free. Throws std::bad_alloc.
 void* AllocateLarge(size_t bytes);
 
+/// Zero-filled memory whose pages are mapped on first touch (lazily, like calloc's): from
+/// 1 MiB to kZeroedHugeLimit an anonymous mapping, 2 MiB aligned and marked for huge pages;
+/// other sizes from calloc (beyond the limit a sparse use would make whole 2 MiB pages
+/// resident). Release with ZeroedDeleter. Throws std::bad_alloc.
+constexpr size_t kZeroedHugeLimit = size_t(64) << 20;
+struct ZeroedDeleter {
+    size_t mapped = 0;  // the mapping's length; 0: from calloc
+    void operator()(void* p) const noexcept;
+};
+void* AllocateZeroed(size_t bytes, ZeroedDeleter* deleter);
+
 /// std::allocator's interface over AllocateLarge, for std::vector of big buffers (images,
 /// the light mesh's per-triangle tables). Values are default-initialised by the vector as
 /// usual; only where the pages come from changes.

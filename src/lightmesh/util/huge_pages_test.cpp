@@ -27,6 +27,26 @@ TEST(HugePages, LargeBuffersAreAlignedToHugePagesAndSmallOnesWork) {
     EXPECT_EQ(a.size(), (size_t(1) << 20) + 1);
 }
 
+// Zeroed memory is zero whatever its size, huge-page aligned between 1 MiB and the limit,
+// and released by its deleter (mapped or from calloc).
+TEST(HugePages, ZeroedMemoryIsZeroAndAlignedWhereItIsMapped) {
+    for (size_t bytes : {size_t(1), size_t(100000), size_t(1) << 20, (size_t(3) << 20) + 5, kZeroedHugeLimit + 1}) {
+        ZeroedDeleter deleter;
+        auto* p = static_cast<unsigned char*>(AllocateZeroed(bytes, &deleter));
+        ASSERT_NE(p, nullptr);
+        EXPECT_EQ(deleter.mapped != 0, bytes >= (size_t(1) << 20) && bytes <= kZeroedHugeLimit) << bytes;
+        if (deleter.mapped) {
+            EXPECT_EQ(reinterpret_cast<uintptr_t>(p) % (size_t(2) << 20), 0u) << bytes;
+            EXPECT_GE(deleter.mapped, bytes);
+        }
+        size_t nonZero = 0;
+        for (size_t i = 0; i < bytes; i += 4093) nonZero += p[i] != 0;
+        EXPECT_EQ(nonZero + p[bytes - 1], 0u) << bytes;
+        p[bytes - 1] = 1;
+        deleter(p);
+    }
+}
+
 // Where the kernel gives huge pages on request (transparent huge pages "madvise" or
 // "always"), filling a 16 MiB buffer must fault far fewer times than its 4,096 small pages.
 TEST(HugePages, FillingALargeBufferTakesFewPageFaults) {
