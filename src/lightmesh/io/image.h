@@ -9,8 +9,8 @@
 
 namespace lm {
 
-/// Linear RGB pixels, row-major from the top-left corner. (On huge pages from 1 MiB up,
-/// 512×512 and larger: the first touch of each 4 KiB page would cost a page fault.)
+/// Linear RGB pixels, row-major from the top-left corner. (On huge pages from 256 KiB up,
+/// 150×150 and larger: the first touch of each 4 KiB page would cost a page fault.)
 struct Image {
     int width = 0, height = 0;
     std::vector<Color, HugePageAllocator<Color>> pixels;

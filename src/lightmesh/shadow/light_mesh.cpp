@@ -103,7 +103,7 @@ namespace {
 using namespace kernels;
 
 /// Zero-filled storage whose pages the kernel hands out on first touch (AllocateZeroed: on
-/// huge pages from 1 to 64 MiB), so a large lattice costs nothing until its nodes are used
+/// huge pages from 256 KiB to 64 MiB), so a large lattice costs nothing until its nodes are used
 /// (lazy, like the nodes themselves). std::atomic of an integer is a standard-layout type
 /// whose zero bytes are the value 0.
 struct FreeDeleter {

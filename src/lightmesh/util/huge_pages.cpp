@@ -12,7 +12,7 @@ constexpr size_t kHugePage = size_t(2) << 20;
 }  // namespace
 
 void* AllocateLarge(size_t bytes) {
-    if (bytes >= kHugePage / 2) {
+    if (bytes >= kHugePage / 8) {
         const size_t rounded = (bytes + kHugePage - 1) & ~(kHugePage - 1);
         void* p = std::aligned_alloc(kHugePage, rounded);
         if (!p) throw std::bad_alloc();
@@ -27,7 +27,7 @@ void* AllocateLarge(size_t bytes) {
 
 void* AllocateZeroed(size_t bytes, ZeroedDeleter* deleter) {
     deleter->mapped = 0;
-    if (bytes >= kHugePage / 2 && bytes <= kZeroedHugeLimit) {
+    if (bytes >= kHugePage / 8 && bytes <= kZeroedHugeLimit) {
         const size_t length = (bytes + kHugePage - 1) & ~(kHugePage - 1);
         // Map a huge page more than needed and unmap the slack on both sides of the 2 MiB
         // aligned part.

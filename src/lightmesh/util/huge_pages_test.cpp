@@ -17,7 +17,7 @@ TEST(HugePages, LargeBuffersAreAlignedToHugePagesAndSmallOnesWork) {
         void* p = AllocateLarge(bytes);
         ASSERT_NE(p, nullptr) << bytes;
         std::memset(p, 0xAB, bytes);
-        if (bytes >= (size_t(1) << 20)) EXPECT_EQ(reinterpret_cast<uintptr_t>(p) % (size_t(2) << 20), 0u) << bytes;
+        if (bytes >= (size_t(1) << 18)) EXPECT_EQ(reinterpret_cast<uintptr_t>(p) % (size_t(2) << 20), 0u) << bytes;
         std::free(p);
     }
     std::vector<int, HugePageAllocator<int>> a(1 << 20, 7), b(1 << 20, 7);
@@ -27,14 +27,14 @@ TEST(HugePages, LargeBuffersAreAlignedToHugePagesAndSmallOnesWork) {
     EXPECT_EQ(a.size(), (size_t(1) << 20) + 1);
 }
 
-// Zeroed memory is zero whatever its size, huge-page aligned between 1 MiB and the limit,
+// Zeroed memory is zero whatever its size, huge-page aligned between 256 KiB and the limit,
 // and released by its deleter (mapped or from calloc).
 TEST(HugePages, ZeroedMemoryIsZeroAndAlignedWhereItIsMapped) {
     for (size_t bytes : {size_t(1), size_t(100000), size_t(1) << 20, (size_t(3) << 20) + 5, kZeroedHugeLimit + 1}) {
         ZeroedDeleter deleter;
         auto* p = static_cast<unsigned char*>(AllocateZeroed(bytes, &deleter));
         ASSERT_NE(p, nullptr);
-        EXPECT_EQ(deleter.mapped != 0, bytes >= (size_t(1) << 20) && bytes <= kZeroedHugeLimit) << bytes;
+        EXPECT_EQ(deleter.mapped != 0, bytes >= (size_t(1) << 18) && bytes <= kZeroedHugeLimit) << bytes;
         if (deleter.mapped) {
             EXPECT_EQ(reinterpret_cast<uintptr_t>(p) % (size_t(2) << 20), 0u) << bytes;
             EXPECT_GE(deleter.mapped, bytes);
