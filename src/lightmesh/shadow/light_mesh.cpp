@@ -103,9 +103,9 @@ namespace {
 using namespace kernels;
 
 /// Zero-filled storage whose pages the kernel hands out on first touch (AllocateZeroed: on
-/// huge pages from 256 KiB to 64 MiB), so a large lattice costs nothing until its nodes are used
-/// (lazy, like the nodes themselves). std::atomic of an integer is a standard-layout type
-/// whose zero bytes are the value 0.
+/// huge pages from 256 KiB to 64 MiB), so a large lattice costs nothing until its nodes
+/// are used (lazy, like the nodes themselves). std::atomic of an integer is a
+/// standard-layout type whose zero bytes are the value 0.
 struct FreeDeleter {
     void operator()(void* p) const { std::free(p); }
 };
@@ -257,7 +257,8 @@ class LightMesh final : public LightMeshShadows {
         const uint64_t runs = std::clamp<uint64_t>((uint64_t(1) << 24) / std::max<uint64_t>(bricks, 1), 1,
                                                    std::min<uint64_t>(16, std::max<size_t>(planes_.size() / 4096, 1)));
         const uint64_t perRun = (planes_.size() + runs - 1) / runs;
-        std::vector<uint64_t, HugePageAllocator<uint64_t>> at(runs * bricks, 0);  // run r's count, then its next slot, in brick b: at[r·bricks + b]
+        // Run r's count in brick b, then its next slot there: at[r·bricks + b].
+        std::vector<uint64_t, HugePageAllocator<uint64_t>> at(runs * bricks, 0);
         auto each = [&](size_t t, auto&& visit) {
             int64_t b0[3], b1[3];
             for (int a = 0; a < 3; ++a) range(planes_[t], a, &b0[a], &b1[a]);
@@ -431,8 +432,9 @@ class LightMesh final : public LightMeshShadows {
     // A summary belongs to a mesh cell (the cell whose lower corner is node (ci, cj, ck))
     // and to its main plane Π: the plane of the largest triangle meeting the cell (ties:
     // the lower id, so it does not depend on the lists' order). It is used by the points of
-    // the cell that lie on Π (within the cell's tolerance delta, normal within kPlaneEps), which is most
-    // points of floors, walls and other flat faces. For each side s of Π:
+    // the cell that lie on Π (within planeDelta_, normal within kPlaneEps; the planar
+    // argument below within the cell's own tolerance delta), which is most points of
+    // floors, walls and other flat faces. For each side s of Π:
     //  - uniform_s: every node a point of the cell may use (cellNodes_) that lies on side
     //    s of Π has the same visibility bits bits_s (and, for СТ, the same inside flag).
     //    A point on Π seen from side s uses only such nodes (its front test keeps nodes
