@@ -1592,12 +1592,17 @@ class LightMesh final : public LightMeshShadows {
         }
         frontBegin_.push_back(static_cast<uint32_t>(frontBlocks_.size()));
         // The union of all sub-positions' sets: every node a point of a cell may use, in
-        // memory order (the cell summaries read them all).
-        std::vector<std::array<int8_t, 3>> all(t.offsets.begin(), t.offsets.end());
-        std::sort(all.begin(), all.end(), [](const auto& a, const auto& b) {
-            return std::tie(a[2], a[1], a[0]) < std::tie(b[2], b[1], b[0]);
-        });
-        all.erase(std::unique(all.begin(), all.end()), all.end());
+        // memory order (the cell summaries read them all): marked in the offsets' cube,
+        // then read back z, y, x.
+        std::vector<std::array<int8_t, 3>> all;
+        std::vector<bool> present(cubeNodes);
+        for (const auto& o : t.offsets)
+            present[(o[0] - minOffset_) + cubeSide * ((o[1] - minOffset_) + static_cast<uint64_t>(cubeSide) * (o[2] - minOffset_))] = true;
+        for (int z = 0, e = 0; z < cubeSide; ++z)
+            for (int y = 0; y < cubeSide; ++y)
+                for (int x = 0; x < cubeSide; ++x, ++e)
+                    if (present[e]) all.push_back({static_cast<int8_t>(x + minOffset_), static_cast<int8_t>(y + minOffset_),
+                                                   static_cast<int8_t>(z + minOffset_)});
         for (const auto& o : all) cellNodes_.push_back(linear(o[0], o[1], o[2]));
         patchesFit_ = cubeFits;
         cellOffsets_ = std::move(all);
@@ -1702,7 +1707,7 @@ class LightMesh final : public LightMeshShadows {
     // The templates again, as FrontBlocks: sub-position s's boundary entries are blocks
     // frontBegin_[s] … frontInner_[s] - 1, its inner entries frontInner_[s] … frontBegin_[s + 1] - 1,
     // each run in the template's order.
-    std::vector<FrontBlock> frontBlocks_;
+    std::vector<FrontBlock, HugePageAllocator<FrontBlock>> frontBlocks_;  // ~0.5 MiB at kI 2
     std::vector<uint32_t> frontBegin_, frontInner_;
     FrontFunction frontMasks_ = nullptr;
     CullFunction cull_ = nullptr;

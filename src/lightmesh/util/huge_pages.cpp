@@ -11,7 +11,7 @@ namespace {
 constexpr size_t kHugePage = size_t(2) << 20;
 }  // namespace
 
-void* AllocateLarge(size_t bytes) {
+void* AllocateLarge(size_t bytes, size_t align) {
     if (bytes >= kHugePage / 8) {
         const size_t rounded = (bytes + kHugePage - 1) & ~(kHugePage - 1);
         void* p = std::aligned_alloc(kHugePage, rounded);
@@ -20,7 +20,9 @@ void* AllocateLarge(size_t bytes) {
         madvise(p, rounded, MADV_HUGEPAGE);
         return p;
     }
-    void* p = std::malloc(bytes ? bytes : 1);
+    void* p = align <= alignof(std::max_align_t)
+                  ? std::malloc(bytes ? bytes : 1)
+                  : std::aligned_alloc(align, (std::max<size_t>(bytes, 1) + align - 1) & ~(align - 1));
     if (!p) throw std::bad_alloc();
     return p;
 }

@@ -20,6 +20,13 @@ TEST(HugePages, LargeBuffersAreAlignedToHugePagesAndSmallOnesWork) {
         if (bytes >= (size_t(1) << 18)) EXPECT_EQ(reinterpret_cast<uintptr_t>(p) % (size_t(2) << 20), 0u) << bytes;
         std::free(p);
     }
+    struct alignas(64) Wide {
+        float v[16];
+    };
+    for (size_t n : {1, 3, 100}) {  // below the huge-page size: the type's alignment still holds
+        std::vector<Wide, HugePageAllocator<Wide>> w(n);
+        EXPECT_EQ(reinterpret_cast<uintptr_t>(w.data()) % 64, 0u) << n;
+    }
     std::vector<int, HugePageAllocator<int>> a(1 << 20, 7), b(1 << 20, 7);
     EXPECT_EQ(a, b);
     a.push_back(8);
