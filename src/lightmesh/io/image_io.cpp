@@ -23,8 +23,8 @@
 
 #include "lightmesh/io/image.h"
 #include "lightmesh/util/error.h"
-#include "lightmesh/util/parallel.h"
 #include "lightmesh/util/huge_pages.h"
+#include "lightmesh/util/parallel.h"
 #include "lightmesh/util/system.h"
 
 // stb's PNG decoder lives in this one translation unit, with internal linkage.

@@ -106,9 +106,6 @@ using namespace kernels;
 /// huge pages from 256 KiB to 64 MiB), so a large lattice costs nothing until its nodes
 /// are used (lazy, like the nodes themselves). std::atomic of an integer is a
 /// standard-layout type whose zero bytes are the value 0.
-struct FreeDeleter {
-    void operator()(void* p) const { std::free(p); }
-};
 template <typename T>
 using ZeroedPtr = std::unique_ptr<T[], ZeroedDeleter>;
 template <typename T>
@@ -119,6 +116,11 @@ ZeroedPtr<std::atomic<T>> ZeroedArray(uint64_t count) {
     void* p = AllocateZeroed(std::max<uint64_t>(count, 1) * sizeof(T), &deleter);
     return ZeroedPtr<std::atomic<T>>(static_cast<std::atomic<T>*>(p), deleter);
 }
+
+// For the arenas' chunks (AllocateLarge).
+struct FreeDeleter {
+    void operator()(void* p) const { std::free(p); }
+};
 
 // The most triangles a cell's reach list keeps (more: every segment of its points goes to
 // the back-end). Measured: 1024 instead made the castle no faster and the playground 17 %
@@ -166,10 +168,10 @@ class LightMesh final : public LightMeshShadows {
         // in front of it: its visibility there is decided by rounding.
         const Vec3 far = lattice_.Node(lattice_.nx - 1, lattice_.ny - 1, lattice_.nz - 1);
         const float magnitude = std::max(MaxComponent(Abs(lattice_.origin)), MaxComponent(Abs(far)));
-        planeDelta_ = 2e-7f * magnitude;
+        planeDelta_ = PlaneDelta(magnitude);
         frontEps_ = (4 * planeDelta_ + 2 * kPlaneEps * (lattice_.r + 2 * lattice_.h)) / lattice_.h;
         reachMargin_ = 1e-3f * lattice_.h + 1e-5f * magnitude;
-        cullMargin_ = 4 * planeDelta_;
+        cullMargin_ = CullMargin(planeDelta_);
         // A point's segments end at nodes within r of its snapped sub-position.
         pointReach_ = lattice_.r + 0.87f * lattice_.h / static_cast<float>(std::max(templates_.templates.ns, 1)) + reachMargin_;
         summaries_ = variant_.enumeration == SphereEnumeration::Templates &&
@@ -658,7 +660,7 @@ class LightMesh final : public LightMeshShadows {
         q.x = x;
         q.lo = Min(x, list.qlo);
         q.hi = Max(x, list.qhi);
-        q.m = 4 * list.delta;  // cullMargin_'s rule with the cell's tolerance
+        q.m = CullMargin(list.delta);
         q.mQ = q.m + 4 * list.delta;
         const bool sees = patchSees_(list.arrays, q);
         list.known[word] |= mask;
@@ -695,7 +697,7 @@ class LightMesh final : public LightMeshShadows {
         q.lo = sp.p - Vec3(pointReach_);
         q.hi = sp.p + Vec3(pointReach_);
         q.o = sp.origin;
-        q.margin = 4 * c.delta;  // cullMargin_'s rule with the cell's tolerance
+        q.margin = CullMargin(c.delta);
         q.far = pointReach_ + 2 * q.margin;
         q.reach = pointReach_;
         q.delta8 = 8 * c.delta;
@@ -846,7 +848,7 @@ class LightMesh final : public LightMeshShadows {
         float magnitude = std::max(MaxComponent(Abs(reachBox.lo)), MaxComponent(Abs(reachBox.hi)));
         for (const uint32_t t : reach)
             for (int k = 0; k < 3; ++k) magnitude = std::max(magnitude, MaxComponent(Abs(mesh.Vertex(t, k))));
-        c.delta = std::min(planeDelta_, 2e-7f * magnitude);
+        c.delta = std::min(planeDelta_, PlaneDelta(magnitude));
         if (variant_.local == LocalVisibility::Consensus) {
             if (reach.size() > kMaxReach) {
                 c.reachCount = kTooMany;
@@ -1560,10 +1562,11 @@ class LightMesh final : public LightMeshShadows {
         const uint64_t cubeNodes = static_cast<uint64_t>(cubeSide) * cubeSide * cubeSide;
         cubeWords_ = static_cast<uint32_t>(std::min<uint64_t>((cubeNodes + 63) / 64, kCubeWords));
         const bool cubeFits = cubeNodes <= 64 * kCubeWords;
-        auto cubeBit = [&](const std::array<int8_t, 3>& o) {
-            return cubeFits ? static_cast<uint16_t>((o[0] - minOffset_) + cubeSide * ((o[1] - minOffset_) + cubeSide * (o[2] - minOffset_)))
-                            : uint16_t(0);
+        // An offset's place in the cube of all offsets, x fastest.
+        auto cubeIndex = [&](const std::array<int8_t, 3>& o) {
+            return static_cast<uint64_t>((o[0] - minOffset_) + cubeSide * ((o[1] - minOffset_) + cubeSide * (o[2] - minOffset_)));
         };
+        auto cubeBit = [&](const std::array<int8_t, 3>& o) { return cubeFits ? static_cast<uint16_t>(cubeIndex(o)) : uint16_t(0); };
         auto pack = [&](uint32_t from, uint32_t to) {
             for (uint32_t first = from; first < to; first += 8) {
                 FrontBlock b;
@@ -1596,8 +1599,7 @@ class LightMesh final : public LightMeshShadows {
         // then read back z, y, x.
         std::vector<std::array<int8_t, 3>> all;
         std::vector<bool> present(cubeNodes);
-        for (const auto& o : t.offsets)
-            present[(o[0] - minOffset_) + cubeSide * ((o[1] - minOffset_) + static_cast<uint64_t>(cubeSide) * (o[2] - minOffset_))] = true;
+        for (const auto& o : t.offsets) present[cubeIndex(o)] = true;
         for (int z = 0, e = 0; z < cubeSide; ++z)
             for (int y = 0; y < cubeSide; ++y)
                 for (int x = 0; x < cubeSide; ++x, ++e)
@@ -1704,6 +1706,12 @@ class LightMesh final : public LightMeshShadows {
     float invH_ = 0;
     Bounds3 sceneBox_;
     float planeDelta_ = 0, frontEps_ = 0, reachMargin_ = 0, cullMargin_ = 0, pointReach_ = 0;
+    // The plane margin of the segment culling and the patches' test for a tolerance delta:
+    // cullMargin_ at the scene's (the triangles' grown boxes), a cell's at its own.
+    static float CullMargin(float delta) { return 4 * delta; }
+    // How far from a plane a point may lie and still count as on it, for coordinates up to
+    // `magnitude`: a few float ulps (planeDelta_ at the lattice's, a cell's at its own).
+    static float PlaneDelta(float magnitude) { return 2e-7f * magnitude; }
     // The templates again, as FrontBlocks: sub-position s's boundary entries are blocks
     // frontBegin_[s] … frontInner_[s] - 1, its inner entries frontInner_[s] … frontBegin_[s + 1] - 1,
     // each run in the template's order.
