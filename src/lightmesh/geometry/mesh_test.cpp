@@ -2,8 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
+#include <set>
 
 #include "lightmesh/scene/shapes.h"
 
@@ -22,6 +25,44 @@ TEST(Mesh, CleanDropsDegenerateAndDuplicateTriangles) {
     EXPECT_EQ(r.degenerate, 3u);
     ASSERT_EQ(m.TriangleCount(), 2u);
     EXPECT_EQ(m.materialIds, (std::vector<uint32_t>{0, 6}));
+}
+
+// +0 and -0 are one position; and on a mesh large enough for the open-addressing tables
+// to collide often, the triangles kept are exactly those a plain set of sorted position
+// triples keeps (first occurrence wins).
+TEST(Mesh, CleanWeldsSignedZerosAndMatchesASetOnALargeMesh) {
+    TriangleMesh z;
+    z.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-0.0f, 0, -0.0f}};
+    z.triangles = {{0, 1, 2}, {3, 1, 2}};
+    EXPECT_EQ(CleanMesh(&z).duplicate, 1u);
+
+    TriangleMesh m;
+    uint32_t seed = 12345;
+    auto next = [&] { return seed = seed * 1664525u + 1013904223u; };
+    for (int i = 0; i < 60000; ++i)  // a 40×40 lattice of positions, many repeated
+        m.positions.push_back({static_cast<float>(next() % 40), static_cast<float>(next() % 40), 0.5f});
+    for (int i = 0; i < 50000; ++i) {
+        m.triangles.push_back({next() % 60000, next() % 60000, next() % 60000});
+        m.materialIds.push_back(static_cast<uint32_t>(i));
+    }
+    std::vector<uint32_t> expected;
+    std::set<std::array<std::array<float, 3>, 3>> seen;
+    for (uint32_t i = 0; i < m.triangles.size(); ++i) {
+        std::array<std::array<float, 3>, 3> key;
+        for (int k = 0; k < 3; ++k) {
+            const Vec3& p = m.positions[m.triangles[i][k]];
+            key[k] = {p.x, p.y, p.z};
+        }
+        const Vec3 e1 = m.positions[m.triangles[i][1]] - m.positions[m.triangles[i][0]];
+        const Vec3 e2 = m.positions[m.triangles[i][2]] - m.positions[m.triangles[i][0]];
+        if (!(LengthSquared(Cross(e1, e2)) > 0)) continue;  // degenerate
+        std::sort(key.begin(), key.end());
+        if (seen.insert(key).second) expected.push_back(i);
+    }
+    CleanMesh(&m);
+    EXPECT_EQ(m.materialIds, expected);
+    EXPECT_GT(m.materialIds.size(), 1000u);
+    EXPECT_LT(m.materialIds.size(), 50000u);
 }
 
 TEST(Mesh, EdgeReportSeesClosedOpenAndNonManifold) {
