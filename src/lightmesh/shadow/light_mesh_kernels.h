@@ -5,7 +5,7 @@
 // segment culling). Each vectorised kernel performs its scalar oracle's operations in the
 // same order (the library is built with -ffp-contract=off), so every width gives the same
 // answers bit for bit; LightMeshOptions::simdWidth picks one for the tests. Internal to
-// shadow/light_mesh.cpp.
+// the light mesh (light_mesh_impl.h and its parts).
 #pragma once
 
 #include <algorithm>

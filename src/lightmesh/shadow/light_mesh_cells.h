@@ -1,0 +1,306 @@
+// light_mesh_cells.h -- cell summaries (ours, not in the paper; exact): the triangles binned by
+// brick of cells, each cell's main plane, tolerance and reach list, and the per-side uniform
+// bits.
+// Part of LightMesh<Word>'s definition (light_mesh_impl.h): included once, by light_mesh.cpp,
+// whose anonymous namespace it shares.
+#pragma once
+
+#include "lightmesh/shadow/light_mesh_impl.h"
+
+namespace lm {
+namespace {
+
+// Every brick's candidate list: the triangles whose bounding box meets the box of all
+// that its cells' summaries look at (their reach), in triangle order. Built once, in
+// parallel, in two passes (count, fill).
+// False, having stored nothing, when the lists would exceed BinBudget().
+template <typename Word>
+inline bool LightMesh<Word>::BinTrianglesByBrick(uint64_t bricksZ) {
+    const LightMeshLattice& L = lattice_;
+    const uint64_t nb[3] = {bricksX_, bricksY_, bricksZ};
+    const float lo[3] = {static_cast<float>(minOffset_), static_cast<float>(minOffset_), static_cast<float>(minOffset_)};
+    const float span = static_cast<float>(kBrick - 1 + maxOffset_);
+    const float slack = reachMargin_ / L.h + 0.01f;
+    // The bricks [b0, b1] per axis whose reach meets the triangle's box (none if b0 > b1).
+    auto range = [&](const TrianglePlane& pl, int axis, int64_t* b0, int64_t* b1) {
+        const float tlo = (pl.lo[axis] - L.origin[axis]) / L.h, thi = (pl.hi[axis] - L.origin[axis]) / L.h;
+        // brick B covers nodes [kBrick·B + minOffset, kBrick·B + span] (± slack)
+        const float f0 = std::ceil((tlo - span - slack) / kBrick), f1 = std::floor((thi - lo[axis] + slack) / kBrick);
+        const float maxB = static_cast<float>(nb[axis] - 1);
+        *b0 = static_cast<int64_t>(std::clamp(f0, 0.0f, maxB + 1));
+        *b1 = static_cast<int64_t>(std::clamp(f1, -1.0f, maxB));
+    };
+    const uint64_t bricks = bricksX_ * bricksY_ * bricksZ;
+    // The pairs first, without visiting them: a hostile file must not make this a hang.
+    std::atomic<uint64_t> pairs{0};
+    ParallelFor(size_t(0), planes_.size(), [&](size_t t) {
+        uint64_t product = 1;
+        for (int a = 0; a < 3; ++a) {
+            int64_t b0, b1;
+            range(planes_[t], a, &b0, &b1);
+            product *= static_cast<uint64_t>(std::max<int64_t>(b1 - b0 + 1, 0));
+        }
+        pairs.fetch_add(product, std::memory_order_relaxed);
+    });
+    binPairs_ = pairs.load();
+    if (binPairs_ > BinBudget()) return false;
+    // Count and fill by contiguous runs of triangles, each with its own counts per brick:
+    // no atomics (two threads incrementing one array's counters spend most of their
+    // time trading its cache lines), and every list comes out in triangle order. Runs
+    // are fewer for a lattice with many bricks, so their counts stay within about
+    // 16 M entries.
+    const uint64_t runs = std::clamp<uint64_t>((uint64_t(1) << 24) / std::max<uint64_t>(bricks, 1), 1,
+                                               std::min<uint64_t>(16, std::max<size_t>(planes_.size() / 4096, 1)));
+    const uint64_t perRun = (planes_.size() + runs - 1) / runs;
+    // Run r's count in brick b, then its next slot there: at[r·bricks + b].
+    std::vector<uint64_t, HugePageAllocator<uint64_t>> at(runs * bricks, 0);
+    auto each = [&](size_t t, auto&& visit) {
+        int64_t b0[3], b1[3];
+        for (int a = 0; a < 3; ++a) range(planes_[t], a, &b0[a], &b1[a]);
+        for (int64_t z = b0[2]; z <= b1[2]; ++z)
+            for (int64_t y = b0[1]; y <= b1[1]; ++y)
+                for (int64_t x = b0[0]; x <= b1[0]; ++x) visit((static_cast<uint64_t>(z) * bricksY_ + y) * bricksX_ + x);
+    };
+    auto forRuns = [&](auto&& body) {
+        ParallelFor(uint64_t(0), runs, [&](uint64_t r) {
+            uint64_t* mine = at.data() + r * bricks;
+            const size_t end = std::min<size_t>(planes_.size(), (r + 1) * perRun);
+            for (size_t t = r * perRun; t < end; ++t) body(t, mine);
+        });
+    };
+    forRuns([&](size_t t, uint64_t* mine) { each(t, [&](uint64_t b) { ++mine[b]; }); });
+    // Brick b's list holds run 0's triangles, then run 1's, …: each run's slots start
+    // where the previous run's end.
+    brickStart_.assign(bricks + 1, 0);
+    uint64_t total = 0;
+    for (uint64_t b = 0; b < bricks; ++b) {
+        brickStart_[b] = total;
+        for (uint64_t r = 0; r < runs; ++r) {
+            const uint64_t n = at[r * bricks + b];
+            at[r * bricks + b] = total;
+            total += n;
+        }
+    }
+    brickStart_[bricks] = total;
+    brickTris_.resize(total);
+    forRuns([&](size_t t, uint64_t* mine) {
+        each(t, [&](uint64_t b) { brickTris_[mine[b]++] = static_cast<uint32_t>(t); });
+    });
+    return true;
+}
+
+// The summary of cell (ci, cj, ck): the stored one, or one computed into `scratch`.
+template <typename Word>
+inline auto LightMesh<Word>::Summary(int ci, int cj, int ck, CellSummary* scratch, SummaryBrick** brickOut,
+                                     int* slotOut) const -> const CellSummary& {
+    const uint64_t brick =
+        (static_cast<uint64_t>(ck / kBrick) * bricksY_ + static_cast<uint64_t>(cj / kBrick)) * bricksX_ +
+        static_cast<uint64_t>(ci / kBrick);
+    SummaryBrick* b = bricks_[brick].load(std::memory_order_acquire);
+    if (!b) b = AllocateBrick(brick);
+    const int slot = ((ck % kBrick) * kBrick + (cj % kBrick)) * kBrick + (ci % kBrick);
+    *brickOut = b;
+    *slotOut = slot;
+    uint8_t state = b->state[slot].load(std::memory_order_acquire);
+    if (state == 2) return b->cell[slot];
+    *scratch = ComputeSummary(ci, cj, ck, *b);
+    if (state == 0 && b->state[slot].compare_exchange_strong(state, 1, std::memory_order_acquire)) {
+        b->cell[slot] = *scratch;
+        b->state[slot].store(2, std::memory_order_release);
+        summarized_.fetch_add(1, std::memory_order_relaxed);
+        if (scratch->flags & (kClear0 | kClear1)) planarCells_.fetch_add(1, std::memory_order_relaxed);
+    }
+    return *scratch;
+}
+
+// Copies a reach list into the arena (chunks never move, so the pointer stays valid).
+template <typename Word>
+inline const uint32_t* LightMesh<Word>::StoreReach(const std::vector<uint32_t>& ids) const {
+    if (ids.empty()) return nullptr;
+    std::lock_guard<std::mutex> lock(brickMutex_);
+    if (reachArena_.empty() || reachUsed_ + ids.size() > kReachChunk) {
+        // Pages as used, huge ones (see AllocateBrick).
+        reachArena_.emplace_back(static_cast<uint32_t*>(AllocateLarge(kReachChunk * sizeof(uint32_t))));
+        reachUsed_ = 0;
+    }
+    uint32_t* out = reachArena_.back().get() + reachUsed_;
+    std::copy(ids.begin(), ids.end(), out);
+    reachUsed_ += ids.size();
+    reachBytes_ += ids.size() * sizeof(uint32_t);
+    return out;
+}
+
+template <typename Word>
+inline auto LightMesh<Word>::AllocateBrick(uint64_t brick) const -> SummaryBrick* {
+    SummaryBrick* fresh = nullptr;
+    {
+        // From chunks of kBricksPerChunk (on huge pages: a brick is 3.5 KiB, and a first
+        // touch of each fresh 4 KiB page would cost a page fault). A brick that loses the
+        // race below stays unused in its chunk.
+        std::lock_guard<std::mutex> lock(brickMutex_);
+        if (brickChunks_.empty() || brickChunkUsed_ == kBricksPerChunk) {
+            brickChunks_.emplace_back(static_cast<SummaryBrick*>(AllocateLarge(kBricksPerChunk * sizeof(SummaryBrick))));
+            brickChunkUsed_ = 0;
+        }
+        fresh = new (brickChunks_.back().get() + brickChunkUsed_++) SummaryBrick();
+    }
+    for (auto& st : fresh->state) st.store(0, std::memory_order_relaxed);
+    for (auto& st : fresh->sideState) st[0].store(0, std::memory_order_relaxed), st[1].store(0, std::memory_order_relaxed);
+    const uint64_t begin = brickStart_[brick], end = brickStart_[brick + 1];
+    fresh->nearCount = end - begin > kMaxBrickNear ? kTooMany : static_cast<uint32_t>(end - begin);
+    fresh->near = brickTris_.data() + begin;
+    SummaryBrick* expected = nullptr;
+    if (bricks_[brick].compare_exchange_strong(expected, fresh, std::memory_order_acq_rel)) {
+        bricksUsed_.fetch_add(1, std::memory_order_relaxed);
+        return fresh;
+    }
+    return expected;  // another thread's brick
+}
+
+template <typename Word>
+inline auto LightMesh<Word>::ComputeSummary(int ci, int cj, int ck, const SummaryBrick& brick) const -> CellSummary {
+    CellSummary c;
+    c.delta = planeDelta_;
+    const LightMeshLattice& L = lattice_;
+    const TriangleMesh& mesh = scene_.mesh;
+    thread_local std::vector<uint32_t> tris;
+    thread_local std::vector<uint32_t> reach;
+    reach.clear();
+    tris.clear();
+    const Bounds3 cellBox(L.Node(ci, cj, ck) - Vec3(reachMargin_), L.Node(ci + 1, cj + 1, ck + 1) + Vec3(reachMargin_));
+    const Bounds3 reachBox = ReachBox(ci, cj, ck);
+    // Too crowded a brick (dense foliage): no summary; such points walk and trace.
+    if (brick.nearCount == kTooMany) {
+        c.reachCount = kTooMany;
+        return c;
+    }
+    // From the brick's candidates: the reach (bounding boxes meeting the reach box) and
+    // the triangles meeting the cell (bounding boxes too: they only choose Π).
+    auto meets = [](const TrianglePlane& pl, const Bounds3& b) {
+        return pl.hi.x >= b.lo.x && pl.lo.x <= b.hi.x && pl.hi.y >= b.lo.y && pl.lo.y <= b.hi.y &&
+               pl.hi.z >= b.lo.z && pl.lo.z <= b.hi.z;
+    };
+    for (uint32_t i = 0; i < brick.nearCount; ++i) {
+        const uint32_t t = brick.near[i];
+        const TrianglePlane& pl = planes_[t];
+        if (!meets(pl, reachBox)) continue;
+        reach.push_back(t);
+        if (meets(pl, cellBox)) tris.push_back(t);
+    }
+    // The cell's tolerance: every coordinate its tests compute with lies in the reach box
+    // (nodes, points, origins) or is a vertex of a reach triangle (planes, patches).
+    float magnitude = std::max(MaxComponent(Abs(reachBox.lo)), MaxComponent(Abs(reachBox.hi)));
+    for (const uint32_t t : reach)
+        for (int k = 0; k < 3; ++k) magnitude = std::max(magnitude, MaxComponent(Abs(mesh.Vertex(t, k))));
+    c.delta = std::min(planeDelta_, PlaneDelta(magnitude));
+    if (variant_.local == LocalVisibility::Consensus) {
+        if (reach.size() > kMaxReach) {
+            c.reachCount = kTooMany;
+        } else {
+            c.reachCount = static_cast<uint32_t>(reach.size());
+            c.reach = StoreReach(reach);
+        }
+    }
+    // Π: the largest triangle meeting the cell (grown by the reach margin); a tie goes to
+    // the lower id, so the choice does not depend on the lists' order.
+    double best = 0, n[3] = {0, 0, 0};
+    uint32_t plane = UINT32_MAX;
+    for (const uint32_t t : tris) {
+        double m[3];
+        const double area = UnitNormal(mesh, t, m);
+        if (area > best || (area == best && area > 0 && t < plane)) {
+            best = area;
+            plane = t;
+            for (int a = 0; a < 3; ++a) n[a] = m[a];
+        }
+    }
+    if (plane == UINT32_MAX) return c;
+    const Vec3& v0 = mesh.Vertex(plane, 0);
+    c.n[0] = static_cast<float>(n[0]);
+    c.n[1] = static_cast<float>(n[1]);
+    c.n[2] = static_cast<float>(n[2]);
+    // Heights are measured with the stored (float) normal, as the points are tested.
+    const double nf[3] = {c.n[0], c.n[1], c.n[2]};
+    c.d = nf[0] * v0.x + nf[1] * v0.y + nf[2] * v0.z;
+    c.flags = kHasPlane;
+
+    if (variant_.local == LocalVisibility::Consensus) {
+        // clear_s: the extreme heights of the vertices of the triangles in reach (of all
+        // whose bounding box is in reach: more triangles can only make it stricter).
+        // In float from a vertex of Π: v - v0 is short and exact to half an ulp of the
+        // coordinates, so the error stays below the delta / 2 compared with.
+        const Vec3 np(c.n[0], c.n[1], c.n[2]);
+        const float limit = 0.5f * c.delta;
+        bool up = false, down = false;  // a vertex above Π (side 0), below (side 1)
+        for (size_t i = 0; i < reach.size() && !(up && down); ++i)
+            for (int k = 0; k < 3; ++k) {
+                const float hv = Dot(np, mesh.Vertex(reach[i], k) - v0);
+                up |= hv > limit;
+                down |= hv < -limit;
+            }
+        if (!up) c.flags |= kClear0;
+        if (!down) c.flags |= kClear1;
+    }
+    return c;
+}
+
+// uniform_s of the cell's plane, for one side, light by light: computed the first time
+// a point on that side asks (so only the nodes on the side that is seen are evaluated,
+// as a walk would), and stored in the brick like the summary itself.
+template <typename Word>
+inline auto LightMesh<Word>::Side(const CellSummary& c, SummaryBrick* brick, int slot, int side, int ci, int cj,
+                                  int ck) const -> SideSummary {
+    if (brick) {
+        if (brick->sideState[slot][side].load(std::memory_order_acquire) == 2) return brick->side[slot][side];
+    }
+    const LightMeshLattice& L = lattice_;
+    const int64_t base = static_cast<int64_t>(L.Index(ci, cj, ck));
+    const double nf[3] = {c.n[0], c.n[1], c.n[2]};
+    Word all = kVisMask, any = 0;
+    for (size_t e = 0; e < cellNodes_.size(); ++e) {
+        const uint64_t index = static_cast<uint64_t>(base + cellNodes_[e]);
+        const std::array<int8_t, 3>& o = cellOffsets_[e];
+        const Vec3 x = L.Node(ci + o[0], cj + o[1], ck + o[2]);  // NodeAt(index), without its divisions
+        const double hx = nf[0] * x.x + nf[1] * x.y + nf[2] * x.z - c.d;
+        if (side == 0 ? !(hx > 0) : !(hx < 0)) continue;  // the other side, or on Π
+        const Word w = Evaluate(index) & kVisMask;
+        all &= w;
+        any |= w;
+    }
+    SideSummary r{all, static_cast<Word>(~(all ^ any) & kVisMask)};
+    if (brick) {
+        uint8_t expected = 0;
+        if (brick->sideState[slot][side].compare_exchange_strong(expected, 1, std::memory_order_acquire)) {
+            brick->side[slot][side] = r;
+            brick->sideState[slot][side].store(2, std::memory_order_release);
+            if (r.uniform == kVisMask) uniformCells_.fetch_add(1, std::memory_order_relaxed);
+        }
+    }
+    return r;
+}
+
+// Unit normal of triangle t in double into n; returns twice its area (0 if degenerate).
+template <typename Word>
+inline double LightMesh<Word>::UnitNormal(const TriangleMesh& mesh, uint32_t t, double n[3]) {
+    const Vec3 &a = mesh.Vertex(t, 0), &b = mesh.Vertex(t, 1), &c = mesh.Vertex(t, 2);
+    const double e1[3] = {double(b.x) - a.x, double(b.y) - a.y, double(b.z) - a.z};
+    const double e2[3] = {double(c.x) - a.x, double(c.y) - a.y, double(c.z) - a.z};
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(len > 0) || !std::isfinite(len)) return 0;
+    for (int k = 0; k < 3; ++k) n[k] /= len;
+    return len;
+}
+
+template <typename Word>
+inline uint64_t LightMesh<Word>::SummaryBytes() const {
+    std::lock_guard<std::mutex> lock(brickMutex_);
+    return bricksUsed_.load() * sizeof(SummaryBrick) + reachBytes_ + planes_.size() * sizeof(TrianglePlane) +
+           brickTris_.size() * sizeof(uint32_t) + brickStart_.size() * sizeof(uint64_t) +
+           bricksX_ * bricksY_ * sizeof(void*) * ((lattice_.nz + kBrick - 1) / kBrick);
+}
+
+}  // namespace
+}  // namespace lm

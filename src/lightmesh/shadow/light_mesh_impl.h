@@ -1,0 +1,533 @@
+// light_mesh_impl.h -- the class behind CreateLightMeshShadows: LightMesh<Word>, its data and
+// its small members. The larger members are defined by concept in light_mesh_cells.h (cell
+// summaries), light_mesh_patches.h (front lists, cell patches, blockers), light_mesh_walks.h
+// (the sphere walks and the variants' local-visibility rules), light_mesh_penumbra.h
+// (contact-hardening penumbrae) and light_mesh.cpp (construction, node evaluation, figures).
+// Private to the light mesh: included once, by light_mesh.cpp (an anonymous namespace, as
+// when it was one file, so the compiler sees one translation unit's functions).
+#pragma once
+
+#include "lightmesh/shadow/light_mesh.h"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cstdlib>
+#include <limits>
+#include <mutex>
+#include <new>
+#include <tuple>
+#include <cmath>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include <immintrin.h>
+
+#include "lightmesh/geometry/triangle.h"
+#include "lightmesh/math/simd.h"
+#include "lightmesh/shadow/area_light.h"
+#include "lightmesh/shadow/light_mesh_kernels.h"
+#include "lightmesh/util/error.h"
+#include "lightmesh/util/huge_pages.h"
+#include "lightmesh/util/log.h"
+#include "lightmesh/util/parallel.h"
+#include "lightmesh/util/system.h"
+
+namespace lm {
+namespace {
+
+using namespace kernels;
+
+/// Zero-filled storage whose pages the kernel hands out on first touch (AllocateZeroed: on
+/// huge pages from 256 KiB to 64 MiB), so a large lattice costs nothing until its nodes
+/// are used (lazy, like the nodes themselves). std::atomic of an integer is a
+/// standard-layout type whose zero bytes are the value 0.
+template <typename T>
+using ZeroedPtr = std::unique_ptr<T[], ZeroedDeleter>;
+template <typename T>
+ZeroedPtr<std::atomic<T>> ZeroedArray(uint64_t count) {
+    static_assert(std::atomic<T>::is_always_lock_free && sizeof(std::atomic<T>) == sizeof(T));
+    if (count > std::numeric_limits<size_t>::max() / sizeof(T)) throw std::bad_alloc();
+    ZeroedDeleter deleter;
+    void* p = AllocateZeroed(std::max<uint64_t>(count, 1) * sizeof(T), &deleter);
+    return ZeroedPtr<std::atomic<T>>(static_cast<std::atomic<T>*>(p), deleter);
+}
+
+// For the arenas' chunks (AllocateLarge).
+struct FreeDeleter {
+    void operator()(void* p) const { std::free(p); }
+};
+
+// The most triangles a cell's reach list keeps (more: every segment of its points goes to
+// the back-end). Measured: 1024 instead made the castle no faster and the playground 17 %
+// slower (its thin bars fill the reach lists; building a point's front list scans them),
+// also with a point's blockers capped at 32 or 64. Again with the cells' own tolerances
+// (1024×768, Embree, medians of 2 alternated bench runs): at kI 3, 1024 took the castle's
+// segments to Embree from 2.14M to 83k and still made every scene 3–16 % slower (a short
+// segment costs Embree less than the front lists, patches and culling over long lists);
+// at kI 2, 128 made the garden 7 % faster but the castle 2.5 % slower.
+constexpr uint32_t kMaxReach = 256;
+// Cell patches keep a bit per node of a cell's neighbourhood cube: up to 64 words (kI up
+// to about 7; larger spheres test every segment point by point).
+constexpr uint32_t kCubeWords = 64;
+
+/// The light mesh with node words of type Word (uint8_t for up to 6 lights).
+///
+/// Node word layout: bits 0 … nL-1 are V(L_i, x) (paper §4: S = ⟨f, v_1…v_nL, i⟩), the top
+/// bit is f ("initialised"), the bit below it i ("inside a solid", СТ only).
+/// A node is evaluated the first time a sphere needs it. Several threads may evaluate the
+/// same node at once: each computes the same value (it depends only on the node), and a
+/// compare-and-swap from 0 lets exactly one of them store it and count it, so no lock is
+/// taken and the result never depends on the thread that won.
+template <typename Word>
+class LightMesh final : public LightMeshShadows {
+    static constexpr Word kInit = Word(1) << (sizeof(Word) * 8 - 1);
+    static constexpr Word kInside = kInit >> 1;
+    static constexpr Word kVisMask = kInside - 1;
+
+  public:
+    LightMesh(const Scene& scene, const Accelerator& accel, const LightMeshLattice& lattice,
+              const LightMeshVariant& variant, TemplateLoad templates, const LightMeshOptions& options);
+
+    // The most (triangle, brick) pairs the binning may store: far more than any scene of
+    // ordinary triangles needs (the garden: about 8 per triangle), far less than a file of
+    // huge overlapping triangles would ask for.
+    uint64_t BinBudget() const { return 64 * static_cast<uint64_t>(planes_.size()) + (uint64_t(1) << 22); }
+
+    // Cell summaries (light_mesh_cells.h): the triangles binned by brick of cells.
+    bool BinTrianglesByBrick(uint64_t bricksZ);
+
+    const LightMeshLattice& Lattice() const override { return lattice_; }
+    const LightMeshVariant& Variant() const override { return variant_; }
+    const TemplateLoad& Templates() const override { return templates_; }
+    int BytesPerNode() const override { return LightMeshStorageBytesPerNode(scene_.lights.size(), lightRadius_); }
+    uint64_t NodesEvaluated() const override { return evaluated_.load(); }
+    bool IsEvaluated(uint64_t index) const override {
+        return (nodes_[index].load(std::memory_order_acquire) & kInit) != 0;
+    }
+    uint64_t NodeVisibility(uint64_t index) const override { return NodeWord(index) & kVisMask; }
+    bool NodeInside(uint64_t index) const override { return (NodeWord(index) & kInside) != 0; }
+    float NodeBlockerParameter(uint64_t index, size_t light) const override {
+        if (light >= scene_.lights.size()) return 0.0f;
+        const Word w = NodeWord(index);
+        if (lightRadius_ == 0 || ((w >> light) & 1)) return 0.0f;
+        return BlockerParameter(index, light);
+    }
+    // The stored blocker parameter of an evaluated node whose light is blocked.
+    float BlockerParameter(uint64_t index, size_t light) const {
+        return static_cast<float>(blockerT_[index * scene_.lights.size() + light].load(std::memory_order_relaxed)) *
+               (1.0f / 65535.0f);
+    }
+
+    // Formula (2) at P for every light needed (light_mesh.cpp).
+    void Visibility(const ShadingPoint& sp, const bool* needed, float* vis,
+                    RenderCounters& counters) const override;
+
+    ShadowFigures Figures() const override;
+
+  private:
+    // A run of FrontBlocks with their front masks: visits the entries in front in the
+    // template's order.
+    struct FrontRun {
+        const FrontBlock* blocks;
+        const uint8_t* masks;
+        uint32_t count;
+        template <typename F>
+        void ForEach(F&& f) const {
+            for (uint32_t b = 0; b < count; ++b)
+                for (unsigned m = masks[b]; m; m &= m - 1) f(blocks[b], __builtin_ctz(m));
+        }
+        /// Whether f holds for some entry in front, stopping at the first.
+        template <typename F>
+        bool Any(F&& f) const {
+            for (uint32_t b = 0; b < count; ++b)
+                for (unsigned m = masks[b]; m; m &= m - 1)
+                    if (f(blocks[b], __builtin_ctz(m))) return true;
+            return false;
+        }
+    };
+
+    // ---- Cell summaries (ours, not in the paper; exact) ------------------------------
+    //
+    // A summary belongs to a mesh cell (the cell whose lower corner is node (ci, cj, ck))
+    // and to its main plane Π: the plane of the largest triangle meeting the cell (ties:
+    // the lower id, so it does not depend on the lists' order). It is used by the points of
+    // the cell that lie on Π (within planeDelta_, normal within kPlaneEps; the planar
+    // argument below within the cell's own tolerance delta), which is most points of
+    // floors, walls and other flat faces. For each side s of Π:
+    //  - uniform_s: every node a point of the cell may use (cellNodes_) that lies on side
+    //    s of Π has the same visibility bits bits_s (and, for СТ, the same inside flag).
+    //    A point on Π seen from side s uses only such nodes (its front test keeps nodes
+    //    more than frontEps_ steps in front of its own plane, which is within the
+    //    tolerances of Π), so any non-empty subset averages to exactly bits_s: formula (2)
+    //    needs neither the walk nor the node words.
+    //  - clear_s (consensus): no triangle meeting the cell grown by the sphere's reach has
+    //    a vertex more than delta / 2 on side s. A local-visibility segment runs from a
+    //    node to P's origin, both clearly on side s, inside that box, so nothing can block
+    //    it: no segment is traced.
+    // Summaries are computed on first use and published like the nodes: the values depend
+    // on the cell only, and the thread that claims a record is the only one to write it.
+    struct CellSummary {
+        float n[3] = {0, 0, 0};  // Π: unit normal and offset, (n, x) = d on Π
+        double d = 0;
+        uint8_t flags = 0;
+        // The cell's tolerance: planeDelta_'s rule at the largest coordinate the cell's
+        // computations meet (its reach box and its reach's vertices), at most planeDelta_.
+        // Every margin of the summaries, patches and culling of this cell scales with it, so
+        // a small object near the coordinates' origin in a large scene keeps them.
+        float delta = 0;
+        // Consensus: the triangles whose bounding box meets the reach box (kTooMany: more
+        // than kMaxReach; the back-end tests every segment), in an arena of the mesh.
+        const uint32_t* reach = nullptr;
+        uint32_t reachCount = 0;
+    };
+    static constexpr uint32_t kTooMany = UINT32_MAX;
+
+    // Consensus with cell summaries: the triangles that could block a segment from a node
+    // to this P. Every such segment lies in the cell's reach box, so only the reach list's
+    // triangles can block it; of those, one whose vertices all lie on or behind P's plane
+    // cannot (the segment runs clearly in front of it, like the planar argument). So:
+    // the reach triangles with a vertex in front of P's triangle's plane (by more than
+    // the cell's delta / 2, measured with the triangle's own plane so the list depends on the
+    // cell, the triangle and the side only): points of one triangle in one cell, which a
+    // tile shades one after another, share it, so each thread keeps the last few.
+    struct FrontList {
+        uint64_t owner = 0;  // serial_ of the light mesh it belongs to
+        int64_t base = -1;
+        uint32_t prim = UINT32_MAX;
+        float sign = 0;
+        FrontArrays arrays;
+        // The cell patch (Patch): computed on first use; usable when `patch` is true.
+        bool patchTried = false, patch = false;
+        float delta = 0;   // the cell's tolerance (CellSummary::delta)
+        Vec3 normal;       // the points' normal the patch was built with
+        Vec3 qlo, qhi;     // the box of the patch's origins, grown by reachMargin_
+        uint64_t known[kCubeWords], sees[kCubeWords];  // node states, by CubeBit
+    };
+    // A few lists per thread, replaced in turn: a tile's row of pixels crosses cells and
+    // triangles back and forth, and its next row comes back to them.
+    static constexpr int kFrontLists = 8;
+    // Segments decided without rays (light_mesh_patches.h): a point's front triangles, its
+    // cell patch and the node that sees all of it, its blockers, the segment culling.
+    FrontList& FrontTriangles(const CellSummary& c, int64_t base, const ShadingPoint& sp) const;
+
+    FrontList* Patch(const CellSummary& c, int64_t base, int ci, int cj, int ck, const ShadingPoint& sp) const;
+    void BuildPatch(FrontList& list, int ci, int cj, int ck, const ShadingPoint& sp, float offset) const;
+    bool PatchSees(FrontList& list, const FrontBlock& b, int k, const Vec3& x) const;
+    const FrontBlock* PatchWitness(const CellSummary& c, int64_t base, int ci, int cj, int ck, const ShadingPoint& sp,
+                                   const FrontRun& all, RenderCounters& counters, int* lane = nullptr) const;
+    void FindBlockers(const CellSummary& c, int64_t base, const ShadingPoint& sp, Blockers* b) const;
+    bool SeesPointCulled(const Vec3& x, const ShadingPoint& sp, const Blockers& b, RenderCounters& counters) const;
+    static constexpr uint8_t kHasPlane = 1, kClear0 = 8, kClear1 = 16;
+    static constexpr int kBrick = 4;  // summaries are stored by bricks of 4³ cells
+    struct SideSummary {
+        Word bits = 0, uniform = 0;
+    };
+    struct SummaryBrick {
+        std::atomic<uint8_t> state[kBrick * kBrick * kBrick];  // 0 empty, 1 being written, 2 ready
+        CellSummary cell[kBrick * kBrick * kBrick];
+        // The brick's list from BinTrianglesByBrick: every triangle whose box meets the
+        // reach of one of its cells; kTooMany if more than kMaxBrickNear.
+        const uint32_t* near = nullptr;
+        uint32_t nearCount = 0;
+        std::atomic<uint8_t> sideState[kBrick * kBrick * kBrick][2];  // like state, per side of Π
+        SideSummary side[kBrick * kBrick * kBrick][2];
+    };
+    static_assert(std::is_trivially_destructible_v<SummaryBrick>);  // freed with its chunk
+    static constexpr uint32_t kMaxBrickNear = 16384;
+
+    // A cell's summary, stored or computed (light_mesh_cells.h), with what it is made of.
+    const CellSummary& Summary(int ci, int cj, int ck, CellSummary* scratch, SummaryBrick** brickOut,
+                               int* slotOut) const;
+
+    const uint32_t* StoreReach(const std::vector<uint32_t>& ids) const;
+
+    // The box of everything cell (ci, cj, ck)'s summary looks at: every node any of its
+    // points may use, so every segment of theirs.
+    Bounds3 ReachBox(int ci, int cj, int ck) const {
+        const LightMeshLattice& L = lattice_;
+        return Bounds3(L.Node(ci + minOffset_, cj + minOffset_, ck + minOffset_) - Vec3(reachMargin_),
+                       L.Node(ci + maxOffset_, cj + maxOffset_, ck + maxOffset_) + Vec3(reachMargin_));
+    }
+
+    SummaryBrick* AllocateBrick(uint64_t brick) const;
+
+    CellSummary ComputeSummary(int ci, int cj, int ck, const SummaryBrick& brick) const;
+
+    SideSummary Side(const CellSummary& c, SummaryBrick* brick, int slot, int side, int ci, int cj, int ck) const;
+
+    static double UnitNormal(const TriangleMesh& mesh, uint32_t t, double n[3]);
+
+    uint64_t SummaryBytes() const;
+
+    // The sums of formula (2): m and, per light, the visible nodes. With one-byte node
+    // words the eight bits are counted at once, one byte lane each (kSpread), and the lanes
+    // are moved to `visible` before they can overflow, and at the end (Flush).
+    struct Accumulator {
+        uint32_t m = 0;
+        uint32_t pending = 0;
+        uint64_t lanes = 0;
+        uint32_t visible[64];
+        // Contact-hardening penumbrae: the visibilities themselves, for every light needed.
+        bool weighted = false;
+        float vis[64];
+        explicit Accumulator(size_t lights) {
+            // Flush adds all eight byte lanes, so the first eight are always zeroed.
+            for (size_t l = 0; l < std::max<size_t>(lights, 8); ++l) visible[l] = 0;
+        }
+        void Flush() {
+            for (int b = 0; b < 8; ++b) visible[b] += static_cast<uint32_t>((lanes >> (8 * b)) & 0xFF);
+            lanes = 0;
+            pending = 0;
+        }
+    };
+    static constexpr std::array<uint64_t, 256> MakeSpread() {
+        std::array<uint64_t, 256> t{};
+        for (int w = 0; w < 256; ++w)
+            for (int b = 0; b < 8; ++b) t[w] |= static_cast<uint64_t>((w >> b) & 1) << (8 * b);
+        return t;
+    }
+    static constexpr std::array<uint64_t, 256> kSpread = MakeSpread();
+
+    // Segments traced when a node is evaluated: one per light, plus, for СТ, the extra
+    // segments that complete its vote of three (see EvaluateNode).
+    size_t SegmentsPerNode() const {
+        const size_t n = scene_.lights.size();
+        return variant_.local == LocalVisibility::Inside && n < 3 ? 3 : n;
+    }
+
+    Word NodeWord(uint64_t index) const { return Evaluate(index); }
+
+    // Adds node x to the interpolation set.
+    void Use(Accumulator& acc, Word w) const {
+        ++acc.m;
+        if constexpr (sizeof(Word) == 1) {
+            acc.lanes += kSpread[w];
+            if (++acc.pending == 255) acc.Flush();
+        } else {
+            for (size_t l = 0; l < scene_.lights.size(); ++l) acc.visible[l] += (w >> l) & 1;
+        }
+    }
+
+    // The local-visibility segment from a node to P (paper §1.4): it must be unblocked.
+    bool SeesPoint(const Vec3& x, const ShadingPoint& sp, RenderCounters& counters) const {
+        ++counters.localSegments;
+        return !accel_.Occluded(Segment(x, sp.origin));
+    }
+
+    // The sphere walks and the variants' local visibility (light_mesh_walks.h).
+    void Candidate(const Vec3& x, uint64_t index, const ShadingPoint& sp, Accumulator& acc,
+                   RenderCounters& counters) const;
+
+    // A candidate node for the penumbra mode (PenumbraInterpolate).
+    struct PenumbraNode {
+        Vec3 x;
+        float d2;  // |x − P|²
+        uint64_t index;
+        Word w;
+    };
+
+    void CubeWalk(const ShadingPoint& sp, Word neededMask, Accumulator& acc, RenderCounters& counters) const;
+
+    void CubePenumbra(const ShadingPoint& sp, Word neededMask, std::vector<PenumbraNode>& nodes, Accumulator& acc,
+                      RenderCounters& counters) const;
+
+    bool TemplateWalk(const ShadingPoint& sp, Word neededMask, Accumulator& acc, RenderCounters& counters,
+                      Word* uniform) const;
+
+    // The position of lane k of block b for a point of cell (ci, cj, ck).
+    Vec3 EntryNode(int ci, int cj, int ck, const FrontBlock& b, int k) const {
+        return lattice_.Node(ci + static_cast<int>(b.ox[k]), cj + static_cast<int>(b.oy[k]), ck + static_cast<int>(b.oz[k]));
+    }
+
+    // Use() for every entry of the run in front of P: Нет's whole walk, and consensus's in
+    // a planar cell. The counts live in registers (one byte per light, flushed before 255)
+    // instead of in *acc, which the lazy evaluation's call might change for all the
+    // compiler knows.
+    void UseAll(const FrontRun& run, int64_t base, Accumulator& acc) const {
+        auto word = [&](int32_t linear) { return Evaluate(static_cast<uint64_t>(base + linear)); };
+        if constexpr (sizeof(Word) == 1) {
+            if (sumFront_ &&
+                sumFront_(run.blocks, run.masks, run.count, reinterpret_cast<const uint8_t*>(nodes_.get() + base),
+                          static_cast<int>(scene_.lights.size()), acc.visible, &acc.m))
+                return;
+            uint64_t lanes = 0;
+            uint32_t m = 0, pending = 0;
+            auto flush = [&] {
+                for (int l = 0; l < 8; ++l) acc.visible[l] += static_cast<uint32_t>((lanes >> (8 * l)) & 0xFF);
+                lanes = 0;
+                pending = 0;
+            };
+            for (uint32_t b = 0; b < run.count; ++b)
+                for (unsigned mask = run.masks[b]; mask; mask &= mask - 1) {
+                    lanes += kSpread[word(run.blocks[b].linear[__builtin_ctz(mask)])];
+                    ++m;
+                    if (++pending == 255) flush();
+                }
+            flush();
+            acc.m += m;
+        } else {
+            run.ForEach([&](const FrontBlock& b, int k) { Use(acc, word(b.linear[k])); });
+        }
+    }
+
+    void ConsensusWalk(const ShadingPoint& sp, Word neededMask, const FrontRun& all, int64_t base, int ci, int cj,
+                       int ck, bool planar, const CellSummary* summary, Blockers& blockers,
+                       Accumulator& acc, RenderCounters& counters) const;
+
+    void MinorityFirst(const ShadingPoint& sp, Word neededMask, Word majority, const FrontRun& all, int64_t base,
+                       int ci, int cj, int ck, const CellSummary* summary, Blockers& blockers, Accumulator& acc,
+                       RenderCounters& counters) const;
+
+    // ---- Contact-hardening penumbrae (ours, beyond the paper) -------------------------
+    //
+    // A sphere light of radius R seen past an occluder edge gives a penumbra whose
+    // half-width, measured across the shadow's boundary, is w = R·(d_P − d_b)/d_b (d_P,
+    // d_b: the distances from the light to P and to the blocker; similar triangles). The
+    // visible fraction across it is the share of the light's disc left uncovered. The
+    // paper's formula (2) averages the nodes' hard visibility over a ball of fixed radius
+    // r: a penumbra of half-width r everywhere. Here, at a point whose candidates disagree
+    // on light l (the only points that can be in a penumbra of that light within r):
+    //  1. d_b is the mean of the blocked candidates' blocker distances, which their
+    //     evaluation stored (no new rays), and w follows;
+    //  2. the nodes are weighted by an Epanechnikov kernel k = 1 − |x − P|²/ρ² of support
+    //     ρ = kSupportPerWidth·w (at most r): its profile across a plane, the share of the
+    //     kernel on one side, rises from 25 % to 75 % over 0.562·ρ, and the disc's over
+    //     0.808·w, so the blur spans the true penumbra;
+    //  3. P's own shadow ray (the hard answer, the centre of the penumbra) joins with
+    //     weight 1;
+    //  4. where ρ is below what the lattice resolves (contact, thin gaps: ρ < 1.5·h) the
+    //     nodes only say whether a shadow edge is near; if it is, a few rays to the light's
+    //     disc decide, else P's own ray (NarrowPenumbra).
+    // Local visibility stays ОТ's: every node that gets a weight passes its segment test
+    // (leak-free as the default); only nodes within the largest ρ are tested. Lights the
+    // candidates agree on keep consensus's answer. The blocker estimate reads every
+    // candidate, also ones a segment test would drop: it only sets the width.
+    static constexpr float kSupportPerWidth = 1.438f;  // 0.808 / 0.562
+    // Narrow penumbrae (ρ < kNarrow·h: a kernel on so few nodes would be the lattice's
+    // shape, not the penumbra's): the light itself is sampled, 2·kNarrowPerRing rays to its
+    // disc on two rings (DiscLightVisibility: the outer ring first, the inner one only if
+    // those disagree). These points lie where the candidates disagree only, a band of
+    // about 2r along each shadow edge. Chosen by measurement (gazebo and castle, 1024×768,
+    // against the 256-sample reference): the two rings gave 45.4 and 53.8 dB where a
+    // Vogel spiral of 8 traced 4 + 4 gave 43.8 and 51.0 and traced whole 45.3 and 53.4
+    // for 15 % more time; a first round of 2 lost 3-4 dB more.
+    static constexpr float kNarrow = 1.5f;
+    static constexpr int kNarrowPerRing = 4;
+    // Before sampling, the lattice's own answer where it is likely right: if every
+    // candidate within ρ + kDetect·h of P has the same bit for the light and P's own shadow
+    // ray agrees, no shadow edge of that light is taken to pass within the penumbra's reach
+    // of P, so V is that bit. (A ball of radius √3/2·h always holds a node; 1.5·h leaves
+    // room for the half of it behind the surface.) Measured: the castle 18 % and the garden
+    // 13 % less time for −0.04 dB; kDetect = 1 lost 0.5 dB, and trusting the nodes without
+    // P's ray 2-4.5 dB.
+    static constexpr float kDetect = 1.5f;
+    // Whether light sampling (not the nodes' kernel) answers a penumbra of support ρ.
+    bool Sampled(float rho2) const { return !(rho2 >= kNarrow * kNarrow * lattice_.h * lattice_.h); }
+    // The penumbra mode's answers (light_mesh_penumbra.h).
+    float NarrowPenumbra(const ShadingPoint& sp, size_t l, float rho, const std::vector<PenumbraNode>& nodes,
+                         RenderCounters& counters) const;
+    void PenumbraInterpolate(const ShadingPoint& sp, Word neededMask, const std::vector<PenumbraNode>& nodes,
+                             int64_t base, bool planar, const CellSummary* summary, Blockers& blockers,
+                             Accumulator& acc, RenderCounters& counters) const;
+
+    // Construction and node evaluation (light_mesh.cpp): the templates as FrontBlocks, a
+    // node's shadow segments (and, for СТ, its inside vote).
+    void ConvertTemplates();
+
+    // The node's word, computing it on first use: one shadow ray to each light; for СТ
+    // also the inside flag.
+    // The node's position is only computed when the node is, so a use costs one load.
+    Word Evaluate(uint64_t index) const {
+        const Word w = nodes_[index].load(std::memory_order_acquire);
+        if (w & kInit) [[likely]] return w;
+        return EvaluateSlow(index);
+    }
+    [[gnu::noinline]] Word EvaluateSlow(uint64_t index) const {
+        const Vec3 x = lattice_.NodeAt(index);
+        const Word value = variant_.local == LocalVisibility::Inside ? EvaluateWithInside(x) : EvaluateVisibility(x, index);
+        Word expected = 0;
+        if (nodes_[index].compare_exchange_strong(expected, value, std::memory_order_acq_rel))
+            evaluated_.fetch_add(1, std::memory_order_relaxed);
+        return value;
+    }
+
+    Word EvaluateVisibility(const Vec3& x, uint64_t index) const;
+
+    Word EvaluateWithInside(const Vec3& x) const;
+
+    static constexpr float kPlaneEps = 1e-5f;
+
+    const Scene& scene_;
+    const Accelerator& accel_;
+    const LightMeshLattice lattice_;
+    const LightMeshVariant variant_;
+    const TemplateLoad templates_;
+    int minOffset_ = 0, maxOffset_ = 0;
+    float invH_ = 0;
+    Bounds3 sceneBox_;
+    float planeDelta_ = 0, frontEps_ = 0, reachMargin_ = 0, cullMargin_ = 0, pointReach_ = 0;
+    // The plane margin of the segment culling and the patches' test for a tolerance delta:
+    // cullMargin_ at the scene's (the triangles' grown boxes), a cell's at its own.
+    static float CullMargin(float delta) { return 4 * delta; }
+    // How far from a plane a point may lie and still count as on it, for coordinates up to
+    // `magnitude`: a few float ulps (planeDelta_ at the lattice's, a cell's at its own).
+    static float PlaneDelta(float magnitude) { return 2e-7f * magnitude; }
+    // The templates again, as FrontBlocks: sub-position s's boundary entries are blocks
+    // frontBegin_[s] … frontInner_[s] - 1, its inner entries frontInner_[s] … frontBegin_[s + 1] - 1,
+    // each run in the template's order.
+    std::vector<FrontBlock, HugePageAllocator<FrontBlock>> frontBlocks_;  // ~0.5 MiB at kI 2
+    std::vector<uint32_t> frontBegin_, frontInner_;
+    FrontFunction frontMasks_ = nullptr;
+    CullFunction cull_ = nullptr;
+    FindBlockersFunction findBlockers_ = nullptr;
+    PatchSeesFunction patchSees_ = nullptr;
+    // Cell patches: on for consensus with summaries when the neighbourhood cube of a cell
+    // (the nodes any of its points may use) has at most kCubeWords·64 nodes.
+    bool patches_ = false, patchesFit_ = false;
+    uint32_t cubeWords_ = 0;
+    SumFrontFunction sumFront_ = nullptr;  // for one-byte words
+    static constexpr uint64_t kNodePadding = 8;  // words after the last node, for SumFrontBytesAvx2's loads
+    const uint64_t serial_ = NextSerial();  // tells this mesh's thread-local caches from others'
+    static uint64_t NextSerial() {
+        static std::atomic<uint64_t> next{1};
+        return next.fetch_add(1, std::memory_order_relaxed);
+    }
+    bool summaries_ = false;
+    bool summariesOff_ = false;  // asked for, but the binning was over its budget
+    uint64_t binPairs_ = 0;      // (triangle, brick) pairs the binning counted
+    std::vector<int64_t> cellNodes_;  // linear offsets of the union of the templates
+    std::vector<std::array<int8_t, 3>> cellOffsets_;  // the same nodes' offsets per axis
+    ZeroedPtr<std::atomic<Word>> nodes_;
+    // Penumbra mode (lightRadius_ > 0): per node and light, the nearest blocker's parameter
+    // along the node's shadow segment, t·65535 (EvaluateVisibility); light l of node i at
+    // i·lights + l.
+    const float lightRadius_;
+    ZeroedPtr<std::atomic<uint16_t>> blockerT_;
+    static constexpr size_t kReachChunk = 1 << 18;
+    mutable std::vector<std::unique_ptr<uint32_t[], FreeDeleter>> reachArena_;
+    mutable size_t reachUsed_ = 0, reachBytes_ = 0;
+    // Cell summaries: each triangle's plane (unit normal, offset) and bounding box (grown
+    // by cullMargin_), for the binning, the reach lists and the segment culling.
+    struct TrianglePlane {
+        Vec3 n;
+        float d;
+        Vec3 lo, hi;
+    };
+    // (These two on huge pages: on the garden 18 and 15 MiB, filled at once.)
+    std::vector<TrianglePlane, HugePageAllocator<TrianglePlane>> planes_;
+    std::vector<uint64_t, HugePageAllocator<uint64_t>> brickStart_;  // CSR of the bricks' candidate triangles
+    std::vector<uint32_t, HugePageAllocator<uint32_t>> brickTris_;
+    uint64_t bricksX_ = 0, bricksY_ = 0;
+    ZeroedPtr<std::atomic<SummaryBrick*>> bricks_;  // per brick of cells, allocated on first use
+    mutable std::mutex brickMutex_;
+    static constexpr size_t kBricksPerChunk = 512;  // 1.8 MiB
+    mutable std::vector<std::unique_ptr<SummaryBrick, FreeDeleter>> brickChunks_;
+    mutable size_t brickChunkUsed_ = 0;
+    mutable std::atomic<uint64_t> bricksUsed_{0};
+    mutable std::atomic<uint64_t> evaluated_{0}, summarized_{0}, uniformCells_{0}, planarCells_{0};
+};
+
+}  // namespace
+}  // namespace lm
