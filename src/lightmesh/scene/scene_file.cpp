@@ -1,5 +1,7 @@
 // scene_file.cpp -- the JSON scene format (the checks and the framing of bare meshes are
-// scene_checks.cpp and framing.cpp).
+// scene_checks.cpp and framing.cpp). Over 500 lines as one concept: the format's reference
+// below and the readers of its keys, one function per object, which a reader checks
+// against each other.
 //
 // A scene file is one JSON object (keys in any order; "name" is also allowed on lights
 // and meshes):

@@ -4,7 +4,8 @@
 // (the sphere walks and the variants' local-visibility rules), light_mesh_penumbra.h
 // (contact-hardening penumbrae) and light_mesh.cpp (construction, node evaluation, figures).
 // Private to the light mesh: included once, by light_mesh.cpp (an anonymous namespace, as
-// when it was one file, so the compiler sees one translation unit's functions).
+// when it was one file, so the compiler sees one translation unit's functions). Over 500
+// lines as one concept: the class's data with the comments that say what each part keeps.
 #pragma once
 
 #include "lightmesh/shadow/light_mesh.h"
