@@ -84,7 +84,8 @@ class NestedGridAccel final : public Accelerator {
     const Stats& GetStats() const { return stats_; }
 
     /// One grid level: `res` cells of size `cellSize` from `lo`, whose cells are
-    /// cells_[firstCell ...]. (Public only so grid.cpp's helpers can name it.)
+    /// cells_[firstCell ...]. (Public only so the helpers of grid.cpp and grid_build.cpp
+    /// can name it.)
     struct Node {
         Vec3 lo;
         Vec3 cellSize;
