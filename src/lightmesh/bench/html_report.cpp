@@ -81,7 +81,7 @@ std::string Base64(const std::string& bytes) {
 
 std::string ReadBytes(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
-    if (!in) ThrowError("%s: cannot read the image for the report", path.c_str());
+    if (!in) ThrowErrorAt({path}, "cannot read the image for the report");
     std::stringstream ss;
     ss << in.rdbuf();
     return ss.str();

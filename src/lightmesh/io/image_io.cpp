@@ -48,7 +48,7 @@ ImageFormat ImageFormatFor(const std::string& path) {
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
     if (ext == ".png") return ImageFormat::Png;
     if (ext == ".exr") return ImageFormat::Exr;
-    ThrowError("%s: unknown image extension \"%s\" (use .png or .exr)", path.c_str(), ext.c_str());
+    ThrowErrorAt({path}, "unknown image extension \"%s\" (use .png or .exr)", ext.c_str());
 }
 
 unsigned char EncodeSrgb8Reference(float v) {
@@ -361,7 +361,7 @@ void WritePng(const std::string& tmp, const Image& image) {
     std::ofstream out(tmp, std::ios::binary);
     out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
     out.close();
-    if (!out) ThrowError("%s: write failed: %s", tmp.c_str(), std::strerror(errno));
+    if (!out) ThrowErrorAt({tmp}, "write failed: %s", std::strerror(errno));
 }
 
 void WriteExr(const std::string& tmp, const Image& image) {
@@ -383,7 +383,7 @@ void WriteExr(const std::string& tmp, const Image& image) {
 Image ReadPng(const std::string& path) {
     int w = 0, h = 0, n = 0;
     unsigned char* data = stbi_load(path.c_str(), &w, &h, &n, 3);
-    if (!data) ThrowError("%s: cannot read PNG: %s", path.c_str(), stbi_failure_reason());
+    if (!data) ThrowErrorAt({path}, "cannot read PNG: %s", stbi_failure_reason());
     Image image(w, h);
     for (size_t i = 0; i < image.pixels.size(); ++i)
         image.pixels[i] = Color(DecodeSrgb8(data[3 * i]), DecodeSrgb8(data[3 * i + 1]),
@@ -397,7 +397,7 @@ Image ReadExr(const std::string& path) {
     const Imath::Box2i dw = file.header().dataWindow();
     const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
     if (w <= 0 || h <= 0 || static_cast<int64_t>(w) * h > (int64_t(1) << 28))
-        ThrowError("%s: unsupported EXR size %dx%d", path.c_str(), w, h);
+        ThrowErrorAt({path}, "unsupported EXR size %dx%d", w, h);
     Image image(w, h);
     Imf::FrameBuffer fb;
     char* base = reinterpret_cast<char*>(image.pixels.data()) -
@@ -416,7 +416,7 @@ Image ReadExr(const std::string& path) {
 
 void WriteImage(const std::string& path, const Image& image) {
     const ImageFormat format = ImageFormatFor(path);
-    if (image.width <= 0 || image.height <= 0) ThrowError("%s: empty image", path.c_str());
+    if (image.width <= 0 || image.height <= 0) ThrowErrorAt({path}, "empty image");
     WriteFileAtomically(path, [&](const std::string& tmp) {
         try {
             if (format == ImageFormat::Png) WritePng(tmp, image);
@@ -424,7 +424,7 @@ void WriteImage(const std::string& path, const Image& image) {
         } catch (const Error&) {
             throw;
         } catch (const std::exception& e) {
-            ThrowError("%s: cannot write: %s", path.c_str(), e.what());
+            ThrowErrorAt({path}, "cannot write: %s", e.what());
         }
     });
 }
@@ -433,14 +433,14 @@ Image ReadImage(const std::string& path) {
     const ImageFormat format = ImageFormatFor(path);
     CheckRegularFile(path, "image");  // never blocks on a FIFO
     std::FILE* f = std::fopen(path.c_str(), "rb");
-    if (!f) ThrowError("%s: cannot open: %s", path.c_str(), std::strerror(errno));
+    if (!f) ThrowErrorAt({path}, "cannot open: %s", std::strerror(errno));
     std::fclose(f);
     try {
         return format == ImageFormat::Png ? ReadPng(path) : ReadExr(path);
     } catch (const Error&) {
         throw;
     } catch (const std::exception& e) {
-        ThrowError("%s: cannot read EXR: %s", path.c_str(), e.what());
+        ThrowErrorAt({path}, "cannot read EXR: %s", e.what());
     }
 }
 

@@ -14,7 +14,7 @@ WhittedRenderer::WhittedRenderer(const Scene& scene, const Accelerator& accel,
     : scene_(scene), accel_(accel), shadows_(shadows), options_(options),
       camera_(scene.camera, options.width, options.height) {
     if (scene.lights.size() > static_cast<size_t>(kMaxLights))
-        ThrowError("%s: %zu lights; at most %d are supported", scene.name.c_str(),
+        ThrowErrorAt({scene.name}, "%zu lights; at most %d are supported",
                    scene.lights.size(), kMaxLights);
     if (options.aa < 1 || options.aa > 16) ThrowError("--aa %d: must be 1 to 16", options.aa);
     if (options.maxDepth < 1 || options.maxDepth > 64)

@@ -231,8 +231,7 @@ Json ParseJson(Reader& r, const std::string& text) {
                 why = what.substr(colon + 2);
         }
         if (why.size() > 160) why = why.substr(0, 157) + "...";
-        throw Error(StringPrintf("%s:%zu:%zu: parse error: %s", r.File().c_str(), line, column,
-                                 why.c_str()));
+        throw Error(SourceLoc{r.File(), line, column, ""}, "parse error: " + why);
     } catch (const Json::out_of_range& e) {
         // A number too large for a double, e.g. 1e999 (JSON has no NaN or infinity).
         std::string what = e.what(), token;

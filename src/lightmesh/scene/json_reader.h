@@ -62,12 +62,10 @@ class Reader {
         return keys;
     }
     /// "scene.json /lights/0/position" (or just the file for the root).
-    std::string Where(const std::string& path) const {
-        return path.empty() ? file_ : file_ + " " + path;
-    }
+    std::string Where(const std::string& path) const { return SourceLoc{file_, 0, 0, path}.Format(); }
 
     [[noreturn]] void Fail(const std::string& path, const std::string& message) const {
-        throw Error(Where(path) + ": " + message);
+        throw Error(SourceLoc{file_, 0, 0, path}, message);
     }
     void Warn(const std::string& message) const {
         if (warnings_)

@@ -154,7 +154,7 @@ std::string NoTrianglesMessage(const SceneReport& report, const TriangleMesh& me
 /// Checks that hold for every scene, whatever its source.
 void Validate(const Scene& scene) {
     const std::string& name = scene.name;
-    if (scene.lights.empty()) ThrowError("%s: the scene has no lights", name.c_str());
+    if (scene.lights.empty()) ThrowErrorAt({name}, "the scene has no lights");
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         const PointLight& l = scene.lights[i];
         const Color& c = l.intensity;
@@ -166,15 +166,15 @@ void Validate(const Scene& scene) {
     }
     std::string key;
     if (std::string problem = CameraProblem(scene.camera, &key); !problem.empty())
-        ThrowError("%s: camera %s %s", name.c_str(), key.c_str(), problem.c_str());
+        ThrowErrorAt({name}, "camera %s %s", key.c_str(), problem.c_str());
     if (scene.mesh.materialIds.size() != scene.mesh.triangles.size())
-        ThrowError("%s: every triangle needs a material", name.c_str());
+        ThrowErrorAt({name}, "every triangle needs a material");
     for (uint32_t id : scene.mesh.materialIds)
         if (id >= scene.materials.size())
-            ThrowError("%s: a triangle refers to material %u, which does not exist", name.c_str(),
+            ThrowErrorAt({name}, "a triangle refers to material %u, which does not exist",
                        id);
     for (const Vec3& p : scene.mesh.positions)
-        if (!IsFinite(p)) ThrowError("%s: a vertex has a non-finite coordinate", name.c_str());
+        if (!IsFinite(p)) ThrowErrorAt({name}, "a vertex has a non-finite coordinate");
 }
 
 }  // namespace lm::scene_load

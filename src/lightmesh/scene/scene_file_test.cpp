@@ -209,6 +209,35 @@ std::string SceneText(const BadCase& c) {
     return Replace(text + c.extra + "}", "$DATA", DataDir);
 }
 
+// The place of an error is data (Error::Where), not only text: a value's JSON pointer, a
+// syntax error's line and column.
+TEST(SceneFile, ErrorsKeepTheirPlaceAsData) {
+    const std::string folder = TempFolder();
+    const std::string bad = WriteFile(folder, "bad.json", R"({"camera": {"position": [0, 2, 8], "look_at": [0, 0, 0]},
+ "lights": [{"position": [0, "up", 0]}], "meshes": [{"file": "x.obj"}]})");
+    try {
+        LoadScene(bad, SceneLoadOptions{}, nullptr);
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.Where().file, bad);
+        EXPECT_EQ(e.Where().jsonPath, "/lights/0/position/1");
+        EXPECT_EQ(e.Where().line, 0u);
+        EXPECT_EQ(e.Reason(), "expected a number, got a string (\"up\")");
+        EXPECT_EQ(std::string(e.what()), e.Where().Format() + ": " + e.Reason());
+    }
+    const std::string syntax = WriteFile(folder, "syntax.json", "{\n  \"camera\": {,\n}");
+    try {
+        LoadScene(syntax, SceneLoadOptions{}, nullptr);
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.Where().file, syntax);
+        EXPECT_EQ(e.Where().line, 2u);
+        EXPECT_EQ(e.Where().column, 14u);
+        EXPECT_TRUE(e.Where().jsonPath.empty());
+        EXPECT_EQ(e.Reason().rfind("parse error: ", 0), 0u) << e.Reason();
+    }
+}
+
 TEST(SceneFile, BadInputsGiveExactMessages) {
     const std::string wood = R"(, "materials": {"wood": {"kd": 0.5}, "mirror": {"mirror": 1}})";
     const std::vector<BadCase> cases = {

@@ -103,13 +103,13 @@ void WriteSphereTemplates(const std::string& path, const SphereTemplates& t) {
         std::ofstream out(tmp, std::ios::binary);
         out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
         out.close();
-        if (!out) ThrowError("%s: cannot write: %s", path.c_str(), std::strerror(errno));
+        if (!out) ThrowErrorAt({path}, "cannot write: %s", std::strerror(errno));
     });
 }
 
 SphereTemplates ReadSphereTemplates(const std::string& path, int ns, float ki) {
     if (ns < 1 || ns > 64 || !(ki > 0 && ki <= 16))
-        ThrowError("%s: cannot hold templates for ns %d, kI %g (out of range)", path.c_str(), ns, ki);
+        ThrowErrorAt({path}, "cannot hold templates for ns %d, kI %g (out of range)", ns, ki);
     // Refuse a file larger than any template file for (ns, kI) before reading it.
     const uint64_t sideMax = static_cast<uint64_t>(std::clamp(ns, 1, 64)) + 1;
     const uint64_t reachMax = static_cast<uint64_t>(std::ceil(std::clamp(ki, 0.0f, 16.0f))) + 1;
@@ -117,12 +117,12 @@ SphereTemplates ReadSphereTemplates(const std::string& path, int ns, float ki) {
                               3 * sideMax * sideMax * sideMax * (2 * reachMax + 1) * (2 * reachMax + 1) * (2 * reachMax + 1);
     std::error_code ec;
     const uint64_t size = std::filesystem::file_size(path, ec);
-    if (ec) ThrowError("%s: cannot open: %s", path.c_str(), ec.message().c_str());
+    if (ec) ThrowErrorAt({path}, "cannot open: %s", ec.message().c_str());
     if (size > maxBytes)
-        ThrowError("%s: %llu bytes, more than templates for ns %d, kI %g can take", path.c_str(),
+        ThrowErrorAt({path}, "%llu bytes, more than templates for ns %d, kI %g can take",
                    static_cast<unsigned long long>(size), ns, ki);
     std::ifstream in(path, std::ios::binary);
-    if (!in) ThrowError("%s: cannot open: %s", path.c_str(), std::strerror(errno));
+    if (!in) ThrowErrorAt({path}, "cannot open: %s", std::strerror(errno));
     const std::string bytes{std::istreambuf_iterator<char>(in), {}};
     return ParseSphereTemplates(bytes, path, ns, ki);
 }
@@ -133,29 +133,29 @@ void CheckSphereTemplateGeometry(const SphereTemplates& t, const std::string& pa
 SphereTemplates ParseSphereTemplates(std::string_view bytes, const std::string& path, int ns,
                                      float ki) {
     if (ns < 1 || ns > 64 || !(ki > 0 && ki <= 16))
-        ThrowError("%s: cannot hold templates for ns %d, kI %g (out of range)", path.c_str(), ns, ki);
+        ThrowErrorAt({path}, "cannot hold templates for ns %d, kI %g (out of range)", ns, ki);
     if (bytes.size() < sizeof(Header) + sizeof(uint64_t))
-        ThrowError("%s: truncated (%zu bytes)", path.c_str(), bytes.size());
+        ThrowErrorAt({path}, "truncated (%zu bytes)", bytes.size());
     Header h;
     std::memcpy(&h, bytes.data(), sizeof(Header));
-    if (std::memcmp(h.magic, kMagic, 8) != 0) ThrowError("%s: not a lightmesh template file", path.c_str());
+    if (std::memcmp(h.magic, kMagic, 8) != 0) ThrowErrorAt({path}, "not a lightmesh template file");
     if (h.version != kVersion)
-        ThrowError("%s: format version %u, expected %u", path.c_str(), h.version, kVersion);
+        ThrowErrorAt({path}, "format version %u, expected %u", h.version, kVersion);
     if (h.ns != ns || std::memcmp(&h.ki, &ki, sizeof(float)) != 0)
-        ThrowError("%s: holds templates for ns %d, kI %g, not ns %d, kI %g", path.c_str(), h.ns, h.ki, ns, ki);
+        ThrowErrorAt({path}, "holds templates for ns %d, kI %g, not ns %d, kI %g", h.ns, h.ki, ns, ki);
     const uint64_t side = static_cast<uint64_t>(ns) + 1;
     if (h.subPositions != side * side * side)
-        ThrowError("%s: %u sub-positions, expected %llu", path.c_str(), h.subPositions,
+        ThrowErrorAt({path}, "%u sub-positions, expected %llu", h.subPositions,
                    static_cast<unsigned long long>(side * side * side));
     const uint64_t expected = sizeof(Header) + (h.subPositions + 1ull) * 4 + h.subPositions * 4ull +
                               h.entries * 3ull + sizeof(uint64_t);
     if (bytes.size() != expected)
-        ThrowError("%s: %zu bytes, expected %llu (truncated or corrupt)", path.c_str(), bytes.size(),
+        ThrowErrorAt({path}, "%zu bytes, expected %llu (truncated or corrupt)", bytes.size(),
                    static_cast<unsigned long long>(expected));
     uint64_t sum;
     std::memcpy(&sum, bytes.data() + bytes.size() - sizeof(uint64_t), sizeof(uint64_t));
     if (sum != Fnv1a(reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size() - sizeof(uint64_t)))
-        ThrowError("%s: checksum mismatch (corrupt)", path.c_str());
+        ThrowErrorAt({path}, "checksum mismatch (corrupt)");
     SphereTemplates t;
     t.ns = ns;
     t.ki = ki;
@@ -172,14 +172,14 @@ SphereTemplates ParseSphereTemplates(std::string_view bytes, const std::string& 
     if (!t.offsets.empty()) std::memcpy(t.offsets.data(), p, t.offsets.size() * 3);
     // The checksum catches accidents; these checks make a forged file harmless too.
     if (t.begin.front() != 0 || t.begin.back() != h.entries)
-        ThrowError("%s: inconsistent index (corrupt)", path.c_str());
+        ThrowErrorAt({path}, "inconsistent index (corrupt)");
     const int reach = static_cast<int>(std::ceil(ki)) + 1;
     for (uint32_t s = 0; s < h.subPositions; ++s)
         if (t.begin[s] > t.begin[s + 1] || t.boundaryCount[s] > t.begin[s + 1] - t.begin[s])
-            ThrowError("%s: inconsistent index (corrupt)", path.c_str());
+            ThrowErrorAt({path}, "inconsistent index (corrupt)");
     for (const auto& o : t.offsets)
         for (int8_t v : o)
-            if (v < -reach || v > reach) ThrowError("%s: offset out of range (corrupt)", path.c_str());
+            if (v < -reach || v > reach) ThrowErrorAt({path}, "offset out of range (corrupt)");
     CheckSphereTemplateGeometry(t, path);
     return t;
 }

@@ -39,8 +39,7 @@ void CheckSphereTemplateGeometry(const SphereTemplates& t, const std::string& pa
                     const auto& o = t.offsets[e];
                     if (e == boundaryEnd) previous = -1;  // the inner run starts over
                     if (!inside(a, b, c, o[0], o[1], o[2]))
-                        ThrowError("%s: an offset lies outside the interpolation sphere (corrupt)",
-                                   path.c_str());
+                        ThrowErrorAt({path}, "an offset lies outside the interpolation sphere (corrupt)");
                     const bool shell = !inside(a, b, c, o[0] - 1, o[1], o[2]) ||
                                        !inside(a, b, c, o[0] + 1, o[1], o[2]) ||
                                        !inside(a, b, c, o[0], o[1] - 1, o[2]) ||
@@ -48,11 +47,10 @@ void CheckSphereTemplateGeometry(const SphereTemplates& t, const std::string& pa
                                        !inside(a, b, c, o[0], o[1], o[2] - 1) ||
                                        !inside(a, b, c, o[0], o[1], o[2] + 1);
                     if (shell != (e < boundaryEnd))
-                        ThrowError("%s: the boundary nodes are not the sphere's shell (corrupt)",
-                                   path.c_str());
+                        ThrowErrorAt({path}, "the boundary nodes are not the sphere's shell (corrupt)");
                     const int k = key(o);
                     if (k <= previous)
-                        ThrowError("%s: offsets out of order or repeated (corrupt)", path.c_str());
+                        ThrowErrorAt({path}, "offsets out of order or repeated (corrupt)");
                     previous = k;
                 }
                 // The nodes in the sphere, row by row: along di the inside ones are one run
@@ -74,8 +72,7 @@ void CheckSphereTemplateGeometry(const SphereTemplates& t, const std::string& pa
                     }
                 }
                 if (count != last - first)
-                    ThrowError("%s: %u nodes for a sub-position whose sphere holds %u (corrupt)",
-                               path.c_str(), last - first, count);
+                    ThrowErrorAt({path}, "%u nodes for a sub-position whose sphere holds %u (corrupt)", last - first, count);
             }
         }
     }

@@ -1,6 +1,7 @@
 #include "lightmesh/util/error.h"
 
 #include <cstdio>
+#include <utility>
 #include <vector>
 
 namespace lm {
@@ -39,12 +40,38 @@ std::string Printable(const std::string& text) {
     return out;
 }
 
+std::string SourceLoc::Format() const {
+    std::string out = file;
+    if (line > 0 && column > 0)
+        out += StringPrintf(":%zu:%zu", line, column);
+    else if (line > 0)
+        out += StringPrintf(":%zu", line);
+    if (!jsonPath.empty()) {
+        if (!out.empty()) out += ' ';
+        out += jsonPath;
+    }
+    return out;
+}
+
+Error::Error(SourceLoc where, const std::string& reason)
+    : std::runtime_error(Printable(where.Known() ? where.Format() + ": " + reason : reason)),
+      where_(std::move(where)),
+      reason_(Printable(reason)) {}
+
 void ThrowError(const char* fmt, ...) {
     va_list args;
     va_start(args, fmt);
     std::string s = StringVPrintf(fmt, args);
     va_end(args);
     throw Error(s);
+}
+
+void ThrowErrorAt(const SourceLoc& where, const char* fmt, ...) {
+    va_list args;
+    va_start(args, fmt);
+    std::string s = StringVPrintf(fmt, args);
+    va_end(args);
+    throw Error(where, s);
 }
 
 }  // namespace lm

@@ -2,8 +2,10 @@
 #pragma once
 
 #include <cstdarg>
+#include <cstddef>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace lm {
 
@@ -15,16 +17,49 @@ std::string StringVPrintf(const char* fmt, va_list args);
 /// smuggle into a message, e.g. terminal escapes in a key) shown as <U+001B>.
 std::string Printable(const std::string& text);
 
+/// Where in the user's input an error lies: a file and, inside it, a line and column (a
+/// text format's syntax) or a JSON pointer (a value of a scene file or bench matrix).
+/// Parts left empty (0 for line and column) are not known.
+struct SourceLoc {
+    SourceLoc() = default;
+    SourceLoc(std::string file, size_t line = 0, size_t column = 0, std::string jsonPath = {})
+        : file(std::move(file)), line(line), column(column), jsonPath(std::move(jsonPath)) {}
+
+    std::string file;
+    size_t line = 0, column = 0;
+    std::string jsonPath;  ///< "/lights/1/position"; empty for the whole file
+
+    bool Known() const { return !file.empty() || line > 0 || !jsonPath.empty(); }
+    /// As messages write it: "scene.json /lights/1/position", "scene.json:3:14",
+    /// "mesh.obj"; empty when nothing is known.
+    std::string Format() const;
+};
+
 /// An error in what the user gave us: a scene file, a mesh, an option, an output path.
 /// The message is complete and names its origin, e.g.
 /// `scene.json /lights/1/position: expected 3 numbers`; main() prints it and exits 1.
+/// Where the origin is a place in a file, it is also kept as data (Where(), Reason()), so a
+/// caller does not have to take the message apart to re-locate or re-word it.
 /// Programmer errors are not Errors: they are assertions.
 class Error : public std::runtime_error {
   public:
-    explicit Error(const std::string& message) : std::runtime_error(Printable(message)) {}
+    /// An error whose message names its origin itself (an option, a path, a limit).
+    explicit Error(const std::string& message) : std::runtime_error(Printable(message)), reason_(what()) {}
+    /// An error at `where`: the message is "<where>: <reason>".
+    Error(SourceLoc where, const std::string& reason);
+
+    const SourceLoc& Where() const { return where_; }
+    /// The message without its location.
+    const std::string& Reason() const { return reason_; }
+
+  private:
+    SourceLoc where_;
+    std::string reason_;
 };
 
 /// Throws an Error with a printf-style message.
 [[noreturn]] void ThrowError(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
+/// Throws an Error at `where` with a printf-style reason.
+[[noreturn]] void ThrowErrorAt(const SourceLoc& where, const char* fmt, ...) __attribute__((format(printf, 2, 3)));
 
 }  // namespace lm

@@ -102,12 +102,12 @@ void CheckRegularFile(const std::string& path, const char* kind) {
 std::string ReadRegularFile(const std::string& path, const char* kind) {
     CheckRegularFile(path, kind);
     const int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-    if (fd < 0) ThrowError("%s: cannot open: %s", path.c_str(), std::strerror(errno));
+    if (fd < 0) ThrowErrorAt({path}, "cannot open: %s", std::strerror(errno));
     struct stat st {};
     // Re-checked on the descriptor read from: the name may have changed meanwhile.
     if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
         close(fd);
-        ThrowError("%s: is not a regular file", path.c_str());
+        ThrowErrorAt({path}, "is not a regular file");
     }
     std::string out;
     if (st.st_size > 0) out.reserve(static_cast<size_t>(st.st_size));
@@ -119,7 +119,7 @@ std::string ReadRegularFile(const std::string& path, const char* kind) {
             if (errno == EINTR) continue;
             const int err = errno;
             close(fd);
-            ThrowError("%s: read error: %s", path.c_str(), std::strerror(err));
+            ThrowErrorAt({path}, "read error: %s", std::strerror(err));
         }
         out.append(buf, static_cast<size_t>(n));
     }
@@ -129,25 +129,24 @@ std::string ReadRegularFile(const std::string& path, const char* kind) {
 
 void CheckWritableFolder(const std::string& path) {
     if (path.find('\0') != std::string::npos)
-        ThrowError("%s: the name contains a NUL byte", path.c_str());
+        ThrowErrorAt({path}, "the name contains a NUL byte");
     const std::string dir = FolderOf(path);
     std::error_code ec;
     struct stat st {};
     if (stat(dir.c_str(), &st) != 0) {
         const int err = errno;
         if (err == ENOENT)
-            ThrowError("%s: folder \"%s\" does not exist", path.c_str(), dir.c_str());
+            ThrowErrorAt({path}, "folder \"%s\" does not exist", dir.c_str());
         if (err == ENOTDIR)
-            ThrowError("%s: folder \"%s\" cannot exist: a folder on its path is a file",
-                       path.c_str(), dir.c_str());
-        ThrowError("%s: folder \"%s\": %s", path.c_str(), dir.c_str(), std::strerror(err));
+            ThrowErrorAt({path}, "folder \"%s\" cannot exist: a folder on its path is a file", dir.c_str());
+        ThrowErrorAt({path}, "folder \"%s\": %s", dir.c_str(), std::strerror(err));
     }
     if (!S_ISDIR(st.st_mode))
-        ThrowError("%s: \"%s\" is a file, not a folder", path.c_str(), dir.c_str());
+        ThrowErrorAt({path}, "\"%s\" is a file, not a folder", dir.c_str());
     if (access(dir.c_str(), W_OK) != 0)
-        ThrowError("%s: folder \"%s\" is not writable", path.c_str(), dir.c_str());
+        ThrowErrorAt({path}, "folder \"%s\" is not writable", dir.c_str());
     if (std::filesystem::is_directory(path, ec))
-        ThrowError("%s: is a folder, not a file", path.c_str());
+        ThrowErrorAt({path}, "is a folder, not a file");
 }
 
 namespace {
@@ -215,7 +214,7 @@ void WriteFileAtomically(const std::string& path,
             close(fd);
         }
         if (std::rename(tmp.c_str(), path.c_str()) != 0)
-            ThrowError("%s: cannot write: %s", path.c_str(), std::strerror(errno));
+            ThrowErrorAt({path}, "cannot write: %s", std::strerror(errno));
     } catch (...) {
         unlink(tmp.c_str());
         ReleasePending(slot);
