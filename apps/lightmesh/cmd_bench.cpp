@@ -98,7 +98,7 @@ int RunBench(BenchCommand& cmd) {
         lm::WriteFileAtomically(path, [&](const std::string& tmp) {
             FILE* f = std::fopen(tmp.c_str(), "wb");
             if (!f || std::fwrite(text.data(), 1, text.size(), f) != text.size() || std::fclose(f) != 0)
-                lm::ThrowError("%s: cannot write", path.c_str());
+                lm::ThrowErrorAt({path}, "cannot write");
         });
     };
     if (!cmd.csv.empty()) write(cmd.csv, lm::BenchCsv(report.results));

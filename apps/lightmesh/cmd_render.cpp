@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <string>
+#include <utility>
 
 #include "lightmesh/distributed/rank_report.h"
 #ifdef LIGHTMESH_HAS_MPI
@@ -17,6 +19,7 @@
 #include "lightmesh/render/whitted.h"
 #include "lightmesh/shadow/area_light.h"
 #include "lightmesh/shadow/light_mesh.h"
+#include "lightmesh/settings/render_settings.h"
 #include "lightmesh/shadow/shadow.h"
 #include "lightmesh/util/log.h"
 #include "lightmesh/util/progress.h"
@@ -58,27 +61,27 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
 
     if (cmd.variant && cmd.variant->empty())
         lm::ThrowError("--variant: must not be empty (leave it out for the default)");
-    // Options the chosen method does not use: a warning each, as pbrt reports unused
-    // parameters.
-    auto unused = [&](bool given, const char* option, const char* usedBy) {
-        if (given)
-            lm::LogWarning(lm::StringPrintf("%s is not used by --shadows %s (only by %s); ignored",
-                                            option, options.shadows.c_str(), usedBy));
+    // Flags the chosen method or back-end does not use: a warning each, as pbrt reports
+    // unused parameters (which knob each method uses is the settings table's). A scene
+    // file's "render" values stay silent: a file may set up several methods.
+    const std::pair<const char*, bool> given[] = {
+        {"cc", cmd.cc.has_value()},
+        {"ki", cmd.ki.has_value()},
+        {"variant", cmd.variant.has_value()},
+        {"ns", cmd.ns.has_value()},
+        {"template_dir", cmd.templateDir.has_value()},
+        {"cell_summaries", cmd.cellSummaries.has_value()},
+        {"light_radius", cmd.lightRadius.has_value()},
+        {"samples", cmd.samples.has_value()},
+        {"grid", cmd.grid.has_value()},
     };
-    if (options.shadows != "lmm") {
-        unused(cmd.cc.has_value(), "--cc", "lmm");
-        unused(cmd.ki.has_value(), "--ki", "lmm");
-        unused(cmd.variant.has_value(), "--variant", "lmm");
-        unused(cmd.ns.has_value(), "--ns", "lmm");
-        unused(cmd.templateDir.has_value(), "--template-dir", "lmm");
+    for (const auto& [key, isGiven] : given) {
+        if (!isGiven) continue;
+        const std::string usedWith = lm::RenderSettingFor(key).usedWith;
+        const std::string warning =
+            lm::UnusedSettingWarning(key, usedWith == "accel" ? options.accel : options.shadows);
+        if (!warning.empty()) lm::LogWarning(warning);
     }
-    if (options.shadows != "area") {
-        if (options.shadows != "lmm") unused(cmd.lightRadius.has_value(), "--light-radius", "area and lmm");
-        unused(cmd.samples.has_value(), "--samples", "area");
-    }
-    if (cmd.grid && options.accel != "grid")
-        lm::LogWarning(lm::StringPrintf("--grid is not used by --accel %s (only by grid); ignored",
-                                        options.accel.c_str()));
     if (options.shadows == "lmm") lm::ParseLightMeshVariant(options.lightMesh.variant);
     if (options.shadows == "area" || cmd.lightRadius || cmd.samples)
         lm::ValidateAreaLightOptions(options.areaLight);

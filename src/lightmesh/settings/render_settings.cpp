@@ -1,6 +1,7 @@
 #include "lightmesh/settings/render_settings.h"
 
 #include <limits>
+#include <string>
 #include <stdexcept>
 
 namespace lm {
@@ -9,35 +10,43 @@ const std::vector<RenderSetting>& RenderSettings() {
     using K = RenderSetting::Kind;
     constexpr double kNoLimit = std::numeric_limits<double>::infinity();
     static const std::vector<RenderSetting> rows = {
-        {"width", "--width", K::Int, 1, 16384, {}, "Image width in pixels"},
-        {"height", "--height", K::Int, 1, 16384, {}, "Image height in pixels"},
-        {"aa", "--aa", K::Int, 1, 16, {}, "Anti-aliasing: N x N camera rays per pixel"},
-        {"max_depth", "--max-depth", K::Int, 1, 64, {}, "Mirror recursion limit (1: no reflections)"},
+        {"width", "--width", K::Int, 1, 16384, {}, "Image width in pixels", nullptr, {}},
+        {"height", "--height", K::Int, 1, 16384, {}, "Image height in pixels", nullptr, {}},
+        {"aa", "--aa", K::Int, 1, 16, {}, "Anti-aliasing: N x N camera rays per pixel", nullptr, {}},
+        {"max_depth", "--max-depth", K::Int, 1, 64, {}, "Mirror recursion limit (1: no reflections)", nullptr, {}},
         {"shadows", "--shadows", K::Choice, 0, 0, {"none", "rt", "lmm", "area"},
          "Shadows: none, rt (hard: one shadow ray per light), lmm (soft: the light mesh method) or area "
-         "(soft reference: spherical lights, --samples shadow rays each)"},
+         "(soft reference: spherical lights, --samples shadow rays each)", nullptr, {}},
         {"accel", "--accel", K::Choice, 0, 0, {"brute", "grid", "embree"},
          std::string("Ray-query back-end: brute, grid (the paper's nested grid) or embree; default ") +
-             kDefaultAccelerator},
-        {"grid", "--grid", K::Int, 0, 4096, {}, "Nested grid: top-level cells along the longest side (0: automatic)"},
+             kDefaultAccelerator,
+         nullptr,
+         {}},
+        {"grid", "--grid", K::Int, 0, 4096, {}, "Nested grid: top-level cells along the longest side (0: automatic)",
+         "accel", {"grid"}},
         {"cc", "--cc", K::Int, 1, 4096, {},
-         "Light mesh: cells across the longest side of the scene (the paper's CC; default 100)"},
-        {"ki", "--ki", K::Float, 0.01, 16, {}, "Light mesh: interpolation radius in mesh steps, r = kI*h (default 2)"},
+         "Light mesh: cells across the longest side of the scene (the paper's CC; default 100)", "shadows", {"lmm"}},
+        {"ki", "--ki", K::Float, 0.01, 16, {}, "Light mesh: interpolation radius in mesh steps, r = kI*h (default 2)",
+         "shadows", {"lmm"}},
         {"variant", "--variant", K::String, 0, 0, {},
          "Light mesh variant, as in the paper's tables: grid (Grid), templates (Ш), "
          "reduced (У), none (Нет), inside (СТ), object (ОТ); not in the paper: consensus "
          "(ОТ's image, segments only where nodes disagree; default) and grid-none. "
-         "The paper's names are accepted too"},
-        {"ns", "--ns", K::Int, 0, 64, {}, "Light mesh templates: sub-steps per cell side (default 8; 0: the default)"},
+         "The paper's names are accepted too",
+         "shadows",
+         {"lmm"}},
+        {"ns", "--ns", K::Int, 0, 64, {}, "Light mesh templates: sub-steps per cell side (default 8; 0: the default)",
+         "shadows", {"lmm"}},
         {"template_dir", "--template-dir", K::String, 0, 0, {},
-         "Folder caching the sphere templates (default: $XDG_CACHE_HOME/lightmesh/templates)"},
+         "Folder caching the sphere templates (default: $XDG_CACHE_HOME/lightmesh/templates)", "shadows", {"lmm"}},
         {"cell_summaries", "--cell-summaries", K::Choice, 0, 0, {"auto", "on", "off"},
-         "Light mesh: per-cell summaries (exact; ours): auto (for consensus only), on (also none, inside) or off"},
+         "Light mesh: per-cell summaries (exact; ours): auto (for consensus only), on (also none, inside) or off",
+         "shadows", {"lmm"}},
         {"light_radius", "--light-radius", K::Float, 0, kNoLimit, {},
          "Radius of the sphere each point light stands for: area shadows sample it, lmm sizes its "
-         "penumbrae by it (contact hardening; default 0: point lights)"},
+         "penumbrae by it (contact hardening; default 0: point lights)", "shadows", {"area", "lmm"}},
         {"samples", "--samples", K::Int, 1, 4096, {},
-         "Area shadows: stratified shadow rays per light and shading point (default 16)"},
+         "Area shadows: stratified shadow rays per light and shading point (default 16)", "shadows", {"area"}},
     };
     return rows;
 }
@@ -46,6 +55,18 @@ const RenderSetting& RenderSettingFor(std::string_view key) {
     for (const RenderSetting& s : RenderSettings())
         if (key == s.key) return s;
     throw std::logic_error("no render setting \"" + std::string(key) + "\"");
+}
+
+std::string UnusedSettingWarning(std::string_view key, std::string_view value) {
+    const RenderSetting& s = RenderSettingFor(key);
+    if (!s.usedWith) return {};
+    std::string users;
+    for (size_t i = 0; i < s.usedBy.size(); ++i) {
+        if (value == s.usedBy[i]) return {};
+        users += (i == 0 ? "" : (i + 1 == s.usedBy.size() ? " and " : ", ")) + s.usedBy[i];
+    }
+    return std::string(s.flag) + " is not used by " + RenderSettingFor(s.usedWith).flag + " " + std::string(value) +
+           " (only by " + users + "); ignored";
 }
 
 }  // namespace lm

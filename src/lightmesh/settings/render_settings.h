@@ -27,6 +27,11 @@ struct RenderSetting {
     double lo = 0, hi = 0;             ///< Int, Float: the accepted range, both ends included
     std::vector<std::string> choices;  ///< Choice: the accepted values
     std::string help;                  ///< the CLI's help text
+    /// The knob matters only when setting `usedWith` (a Choice row's key) takes one of
+    /// `usedBy`; null for knobs every render uses. A flag given for a render that does not
+    /// use it is reported (UnusedSettingWarning), as pbrt reports unused parameters.
+    const char* usedWith = nullptr;
+    std::vector<std::string> usedBy;
 };
 
 /// Every row, in the order of `lightmesh render --help`.
@@ -34,5 +39,9 @@ const std::vector<RenderSetting>& RenderSettings();
 
 /// The row of scene-file key `key`. An unknown key is a programming error (std::logic_error).
 const RenderSetting& RenderSettingFor(std::string_view key);
+
+/// The warning for knob `key` given as its flag when setting `s.usedWith` is `value`, or ""
+/// when that render uses it: "--cc is not used by --shadows rt (only by lmm); ignored".
+std::string UnusedSettingWarning(std::string_view key, std::string_view value);
 
 }  // namespace lm

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 #include <iterator>
 #include <set>
@@ -30,6 +31,35 @@ TEST(RenderSettings, RowsAreWellFormed) {
         EXPECT_FALSE(s.help.empty());
         if (s.kind == RenderSetting::Kind::Int || s.kind == RenderSetting::Kind::Float) EXPECT_LE(s.lo, s.hi);
         EXPECT_EQ(s.kind == RenderSetting::Kind::Choice, !s.choices.empty());
+    }
+}
+
+// Which knobs a method or back-end uses is the table's: a flag given for a render that does
+// not use it gets one warning naming the users; a knob every render uses, none.
+TEST(RenderSettings, UnusedFlagsAreNamedByTheTable) {
+    EXPECT_EQ(UnusedSettingWarning("cc", "rt"), "--cc is not used by --shadows rt (only by lmm); ignored");
+    EXPECT_EQ(UnusedSettingWarning("cc", "lmm"), "");
+    EXPECT_EQ(UnusedSettingWarning("light_radius", "none"),
+              "--light-radius is not used by --shadows none (only by area and lmm); ignored");
+    EXPECT_EQ(UnusedSettingWarning("light_radius", "area"), "");
+    EXPECT_EQ(UnusedSettingWarning("samples", "lmm"), "--samples is not used by --shadows lmm (only by area); ignored");
+    EXPECT_EQ(UnusedSettingWarning("grid", "embree"), "--grid is not used by --accel embree (only by grid); ignored");
+    EXPECT_EQ(UnusedSettingWarning("grid", "grid"), "");
+    EXPECT_EQ(UnusedSettingWarning("width", "anything"), "");
+    for (const RenderSetting& s : RenderSettings()) {
+        SCOPED_TRACE(s.key);
+        if (!s.usedWith) {
+            EXPECT_TRUE(s.usedBy.empty());
+            continue;
+        }
+        // usedWith names a choice row, and every user is one of its choices.
+        const RenderSetting& with = RenderSettingFor(s.usedWith);
+        ASSERT_EQ(with.kind, RenderSetting::Kind::Choice);
+        ASSERT_FALSE(s.usedBy.empty());
+        for (const std::string& user : s.usedBy) {
+            EXPECT_NE(std::find(with.choices.begin(), with.choices.end(), user), with.choices.end()) << user;
+            EXPECT_EQ(UnusedSettingWarning(s.key, user), "");
+        }
     }
 }
 
