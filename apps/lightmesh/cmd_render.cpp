@@ -61,10 +61,17 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
 
     if (cmd.variant && cmd.variant->empty())
         lm::ThrowError("--variant: must not be empty (leave it out for the default)");
-    // Flags the chosen method or back-end does not use: a warning each, as pbrt reports
-    // unused parameters (which knob each method uses is the settings table's). A scene
-    // file's "render" values stay silent: a file may set up several methods.
+    // The flags given replace the file's values: theirs is the place a message names. Flags
+    // the chosen method or back-end does not use get a warning each, as pbrt reports unused
+    // parameters (which knob each method uses is the settings table's). A scene file's
+    // "render" values stay silent: a file may set up several methods.
     const std::pair<const char*, bool> given[] = {
+        {"width", cmd.width.has_value()},
+        {"height", cmd.height.has_value()},
+        {"aa", cmd.aa.has_value()},
+        {"max_depth", cmd.maxDepth.has_value()},
+        {"shadows", cmd.shadows.has_value()},
+        {"accel", cmd.accel.has_value()},
         {"cc", cmd.cc.has_value()},
         {"ki", cmd.ki.has_value()},
         {"variant", cmd.variant.has_value()},
@@ -77,14 +84,17 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
     };
     for (const auto& [key, isGiven] : given) {
         if (!isGiven) continue;
-        const std::string usedWith = lm::RenderSettingFor(key).usedWith;
+        const lm::RenderSetting& setting = lm::RenderSettingFor(key);
+        options.origins[key] = lm::SourceLoc::Option(setting.flag);
+        if (!setting.usedWith) continue;
         const std::string warning =
-            lm::UnusedSettingWarning(key, usedWith == "accel" ? options.accel : options.shadows);
+            lm::UnusedSettingWarning(key, std::string(setting.usedWith) == "accel" ? options.accel : options.shadows);
         if (!warning.empty()) lm::LogWarning(warning);
     }
-    if (options.shadows == "lmm") lm::ParseLightMeshVariant(options.lightMesh.variant);
-    if (options.shadows == "area" || cmd.lightRadius || cmd.samples)
-        lm::ValidateAreaLightOptions(options.areaLight);
+    lm::NamingOrigins(options, [&] {
+        if (options.shadows == "lmm") lm::ParseLightMeshVariant(options.lightMesh.variant);
+        if (options.shadows == "area" || cmd.lightRadius || cmd.samples) lm::ValidateAreaLightOptions(options.areaLight);
+    });
     if (options.shadows == "area") {
         if (options.areaLight.radius == 0)
             lm::LogWarning("--shadows area with light radius 0: point lights, the same image as --shadows rt "

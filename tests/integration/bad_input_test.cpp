@@ -536,7 +536,11 @@ std::vector<Case> Corpus() {
          .files = {{"scene.json", WithExtra(R"(, "render": {"ns": 65})")}}},
         {.name = "variant_unknown",
          .args = "render builtin:gazebo --shadows lmm --variant fastest -o $OUT",
-         .expected = "lightmesh: error: unknown light-mesh variant \"fastest\""},
+         .expected = "lightmesh: error: --variant: unknown light-mesh variant \"fastest\""},
+        {.name = "json_variant_unknown",  // the factory's message names the file's key
+         .args = "render $D/scene.json --shadows lmm -o $OUT",
+         .expected = "lightmesh: error: $D/scene.json /render/variant: unknown light-mesh variant \"fastest\"",
+         .files = {{"scene.json", WithExtra(R"(, "render": {"variant": "fastest"})")}}},
         {.name = "shadows_unknown",
          .args = "render builtin:gazebo --shadows soft -o $OUT",
          .expected = "--shadows: soft not in {none,rt,lmm"},
@@ -733,7 +737,7 @@ std::vector<Case> Corpus() {
          .exitCode = 0},
         {.name = "light_radius_with_a_variant_other_than_consensus",
          .args = kRender + " --shadows lmm --light-radius 0.5 --variant none",
-         .expected = "lightmesh: error: light mesh: a light radius (contact-hardening penumbrae) needs the "
+         .expected = "lightmesh: error: --light-radius: light mesh: a light radius (contact-hardening penumbrae) needs the "
                      "consensus variant (the default), not none\n",
          .files = {{"scene.json", good}}},
         {.name = "output_name_of_252_characters",

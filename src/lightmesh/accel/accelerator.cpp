@@ -5,6 +5,7 @@
 #ifdef LIGHTMESH_HAS_EMBREE
 #include "lightmesh/accel/embree_accel.h"
 #endif
+#include "lightmesh/settings/render_settings.h"
 #include "lightmesh/util/error.h"
 
 
@@ -20,11 +21,11 @@ std::unique_ptr<Accelerator> CreateAccelerator(std::string_view name, const Tria
 #ifdef LIGHTMESH_HAS_EMBREE
         return std::make_unique<EmbreeAccel>(mesh);
 #else
-        ThrowError("--accel embree: this build has no Embree back-end (install libembree-dev "
+        ThrowSettingError("accel", "--accel embree: this build has no Embree back-end (install libembree-dev "
                    "and configure with -DLIGHTMESH_ENABLE_EMBREE=ON)");
 #endif
     }
-    ThrowError("unknown ray-query back-end \"%.*s\" (choose brute, grid or embree)",
+    ThrowSettingError("accel", "unknown ray-query back-end \"%.*s\" (choose brute, grid or embree)",
                static_cast<int>(name.size()), name.data());
 }
 

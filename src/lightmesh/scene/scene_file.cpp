@@ -275,6 +275,9 @@ void ReadRender(const Reader& r, const Json& j, RenderOptions* ro) {
     if (const Json* v = o.Find("cell_summaries")) ro->lightMesh.cellSummaries = choice(*v, "cell_summaries");
     if (const Json* v = o.Find("light_radius")) ro->areaLight.radius = number(*v, "light_radius");
     if (const Json* v = o.Find("samples")) ro->areaLight.samples = integer(*v, "samples");
+    // Where each value came from, for the messages of the factories that read it.
+    for (const RenderSetting& s : RenderSettings())
+        if (o.Find(s.key)) ro->origins[s.key] = SourceLoc(r.File(), 0, 0, o.Child(s.key));
     o.Finish();
 }
 

@@ -238,6 +238,22 @@ TEST(SceneFile, ErrorsKeepTheirPlaceAsData) {
     }
 }
 
+// Each "render" value remembers its place in the file (RenderOptions::origins), for the
+// messages of the factories that read it; defaults have none.
+TEST(SceneFile, RenderValuesRememberTheirPlace) {
+    const std::string folder = TempFolder();
+    const std::string path = WriteFile(folder, "scene.json", R"({"camera": {"position": [0, 2, 8], "look_at": [0, 0, 0]},
+ "lights": [{"position": [0, 5, 0]}], "meshes": [{"file": ")" + std::string(LIGHTMESH_TEST_DATA) + R"(/scene_file/two_boxes.obj"}],
+ "render": {"ki": 3, "variant": "object", "width": 64}})");
+    std::vector<std::string> warnings;
+    const Scene scene = LoadScene(path, SceneLoadOptions{}, &warnings);
+    ASSERT_EQ(scene.render.origins.size(), 3u);
+    EXPECT_EQ(scene.render.origins.at("ki").Format(), path + " /render/ki");
+    EXPECT_EQ(scene.render.origins.at("variant").jsonPath, "/render/variant");
+    EXPECT_EQ(scene.render.origins.at("width").file, path);
+    EXPECT_EQ(scene.render.origins.count("cc"), 0u);
+}
+
 TEST(SceneFile, BadInputsGiveExactMessages) {
     const std::string wood = R"(, "materials": {"wood": {"kd": 0.5}, "mirror": {"mirror": 1}})";
     const std::vector<BadCase> cases = {

@@ -1,6 +1,7 @@
 // options.h -- everything that controls a render, from the scene file and the CLI.
 #pragma once
 
+#include <map>
 #include <string>
 
 #include "lightmesh/settings/accel_options.h"
@@ -65,6 +66,23 @@ struct RenderOptions {
     AccelOptions accelOptions;
     LightMeshOptions lightMesh;
     AreaLightOptions areaLight;
+    /// Where each knob's value came from, by scene-file key: "scene.json /render/ki" or
+    /// "--ki" (the CLI's value replaces the file's); a knob left at its default is absent.
+    std::map<std::string, SourceLoc> origins;
 };
+
+/// Runs f(); a SettingError it throws comes out as an Error at the place the knob's value
+/// came from ("--variant: unknown light-mesh variant ...", "scene.json /render/variant:
+/// ..."), unchanged for a knob at its default.
+template <typename F>
+decltype(auto) NamingOrigins(const RenderOptions& options, F&& f) {
+    try {
+        return f();
+    } catch (const SettingError& e) {
+        const auto it = options.origins.find(e.Key());
+        if (it == options.origins.end()) throw;
+        throw Error(it->second, e.Reason());
+    }
+}
 
 }  // namespace lm

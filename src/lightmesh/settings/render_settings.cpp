@@ -1,5 +1,6 @@
 #include "lightmesh/settings/render_settings.h"
 
+#include <cstdarg>
 #include <limits>
 #include <string>
 #include <stdexcept>
@@ -67,6 +68,14 @@ std::string UnusedSettingWarning(std::string_view key, std::string_view value) {
     }
     return std::string(s.flag) + " is not used by " + RenderSettingFor(s.usedWith).flag + " " + std::string(value) +
            " (only by " + users + "); ignored";
+}
+
+void ThrowSettingError(const char* key, const char* fmt, ...) {
+    va_list args;
+    va_start(args, fmt);
+    std::string reason = StringVPrintf(fmt, args);
+    va_end(args);
+    throw SettingError(key, reason);
 }
 
 }  // namespace lm

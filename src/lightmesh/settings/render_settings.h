@@ -8,7 +8,10 @@
 
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
+
+#include "lightmesh/util/error.h"
 
 namespace lm {
 
@@ -39,6 +42,22 @@ const std::vector<RenderSetting>& RenderSettings();
 
 /// The row of scene-file key `key`. An unknown key is a programming error (std::logic_error).
 const RenderSetting& RenderSettingFor(std::string_view key);
+
+/// An error in the value of one knob, thrown by the factory that reads it (the shadow
+/// method, the back-end). Its message is the reason alone; NamingOrigins (options.h) puts
+/// in front of it where the value came from when it did not come from the defaults.
+class SettingError : public Error {
+  public:
+    SettingError(std::string key, const std::string& reason) : Error(reason), key_(std::move(key)) {}
+    /// The knob's scene-file key ("variant").
+    const std::string& Key() const { return key_; }
+
+  private:
+    std::string key_;
+};
+
+/// Throws a SettingError for knob `key` with a printf-style reason.
+[[noreturn]] void ThrowSettingError(const char* key, const char* fmt, ...) __attribute__((format(printf, 2, 3)));
 
 /// The warning for knob `key` given as its flag when setting `s.usedWith` is `value`, or ""
 /// when that render uses it: "--cc is not used by --shadows rt (only by lmm); ignored".

@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "lightmesh/accel/accelerator.h"
+#include "lightmesh/settings/options.h"
 #include "lightmesh/shadow/shadow.h"
 
 namespace lm {
@@ -61,6 +62,29 @@ TEST(RenderSettings, UnusedFlagsAreNamedByTheTable) {
             EXPECT_EQ(UnusedSettingWarning(s.key, user), "");
         }
     }
+}
+
+// A factory's error in a knob's value names where the value came from: the flag, the
+// scene file's key, or nothing for a default.
+TEST(RenderSettings, FactoryErrorsNameTheValuesOrigin) {
+    RenderOptions options;
+    auto fail = [] { ThrowSettingError("variant", "unknown light-mesh variant \"%s\"", "x"); };
+    auto message = [&] {
+        try {
+            NamingOrigins(options, fail);
+        } catch (const Error& e) {
+            return std::string(e.what());
+        }
+        return std::string("<no error>");
+    };
+    EXPECT_EQ(message(), "unknown light-mesh variant \"x\"");
+    options.origins["variant"] = SourceLoc("scene.json", 0, 0, "/render/variant");
+    EXPECT_EQ(message(), "scene.json /render/variant: unknown light-mesh variant \"x\"");
+    options.origins["variant"] = SourceLoc::Option("--variant");
+    EXPECT_EQ(message(), "--variant: unknown light-mesh variant \"x\"");
+    // Other errors pass unchanged; a value passes through.
+    EXPECT_THROW(NamingOrigins(options, [] { ThrowError("other"); }), Error);
+    EXPECT_EQ(NamingOrigins(options, [] { return 7; }), 7);
 }
 
 // The README documents every knob: its flag in the table of `render` options, its key in

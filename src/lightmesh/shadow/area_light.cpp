@@ -26,6 +26,7 @@
 #include <bit>
 #include <cmath>
 
+#include "lightmesh/settings/render_settings.h"
 #include "lightmesh/util/error.h"
 
 namespace lm {
@@ -48,9 +49,9 @@ constexpr float OneMinusEpsilon = 0x1.fffffep-1f;
 
 void ValidateAreaLightOptions(const AreaLightOptions& o) {
     if (!(std::isfinite(o.radius) && o.radius >= 0))
-        ThrowError("light radius %g: must be a finite number >= 0", static_cast<double>(o.radius));
+        ThrowSettingError("light_radius", "light radius %g: must be a finite number >= 0", static_cast<double>(o.radius));
     if (o.samples < 1 || o.samples > 4096)
-        ThrowError("area-light samples %d: must be 1 to 4096", o.samples);
+        ThrowSettingError("samples", "area-light samples %d: must be 1 to 4096", o.samples);
 }
 
 uint64_t AreaLightSeed(const ShadingPoint& sp, uint32_t light) {

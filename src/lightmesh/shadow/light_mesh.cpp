@@ -17,6 +17,7 @@
 
 #include "lightmesh/geometry/triangle.h"
 #include "lightmesh/math/simd.h"
+#include "lightmesh/settings/render_settings.h"
 #include "lightmesh/shadow/area_light.h"
 #include "lightmesh/shadow/light_mesh_cells.h"
 #include "lightmesh/shadow/light_mesh_impl.h"
@@ -98,7 +99,8 @@ LightMeshVariant ParseLightMeshVariant(std::string_view name) {
     for (const VariantName& v : kVariants)
         if (name == v.name || name == v.paper || name == v.ascii)
             return {v.enumeration, v.local, v.name, v.paper};
-    ThrowError("unknown light-mesh variant \"%.*s\" (choose grid, templates, reduced, none, inside, "
+    ThrowSettingError("variant",
+                      "unknown light-mesh variant \"%.*s\" (choose grid, templates, reduced, none, inside, "
                "object or grid-none; or the paper's Grid, Ш, У, Нет, СТ, ОТ)",
                static_cast<int>(name.size()), name.data());
 }
@@ -418,12 +420,12 @@ std::unique_ptr<LightMeshShadows> CreateLightMeshShadows(const Scene& scene, con
     const size_t nLights = scene.lights.size();
     if (nLights > 62) ThrowError("light mesh: %zu lights; at most 62 are supported", nLights);
     const int ns = options.ns == 0 ? kDefaultTemplateSubsteps : options.ns;
-    if (ns < 1 || ns > 64) ThrowError("light mesh: ns must be between 1 and 64, got %d", ns);
+    if (ns < 1 || ns > 64) ThrowSettingError("ns", "light mesh: ns must be between 1 and 64, got %d", ns);
     const int bytes = LightMeshBytesPerNode(nLights);
     if (!(options.lightRadius >= 0) || !std::isfinite(options.lightRadius))
-        ThrowError("light mesh: the light radius must be finite and >= 0, got %g", options.lightRadius);
+        ThrowSettingError("light_radius", "light mesh: the light radius must be finite and >= 0, got %g", options.lightRadius);
     if (options.lightRadius > 0 && variant.local != LocalVisibility::Consensus)
-        ThrowError("light mesh: a light radius (contact-hardening penumbrae) needs the consensus variant (the "
+        ThrowSettingError("light_radius", "light mesh: a light radius (contact-hardening penumbrae) needs the consensus variant (the "
                    "default), not %s",
                    variant.name.c_str());
     const int bytesPerNode = LightMeshStorageBytesPerNode(nLights, options.lightRadius);
@@ -453,7 +455,7 @@ std::unique_ptr<LightMeshShadows> CreateLightMeshShadows(const Scene& scene, con
     }
     const std::string& summaries = options.cellSummaries;
     if (summaries != "auto" && summaries != "on" && summaries != "off")
-        ThrowError("cell summaries \"%s\": choose auto, on or off", summaries.c_str());
+        ThrowSettingError("cell_summaries", "cell summaries \"%s\": choose auto, on or off", summaries.c_str());
     if (options.simdWidth != 0 && options.simdWidth != 1 && options.simdWidth != 4 && options.simdWidth != 8)
         ThrowError("light mesh: SIMD width %d: choose 0, 1, 4 or 8", options.simdWidth);
     switch (bytes) {

@@ -1,5 +1,6 @@
 #include "lightmesh/shadow/shadow.h"
 
+#include "lightmesh/settings/render_settings.h"
 #include "lightmesh/shadow/area_light.h"
 #include "lightmesh/shadow/light_mesh.h"
 #include "lightmesh/util/error.h"
@@ -61,7 +62,7 @@ std::unique_ptr<ShadowMethod> CreateShadowMethod(std::string_view name, const Sc
         return CreateLightMeshShadows(scene, accel, lmm);
     }
     if (name == "area") return CreateAreaLightShadows(scene, accel, options.areaLight);
-    ThrowError("unknown shadow method \"%.*s\" (choose none, rt, lmm or area)", static_cast<int>(name.size()),
+    ThrowSettingError("shadows", "unknown shadow method \"%.*s\" (choose none, rt, lmm or area)", static_cast<int>(name.size()),
                name.data());
 }
 

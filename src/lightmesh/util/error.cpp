@@ -41,6 +41,7 @@ std::string Printable(const std::string& text) {
 }
 
 std::string SourceLoc::Format() const {
+    if (!option.empty()) return option;
     std::string out = file;
     if (line > 0 && column > 0)
         out += StringPrintf(":%zu:%zu", line, column);

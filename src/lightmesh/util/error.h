@@ -18,8 +18,8 @@ std::string StringVPrintf(const char* fmt, va_list args);
 std::string Printable(const std::string& text);
 
 /// Where in the user's input an error lies: a file and, inside it, a line and column (a
-/// text format's syntax) or a JSON pointer (a value of a scene file or bench matrix).
-/// Parts left empty (0 for line and column) are not known.
+/// text format's syntax) or a JSON pointer (a value of a scene file or bench matrix); or a
+/// command-line option. Parts left empty (0 for line and column) are not known.
 struct SourceLoc {
     SourceLoc() = default;
     SourceLoc(std::string file, size_t line = 0, size_t column = 0, std::string jsonPath = {})
@@ -28,10 +28,17 @@ struct SourceLoc {
     std::string file;
     size_t line = 0, column = 0;
     std::string jsonPath;  ///< "/lights/1/position"; empty for the whole file
+    std::string option;    ///< a command-line option ("--ki") instead of a file
 
-    bool Known() const { return !file.empty() || line > 0 || !jsonPath.empty(); }
+    /// The place of a value given as a command-line option.
+    static SourceLoc Option(std::string flag) {
+        SourceLoc loc;
+        loc.option = std::move(flag);
+        return loc;
+    }
+    bool Known() const { return !file.empty() || line > 0 || !jsonPath.empty() || !option.empty(); }
     /// As messages write it: "scene.json /lights/1/position", "scene.json:3:14",
-    /// "mesh.obj"; empty when nothing is known.
+    /// "mesh.obj", "--ki"; empty when nothing is known.
     std::string Format() const;
 };
 
