@@ -73,7 +73,7 @@ struct LoadedMesh {
 
 /// Reads a mesh file in any format Assimp knows (OBJ+MTL, glTF 2, PLY, STL, FBX, …):
 /// polygons are triangulated, points and lines dropped, node transforms applied. Materials
-/// come from the file (see MaterialFromFile in mesh_loader.cpp for the mapping). Throws
+/// come from the file (see MaterialFromFile in assimp_material.cpp for the mapping). Throws
 /// MeshFileError for a missing, unreadable, empty or malformed file, a file with no
 /// triangles, or non-finite coordinates. A file whose every mesh is excluded is not an
 /// error: the result is empty and meshesExcluded says why.
