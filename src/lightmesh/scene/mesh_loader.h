@@ -5,36 +5,12 @@
 #include <string_view>
 #include <vector>
 
+#include "lightmesh/geometry/affine.h"  // Affine, TransformMesh: for this header's users
 #include "lightmesh/geometry/mesh.h"
 #include "lightmesh/scene/scene.h"
 #include "lightmesh/util/error.h"
 
 namespace lm {
-
-/// An affine transform p ↦ A·p + t: the top three rows of a row-major 4×4 matrix
-/// (the fourth row is implicitly 0 0 0 1).
-struct Affine {
-    float m[3][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}};
-
-    static Affine Scale(const Vec3& s);
-    /// Rotation by `degrees` about `axis` (any non-zero length), counter-clockwise when
-    /// the axis points at the viewer (right-handed).
-    static Affine Rotate(const Vec3& axis, float degrees);
-    static Affine Translate(const Vec3& t);
-
-    /// The composition "first b, then this": (a * b)(p) = a(b(p)).
-    Affine operator*(const Affine& b) const;
-    Vec3 ApplyPoint(const Vec3& p) const;
-    Vec3 ApplyVector(const Vec3& v) const;
-    /// Determinant of the linear 3×3 part (negative: the transform mirrors).
-    float Determinant() const;
-};
-
-/// Transforms every position by `t` and every normal by the inverse transpose of its
-/// linear part (renormalised). A mirroring transform (determinant < 0) also reverses each
-/// triangle's winding, so geometric normals keep pointing the same way relative to the
-/// surface. Precondition: t is invertible.
-void TransformMesh(TriangleMesh* mesh, const Affine& t);
 
 /// What LoadMeshFile throws. what() is "<path>: <reason>"; the parts are kept so that a
 /// scene file can name its JSON path first.
@@ -97,7 +73,7 @@ struct LoadedMesh {
 
 /// Reads a mesh file in any format Assimp knows (OBJ+MTL, glTF 2, PLY, STL, FBX, …):
 /// polygons are triangulated, points and lines dropped, node transforms applied. Materials
-/// come from the file (see MaterialFromFile in mesh_loader.cpp for the mapping). Throws
+/// come from the file (see MaterialFromFile in assimp_material.cpp for the mapping). Throws
 /// MeshFileError for a missing, unreadable, empty or malformed file, a file with no
 /// triangles, or non-finite coordinates. A file whose every mesh is excluded is not an
 /// error: the result is empty and meshesExcluded says why.

@@ -1,0 +1,53 @@
+// mesh_import_internal.h -- what the parts of the mesh import share; not part of
+// mesh_loader.h's interface. The parts: mesh_loader.cpp (the entry points), assimp_import.cpp
+// (the import itself, ImportMeshInProcess), assimp_material.cpp (materials), gltf_checks.cpp
+// (glTF node graphs) and isolated_import.cpp (the child process).
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "lightmesh/scene/mesh_loader.h"
+
+struct aiMaterial;
+
+namespace lm {
+namespace mesh_import {
+
+// assimp_import.cpp
+
+/// "4194304" as "4,194,304", for the budgets' messages.
+std::string Thousands(uint64_t n);
+/// Checks what Assimp would report less clearly: a missing file, a directory, a FIFO, an
+/// empty or unreadable file.
+void CheckReadable(const std::string& path);
+/// Assimp's error string as a reason.
+std::string ImportErrorReason(std::string err, const ImportBudget& budget);
+
+/// The child's result file while it imports (-1 in the parent and in-process imports).
+extern int gResultFd;
+
+// assimp_material.cpp
+
+/// An Assimp material as a Phong material of formula (1); the mapping is written out above
+/// its definition.
+Material MaterialFromFile(const aiMaterial& am);
+
+// gltf_checks.cpp
+
+/// A .gltf's or .glb's node graph checked for cycles, depth and expansion against the budget
+/// before Assimp sees it (MeshFileError); other files, and JSON Assimp rejects anyway, pass.
+void CheckGltfHierarchy(const std::string& path, const ImportBudget& budget);
+
+// isolated_import.cpp
+
+/// An error as the child's result, written to `fd` (Assimp's assertions in the child end
+/// with it).
+void WriteErrorResult(int fd, const std::string& reason, bool unreadable);
+/// LoadMeshFile's import in a child process (see LoadMeshFile); in this process if there is
+/// no memfd or no fork.
+LoadedMesh ImportIsolated(const std::string& path, const MeshLoadOptions& options,
+                          const ImportBudget& budget);
+
+}  // namespace mesh_import
+}  // namespace lm
