@@ -12,21 +12,19 @@
 
 namespace lm {
 
-/// What LoadMeshFile throws. what() is "<path>: <reason>"; the parts are kept so that a
-/// scene file can name its JSON path first.
+/// What LoadMeshFile throws: an Error at the file (Where().file), "<path>: <reason>"; the
+/// reason is kept apart (Reason()) so that a scene file can name its JSON path first.
 class MeshFileError : public Error {
   public:
     MeshFileError(const std::string& path, const std::string& reason, bool unreadable)
-        : Error(path + ": " + reason), path_(path), reason_(reason), unreadable_(unreadable) {}
-    const std::string& Path() const { return path_; }
-    const std::string& Reason() const { return reason_; }
+        : Error(SourceLoc(path), reason), unreadable_(unreadable) {}
+    const std::string& Path() const { return Where().file; }
     /// True when the file could not be read at all (missing, a directory, empty, a format
     /// or content Assimp rejects); false when it was read but holds nothing usable (no
     /// triangles, non-finite coordinates).
     bool Unreadable() const { return unreadable_; }
 
   private:
-    std::string path_, reason_;
     bool unreadable_;
 };
 
