@@ -27,13 +27,7 @@ bool BruteForceAccel::Occluded(const Ray& ray) const {
     return false;
 }
 
-int BruteForceAccel::CountCrossings(const Ray& ray) const {
-    TriangleHit th;
-    int n = 0;
-    for (uint32_t i = 0; i < mesh_.triangles.size(); ++i)
-        n += IntersectTriangle(ray, mesh_.Vertex(i, 0), mesh_.Vertex(i, 1), mesh_.Vertex(i, 2), &th);
-    return n;
-}
+int BruteForceAccel::CountCrossings(const Ray& ray) const { return lm::CountCrossings(mesh_, ray); }
 
 AccelFigures BruteForceAccel::Figures() const {
     return {{"triangles", StringPrintf("%zu", mesh_.triangles.size())},

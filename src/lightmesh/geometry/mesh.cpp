@@ -152,4 +152,12 @@ EdgeReport AnalyzeEdges(const TriangleMesh& mesh) {
     return r;
 }
 
+int CountCrossings(const TriangleMesh& mesh, const Ray& ray) {
+    TriangleHit th;
+    int n = 0;
+    for (uint32_t i = 0; i < mesh.triangles.size(); ++i)
+        n += IntersectTriangle(ray, mesh.Vertex(i, 0), mesh.Vertex(i, 1), mesh.Vertex(i, 2), &th);
+    return n;
+}
+
 }  // namespace lm

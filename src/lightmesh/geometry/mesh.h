@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "lightmesh/math/bounds.h"
+#include "lightmesh/math/ray.h"
 
 namespace lm {
 
@@ -49,5 +50,11 @@ struct EdgeReport {
 /// Counts open and non-manifold edges: the inside-a-solid test (paper §4, "СТ") assumes
 /// closed objects and is unreliable where these exist.
 EdgeReport AnalyzeEdges(const TriangleMesh& mesh);
+
+/// The surfaces the ray crosses, every triangle tested (IntersectTriangle's watertight test
+/// and tie-breaks: a closed mesh gives exact inside/outside parity, paper §4). The brute-force
+/// back-end's CountCrossings, and the scene checks' light-inside-a-solid test, which needs no
+/// back-end for the few rays it traces.
+int CountCrossings(const TriangleMesh& mesh, const Ray& ray);
 
 }  // namespace lm

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "lightmesh/accel/accelerator.h"
+#include "lightmesh/geometry/mesh.h"
 #include "lightmesh/util/error.h"
 
 namespace lm::scene_load {
@@ -106,7 +106,7 @@ void CheckExtent(const Reader& r, const std::string& path, const Scene& scene) {
 /// way out of the scene's box is odd along each of six spread-out directions -- the parity
 /// rule of the light mesh's inside test (СТ). Unanimity, rather than a majority, keeps an
 /// open shape (a lampshade, a room without a ceiling) from being taken for a solid.
-bool InsideASolid(const Accelerator& accel, const Bounds3& box, const Vec3& p) {
+bool InsideASolid(const TriangleMesh& mesh, const Bounds3& box, const Vec3& p) {
     if (!box.Contains(p)) return false;
     const float reach = 1.01f * Length(box.Diagonal()) + 1.0f;
     const Vec3 directions[6] = {{1, 0.37f, 0.21f},  {-0.29f, 1, 0.43f},   {0.31f, -0.23f, 1},
@@ -114,7 +114,7 @@ bool InsideASolid(const Accelerator& accel, const Bounds3& box, const Vec3& p) {
     for (const Vec3& d : directions) {
         const Vec3 out = p + Normalize(d) * reach;
         if (!IsFinite(out)) return false;  // no room to test in float; assume outside
-        if ((accel.CountCrossings(Segment(p, out)) & 1) == 0) return false;
+        if ((CountCrossings(mesh, Segment(p, out)) & 1) == 0) return false;
     }
     return true;
 }
@@ -123,11 +123,9 @@ bool InsideASolid(const Accelerator& accel, const Bounds3& box, const Vec3& p) {
 /// mesh method (paper §4) assumes every light is outside the objects.
 void CheckLightsOutsideSolids(const Reader& r, const Scene& scene) {
     const Bounds3 box = scene.mesh.Bounds();
-    std::unique_ptr<Accelerator> accel;
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         if (!box.Contains(scene.lights[i].position)) continue;
-        if (!accel) accel = CreateAccelerator("brute", scene.mesh);
-        if (InsideASolid(*accel, box, scene.lights[i].position))
+        if (InsideASolid(scene.mesh, box, scene.lights[i].position))
             r.Fail(Index("/lights", i) + "/position",
                    "the light " + FormatVec(scene.lights[i].position) +
                        " is inside a closed object, so it would light nothing (lights must be "

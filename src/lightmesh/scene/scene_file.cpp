@@ -62,7 +62,6 @@
 #include <unordered_map>
 #include <unordered_set>
 
-#include "lightmesh/accel/accelerator.h"
 #include "lightmesh/scene/demo_scene.h"
 #include "lightmesh/scene/json_reader.h"
 #include "lightmesh/scene/mesh_loader.h"
