@@ -155,29 +155,9 @@ void PrintRender(const RenderCommand& cmd, const PreparedRender& p, const lm::Re
                 Count(c.cameraRays).c_str(), Count(c.shadowRays).c_str(),
                 Count(c.reflectionRays).c_str(), Count(c.shadingPoints).c_str());
     PrintFigures("accel", p.job->Accel().Figures());
-    if (c.interpolations + c.fallbacks > 0) {
-        const double points = static_cast<double>(c.interpolations + c.fallbacks);
-        std::printf("lmm       interpolated points %s, mean m %.1f, candidates per point %.1f, "
-                    "local-visibility segments %s, fallbacks %s (%.2f%%)\n",
-                    Count(c.interpolations).c_str(),
-                    c.interpolations ? static_cast<double>(c.nodesUsed) / static_cast<double>(c.interpolations) : 0.0,
-                    static_cast<double>(c.candidates) / points, Count(c.localSegments).c_str(),
-                    Count(c.fallbacks).c_str(), 100.0 * static_cast<double>(c.fallbacks) / points);
-        if (c.uniformCellPoints + c.planarCellPoints > 0)
-            std::printf("cells     points answered by their cell's summary %s (%.1f%%), in planar cells %s (%.1f%%), "
-                        "segments decided without a ray %s (%s by the point's blockers, %s by a node that sees the "
-                        "whole cell patch); mean m counts the other points only\n",
-                        Count(c.uniformCellPoints).c_str(), 100.0 * static_cast<double>(c.uniformCellPoints) / points,
-                        Count(c.planarCellPoints).c_str(), 100.0 * static_cast<double>(c.planarCellPoints) / points,
-                        Count(c.culledSegments + c.patchSegments).c_str(), Count(c.culledSegments).c_str(),
-                        Count(c.patchSegments).c_str());
-        if (c.penumbraLights > 0)
-            std::printf("penumbra  (point, light) pairs whose width followed the light radius %s (%.1f%% of points): "
-                        "%s by the nodes' kernel, %s by rays to the light's disc, the rest by the lattice and P's "
-                        "own ray\n",
-                        Count(c.penumbraLights).c_str(), 100.0 * static_cast<double>(c.penumbraLights) / points,
-                        Count(c.penumbraKernel).c_str(), Count(c.penumbraSampled).c_str());
-    }
+    // The shadow method's own counts (under MPI every rank's, summed), as lines it words itself.
+    for (const auto& [label, text] : p.job->Shadows().CounterLines(c))
+        std::printf("%-10s%s\n", label.c_str(), text.c_str());
     PrintFigures(ranks ? "shadows (rank 0)" : "shadows", p.job->Shadows().Figures());
     std::printf("memory    peak %s%s\n", lm::FormatBytes(lm::PeakMemoryBytes()).c_str(), ranks ? " (rank 0)" : "");
 }

@@ -7,11 +7,7 @@
 namespace lm::cli {
 
 // "1,234,567": counts are easier to read with thousands separators.
-std::string Count(uint64_t n) {
-    std::string s = std::to_string(n);
-    for (int i = static_cast<int>(s.size()) - 3; i > 0; i -= 3) s.insert(static_cast<size_t>(i), ",");
-    return s;
-}
+std::string Count(uint64_t n) { return lm::FormatCount(n); }
 
 void AddCommonOptions(CLI::App* cmd, CommonOptions* o) {
     cmd->add_option("scene", o->scene,

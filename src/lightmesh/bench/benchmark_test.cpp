@@ -6,12 +6,14 @@
 #include <filesystem>
 #include <fstream>
 
+#include "lightmesh/shadow/light_mesh_counters.h"
 #include "lightmesh/util/error.h"
 
 namespace lm {
 namespace {
 
 namespace fs = std::filesystem;
+using Lmc = LightMeshCount;
 
 fs::path WriteTemp(const std::string& name, const std::string& text) {
     const fs::path p = fs::path(::testing::TempDir()) / ("lm_bench_" + std::to_string(getpid()) + "_" + name);
@@ -133,7 +135,7 @@ TEST(RunBenchmark, QuickHtmlReport) {
         if (r.method == "penumbra") {
             ++penumbrae;
             EXPECT_FLOAT_EQ(r.lightRadius, report.quality[0].radius);
-            EXPECT_GT(r.counters.penumbraLights, 0u);
+            EXPECT_GT(Count(r.counters, Lmc::kPenumbraLights), 0u);
         }
     EXPECT_EQ(penumbrae, 2);
     ASSERT_EQ(report.quality.size(), 1u);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "lightmesh/shadow/light_mesh.h"
+#include "lightmesh/shadow/light_mesh_counters.h"
 #include "lightmesh/util/error.h"
 
 namespace lm {
@@ -123,21 +124,25 @@ std::string BenchCsv(const std::vector<BenchResult>& rs) {
         std::string runs;
         for (double s : r.seconds) runs += StringPrintf("%s%.4f", runs.empty() ? "" : " ", s);
         const RenderCounters& c = r.counters;
+        // The light mesh's counts: c.method holds them in its runs ("lmm", and "penumbra": lmm
+        // with a light radius) only; 0 for the other methods.
+        const bool lightMesh = r.method == "lmm" || r.method == "penumbra";
+        const auto lmm = [&](LightMeshCount k) -> unsigned long long { return lightMesh ? Count(c, k) : 0; };
+        const uint64_t interpolations = lmm(LightMeshCount::kInterpolations);
         out += StringPrintf("%s,%d,%d,%s,%s,%s,%s,%d,%g,%.4f,%s,%.4f,%llu,%llu,%llu,%llu,%llu,%.2f,%llu,%llu,%llu,%s,%llu,%llu,%g,%llu,%llu\n",
                             r.scene.c_str(), r.width, r.height, r.method.c_str(), r.variant.c_str(),
                             r.paperName.c_str(), r.accel.c_str(), r.cc, r.ki, r.median, runs.c_str(), r.setupSeconds,
                             static_cast<unsigned long long>(c.cameraRays), static_cast<unsigned long long>(c.shadowRays),
-                            static_cast<unsigned long long>(c.reflectionRays),
-                            static_cast<unsigned long long>(c.localSegments),
-                            static_cast<unsigned long long>(c.interpolations),
-                            c.interpolations ? static_cast<double>(c.nodesUsed) / static_cast<double>(c.interpolations) : 0.0,
-                            static_cast<unsigned long long>(c.fallbacks),
-                            static_cast<unsigned long long>(r.nodesEvaluated),
+                            static_cast<unsigned long long>(c.reflectionRays), lmm(LightMeshCount::kLocalSegments),
+                            lmm(LightMeshCount::kInterpolations),
+                            interpolations ? static_cast<double>(lmm(LightMeshCount::kNodesUsed)) /
+                                                 static_cast<double>(interpolations)
+                                           : 0.0,
+                            lmm(LightMeshCount::kFallbacks), static_cast<unsigned long long>(r.nodesEvaluated),
                             static_cast<unsigned long long>(r.peakMemoryBytes), r.image.c_str(),
-                            static_cast<unsigned long long>(c.uniformCellPoints),
-                            static_cast<unsigned long long>(c.culledSegments), r.lightRadius,
-                            static_cast<unsigned long long>(c.penumbraLights),
-                            static_cast<unsigned long long>(c.patchSegments));
+                            lmm(LightMeshCount::kUniformCellPoints), lmm(LightMeshCount::kCulledSegments),
+                            r.lightRadius,
+                            lmm(LightMeshCount::kPenumbraLights), lmm(LightMeshCount::kPatchSegments));
     }
     return out;
 }

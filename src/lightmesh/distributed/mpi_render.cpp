@@ -14,6 +14,7 @@
 #include <cstring>
 #include <exception>
 #include <new>
+#include <type_traits>
 
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/parallel.h"
@@ -22,9 +23,11 @@
 namespace lm {
 namespace {
 
-// RenderCounters is a plain run of uint64_t counters: it travels as such.
+// RenderCounters is a plain run of uint64_t counters (the renderer's, then the shadow
+// method's slots): it travels as such.
 constexpr int kCounterWords = static_cast<int>(sizeof(RenderCounters) / sizeof(uint64_t));
 static_assert(sizeof(RenderCounters) == kCounterWords * sizeof(uint64_t), "RenderCounters must be uint64_t only");
+static_assert(std::is_trivially_copyable_v<RenderCounters>, "RenderCounters travels by memcpy");
 
 // A rank's figures as one fixed-size message: tiles, batches, seconds and fetch seconds
 // (their bits), nodes evaluated, then the counters.

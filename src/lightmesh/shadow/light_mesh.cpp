@@ -94,6 +94,45 @@ std::vector<std::string> LightMeshVariantNames() {
     return names;
 }
 
+StatsLines LightMeshShadows::CounterLines(const RenderCounters& counters) const {
+    const auto n = [&counters](LightMeshCount k) { return Count(counters, k); };
+    const uint64_t interpolations = n(LightMeshCount::kInterpolations), fallbacks = n(LightMeshCount::kFallbacks);
+    StatsLines lines;
+    if (interpolations + fallbacks == 0) return lines;
+    const double points = static_cast<double>(interpolations + fallbacks);
+    lines.push_back(
+        {"lmm", StringPrintf("interpolated points %s, mean m %.1f, candidates per point %.1f, "
+                             "local-visibility segments %s, fallbacks %s (%.2f%%)",
+                             FormatCount(interpolations).c_str(),
+                             interpolations ? static_cast<double>(n(LightMeshCount::kNodesUsed)) /
+                                                  static_cast<double>(interpolations)
+                                            : 0.0,
+                             static_cast<double>(n(LightMeshCount::kCandidates)) / points,
+                             FormatCount(n(LightMeshCount::kLocalSegments)).c_str(), FormatCount(fallbacks).c_str(),
+                             100.0 * static_cast<double>(fallbacks) / points)});
+    const uint64_t uniform = n(LightMeshCount::kUniformCellPoints), planar = n(LightMeshCount::kPlanarCellPoints);
+    const uint64_t culled = n(LightMeshCount::kCulledSegments), patch = n(LightMeshCount::kPatchSegments);
+    if (uniform + planar > 0)
+        lines.push_back(
+            {"cells", StringPrintf("points answered by their cell's summary %s (%.1f%%), in planar cells %s (%.1f%%), "
+                                   "segments decided without a ray %s (%s by the point's blockers, %s by a node that "
+                                   "sees the whole cell patch); mean m counts the other points only",
+                                   FormatCount(uniform).c_str(), 100.0 * static_cast<double>(uniform) / points,
+                                   FormatCount(planar).c_str(), 100.0 * static_cast<double>(planar) / points,
+                                   FormatCount(culled + patch).c_str(), FormatCount(culled).c_str(),
+                                   FormatCount(patch).c_str())});
+    const uint64_t penumbra = n(LightMeshCount::kPenumbraLights);
+    if (penumbra > 0)
+        lines.push_back(
+            {"penumbra", StringPrintf("(point, light) pairs whose width followed the light radius %s (%.1f%% of "
+                                      "points): %s by the nodes' kernel, %s by rays to the light's disc, the rest by "
+                                      "the lattice and P's own ray",
+                                      FormatCount(penumbra).c_str(), 100.0 * static_cast<double>(penumbra) / points,
+                                      FormatCount(n(LightMeshCount::kPenumbraKernel)).c_str(),
+                                      FormatCount(n(LightMeshCount::kPenumbraSampled)).c_str())});
+    return lines;
+}
+
 LightMeshVariant ParseLightMeshVariant(std::string_view name) {
     if (name.empty()) name = kDefaultLightMeshVariant;
     for (const VariantName& v : kVariants)
@@ -193,8 +232,8 @@ inline void LightMesh<Word>::Visibility(const ShadingPoint& sp, const bool* need
         } else if (uniform) {
             // For every light needed, every node the point may use carries this bit, and
             // the set is not empty.
-            ++counters.interpolations;
-            ++counters.uniformCellPoints;
+            ++Count(counters, LightMeshCount::kInterpolations);
+            ++Count(counters, LightMeshCount::kUniformCellPoints);
             for (size_t l = 0; l < nLights; ++l) vis[l] = static_cast<float>((uniform >> l) & 1);
             return;
         }
@@ -202,8 +241,8 @@ inline void LightMesh<Word>::Visibility(const ShadingPoint& sp, const bool* need
         CubeWalk(sp, neededMask, acc, counters);
     }
     if (acc.weighted) {
-        ++counters.interpolations;
-        counters.nodesUsed += acc.m;
+        ++Count(counters, LightMeshCount::kInterpolations);
+        Count(counters, LightMeshCount::kNodesUsed) += acc.m;
         for (size_t l = 0; l < nLights; ++l)
             if (needed[l]) vis[l] = acc.vis[l];
         return;
@@ -211,7 +250,7 @@ inline void LightMesh<Word>::Visibility(const ShadingPoint& sp, const bool* need
     if (acc.m == 0) {
         // No node left (a crevice, or a sphere cut off by occluders): one shadow ray
         // per light, as RT would (the paper is silent on this case).
-        ++counters.fallbacks;
+        ++Count(counters, LightMeshCount::kFallbacks);
         for (size_t l = 0; l < nLights; ++l) {
             if (!needed[l]) continue;
             ++counters.shadowRays;
@@ -220,8 +259,8 @@ inline void LightMesh<Word>::Visibility(const ShadingPoint& sp, const bool* need
         return;
     }
     if constexpr (sizeof(Word) == 1) acc.Flush();
-    ++counters.interpolations;
-    counters.nodesUsed += acc.m;
+    ++Count(counters, LightMeshCount::kInterpolations);
+    Count(counters, LightMeshCount::kNodesUsed) += acc.m;
     // A true division, so that m visible nodes out of m give exactly 1 (as RT does).
     for (size_t l = 0; l < nLights; ++l)
         vis[l] = static_cast<float>(acc.visible[l]) / static_cast<float>(acc.m);

@@ -7,6 +7,7 @@
 #include <string>
 #include <string_view>
 
+#include "lightmesh/shadow/light_mesh_counters.h"
 #include "lightmesh/shadow/shadow.h"
 #include "lightmesh/shadow/sphere_templates.h"
 
@@ -91,6 +92,8 @@ inline constexpr const char* kDefaultLightMeshVariant = "consensus";
 class LightMeshShadows : public ShadowMethod {
   public:
     std::string_view Name() const override { return "lmm"; }
+    /// The "lmm", "cells" and "penumbra" lines of --stats, from the LightMeshCount slots.
+    StatsLines CounterLines(const RenderCounters& counters) const override;
 
     virtual const LightMeshLattice& Lattice() const = 0;
     virtual const LightMeshVariant& Variant() const = 0;

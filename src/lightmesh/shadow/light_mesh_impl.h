@@ -313,7 +313,7 @@ class LightMesh final : public LightMeshShadows {
 
     // The local-visibility segment from a node to P (paper §1.4): it must be unblocked.
     bool SeesPoint(const Vec3& x, const ShadingPoint& sp, RenderCounters& counters) const {
-        ++counters.localSegments;
+        ++Count(counters, LightMeshCount::kLocalSegments);
         return !accel_.Occluded(Segment(x, sp.origin));
     }
 

@@ -213,7 +213,7 @@ inline const FrontBlock* LightMesh<Word>::PatchWitness(const CellSummary& c, int
         if (lane) *lane = k;
         return true;
     });
-    if (found) ++counters.patchSegments;
+    if (found) ++Count(counters, LightMeshCount::kPatchSegments);
     return found;
 }
 
@@ -256,7 +256,7 @@ inline bool LightMesh<Word>::SeesPointCulled(const Vec3& x, const ShadingPoint& 
     if (b.known) {
         const int decided = cull_(b, x, sp.origin, b.margin);
         if (decided >= 0) {
-            ++counters.culledSegments;
+            ++Count(counters, LightMeshCount::kCulledSegments);
             return decided == 0;
         }
     }

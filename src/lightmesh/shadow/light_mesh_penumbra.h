@@ -31,7 +31,7 @@ inline float LightMesh<Word>::NarrowPenumbra(const ShadingPoint& sp, size_t l, f
         const bool centre = LightVisible(accel_, sp.origin, light);
         if (centre == (first != 0)) return centre ? 1.0f : 0.0f;
     }
-    ++counters.penumbraSampled;
+    ++Count(counters, LightMeshCount::kPenumbraSampled);
     int rays = 0;
     const float v =
         DiscLightVisibility(accel_, sp.origin, light, lightRadius_, kNarrowPerRing, AreaLightSeed(sp, static_cast<uint32_t>(l)), &rays);
@@ -111,12 +111,12 @@ inline void LightMesh<Word>::PenumbraInterpolate(const ShadingPoint& sp, Word ne
             }
             continue;
         }
-        ++counters.penumbraLights;
+        ++Count(counters, LightMeshCount::kPenumbraLights);
         if (Sampled(rho2[l])) {
             acc.vis[l] = NarrowPenumbra(sp, l, std::sqrt(rho2[l]), nodes, counters);
             continue;
         }
-        ++counters.penumbraKernel;
+        ++Count(counters, LightMeshCount::kPenumbraKernel);
         ++counters.shadowRays;
         float sum = LightVisible(accel_, sp.origin, light) ? 1.0f : 0.0f, weight = 1.0f;
         if (rho2[l] > 0) {

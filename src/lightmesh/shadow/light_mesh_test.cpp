@@ -18,6 +18,7 @@ namespace lm {
 namespace {
 
 using testing::AddBox;
+using Lmc = LightMeshCount;
 using testing::FloorPoint;
 using testing::FloorScene;
 using testing::RenderedFloorPoint;
@@ -82,8 +83,8 @@ TEST(LightMesh, UnoccludedPlaneEqualsRtExactly) {
     const RenderResult a = WhittedRenderer(s, *accel, *rt, s.render).Render();
     const RenderResult b = WhittedRenderer(s, *accel, *lmm, s.render).Render();
     EXPECT_EQ(a.image.pixels, b.image.pixels);
-    EXPECT_GT(b.counters.interpolations, 0u);
-    EXPECT_EQ(b.counters.fallbacks, 0u);
+    EXPECT_GT(Count(b.counters, Lmc::kInterpolations), 0u);
+    EXPECT_EQ(Count(b.counters, Lmc::kFallbacks), 0u);
 }
 
 // A large occluder high above the floor: far inside its shadow, LMM gives 0 as RT does.
@@ -161,7 +162,7 @@ TEST(LightMesh, SegmentTestStopsLeaksThatNoTestLetsThrough) {
             RenderCounters counters;
             leaksConsensus += consensus.Vis(sp) > 0;
             leaksConsensus += consensus.Vis(RenderedFloorPoint(x, z), 0, &counters) > 0;
-            patchSegments += counters.patchSegments;
+            patchSegments += Count(counters, Lmc::kPatchSegments);
         }
     }
     EXPECT_GT(samples, 100);
@@ -176,7 +177,7 @@ TEST(LightMesh, SegmentTestStopsLeaksThatNoTestLetsThrough) {
         for (float z = -half; z <= half; z += h / 3) {
             RenderCounters counters;
             EXPECT_EQ(consensus.Vis(RenderedFloorPoint(x, z), 0, &counters), ot.Vis(RenderedFloorPoint(x, z)));
-            patchSegments += counters.patchSegments;
+            patchSegments += Count(counters, Lmc::kPatchSegments);
         }
     EXPECT_GT(patchSegments, 0u);
     EXPECT_GT(leaksNone, samples / 2) << "the leak test must be able to fail";
@@ -269,8 +270,9 @@ TEST(LightMesh, ConsensusGivesTheObjectTestsImageExactly) {
                 results[v] = WhittedRenderer(s, *accel, *lmm, s.render).Render();
             }
             EXPECT_EQ(results[0].image.pixels, results[1].image.pixels) << "scene " << sceneIndex << " kI " << ki;
-            EXPECT_EQ(results[0].counters.fallbacks, results[1].counters.fallbacks);
-            EXPECT_LT(results[1].counters.localSegments, results[0].counters.localSegments / 2)
+            EXPECT_EQ(Count(results[0].counters, Lmc::kFallbacks), Count(results[1].counters, Lmc::kFallbacks));
+            EXPECT_LT(Count(results[1].counters, Lmc::kLocalSegments),
+                      Count(results[0].counters, Lmc::kLocalSegments) / 2)
                 << "scene " << sceneIndex << " kI " << ki;
         }
     }
@@ -336,19 +338,19 @@ TEST(LightMesh, CellSummariesKeepEveryImageExactly) {
                 const RenderResult slow = RenderLmm(s, *accel, "consensus", "off", ki);
                 EXPECT_EQ(ot.image.pixels, fast.image.pixels) << what;
                 EXPECT_EQ(ot.image.pixels, slow.image.pixels) << what;
-                EXPECT_EQ(ot.counters.fallbacks, fast.counters.fallbacks) << what;
-                EXPECT_LE(fast.counters.localSegments, slow.counters.localSegments) << what;
-                uniformPoints += fast.counters.uniformCellPoints;
-                planarPoints += fast.counters.planarCellPoints;
-                culledSegments += fast.counters.culledSegments;
-                patchSegments += fast.counters.patchSegments;
+                EXPECT_EQ(Count(ot.counters, Lmc::kFallbacks), Count(fast.counters, Lmc::kFallbacks)) << what;
+                EXPECT_LE(Count(fast.counters, Lmc::kLocalSegments), Count(slow.counters, Lmc::kLocalSegments)) << what;
+                uniformPoints += Count(fast.counters, Lmc::kUniformCellPoints);
+                planarPoints += Count(fast.counters, Lmc::kPlanarCellPoints);
+                culledSegments += Count(fast.counters, Lmc::kCulledSegments);
+                patchSegments += Count(fast.counters, Lmc::kPatchSegments);
                 if (ki != 2.0f) continue;
                 for (const char* variant : {"none", "inside"}) {
                     const RenderResult off = RenderLmm(s, *accel, variant, "off", ki);
                     const RenderResult on = RenderLmm(s, *accel, variant, "on", ki);
                     EXPECT_EQ(off.image.pixels, on.image.pixels) << what << " " << variant;
-                    EXPECT_GT(on.counters.uniformCellPoints, 0u) << what << " " << variant;
-                    EXPECT_EQ(off.counters.uniformCellPoints, 0u) << what << " " << variant;
+                    EXPECT_GT(Count(on.counters, Lmc::kUniformCellPoints), 0u) << what << " " << variant;
+                    EXPECT_EQ(Count(off.counters, Lmc::kUniformCellPoints), 0u) << what << " " << variant;
                 }
             }
         }
@@ -399,10 +401,10 @@ TEST(LightMesh, CellTolerancesFollowTheLocalCoordinates) {
     // With the scene's tolerance no point here is planar and no segment is decided by
     // blockers or patches (measured: 0, 0, and 6,096 of ОТ's 21,056 segments traced);
     // with the cells' own, 2,007 points are planar and 329 segments are traced.
-    EXPECT_GT(fast.counters.planarCellPoints, fast.counters.interpolations / 2);
-    EXPECT_GT(fast.counters.culledSegments, 0u);
-    EXPECT_GT(fast.counters.patchSegments, fast.counters.localSegments);
-    EXPECT_LT(fast.counters.localSegments, ot.counters.localSegments / 20);
+    EXPECT_GT(Count(fast.counters, Lmc::kPlanarCellPoints), Count(fast.counters, Lmc::kInterpolations) / 2);
+    EXPECT_GT(Count(fast.counters, Lmc::kCulledSegments), 0u);
+    EXPECT_GT(Count(fast.counters, Lmc::kPatchSegments), Count(fast.counters, Lmc::kLocalSegments));
+    EXPECT_LT(Count(fast.counters, Lmc::kLocalSegments), Count(ot.counters, Lmc::kLocalSegments) / 20);
 }
 
 // The templates' front test runs eight entries at a time (AVX2) or four (SSE), the
@@ -428,14 +430,15 @@ TEST(LightMesh, VectorisedFrontTestAndCullingMatchTheScalarOnes) {
                 }
                 const std::string what = StringPrintf("scene %d, kI %g, %s", index, ki, variant);
                 for (int w = 1; w < 3; ++w) {
+                    const RenderCounters &c0 = results[0].counters, &cw = results[w].counters;
                     EXPECT_EQ(results[0].image.pixels, results[w].image.pixels) << what << ", width " << widths[w];
-                    EXPECT_EQ(results[0].counters.candidates, results[w].counters.candidates) << what;
-                    EXPECT_EQ(results[0].counters.localSegments, results[w].counters.localSegments) << what;
+                    EXPECT_EQ(Count(c0, Lmc::kCandidates), Count(cw, Lmc::kCandidates)) << what;
+                    EXPECT_EQ(Count(c0, Lmc::kLocalSegments), Count(cw, Lmc::kLocalSegments)) << what;
                     // FindBlockers and the patch test: the AVX2 passes decide as the scalar ones.
-                    EXPECT_EQ(results[0].counters.culledSegments, results[w].counters.culledSegments) << what;
-                    EXPECT_EQ(results[0].counters.patchSegments, results[w].counters.patchSegments) << what;
+                    EXPECT_EQ(Count(c0, Lmc::kCulledSegments), Count(cw, Lmc::kCulledSegments)) << what;
+                    EXPECT_EQ(Count(c0, Lmc::kPatchSegments), Count(cw, Lmc::kPatchSegments)) << what;
                 }
-                candidates += results[0].counters.candidates;
+                candidates += Count(results[0].counters, Lmc::kCandidates);
             }
     }
     EXPECT_GT(candidates, 0u);
@@ -489,9 +492,9 @@ TEST(LightMesh, CellSummaryAnswersOpenFloorWithoutSegments) {
         RenderCounters c;
         lmm->Visibility(FloorPoint(x, 0.3f), needed, vis, c);
         EXPECT_EQ(vis[0], expected) << x;
-        EXPECT_EQ(c.uniformCellPoints, 1u) << x;
-        EXPECT_EQ(c.planarCellPoints, 1u) << x;
-        EXPECT_EQ(c.localSegments, 0u) << x;
+        EXPECT_EQ(Count(c, Lmc::kUniformCellPoints), 1u) << x;
+        EXPECT_EQ(Count(c, Lmc::kPlanarCellPoints), 1u) << x;
+        EXPECT_EQ(Count(c, Lmc::kLocalSegments), 0u) << x;
     }
     // On the box's top face, next to its edge: planar only if the reach stays on the face.
     float vis[kMaxLights] = {};
@@ -520,9 +523,9 @@ TEST(LightMesh, ReducedEqualsTemplatesWithoutOccludersInSpheres) {
         results[n++] = WhittedRenderer(s, *accel, *lmm, s.render).Render();
     }
     EXPECT_EQ(results[0].image.pixels, results[1].image.pixels);
-    EXPECT_LT(results[1].counters.localSegments, results[0].counters.localSegments);
+    EXPECT_LT(Count(results[1].counters, Lmc::kLocalSegments), Count(results[0].counters, Lmc::kLocalSegments));
     // And the occluder does cast a shadow: this is not a trivially lit image.
-    EXPECT_GT(results[0].counters.interpolations, 0u);
+    EXPECT_GT(Count(results[0].counters, Lmc::kInterpolations), 0u);
 }
 
 // СТ (§4) marks exactly the nodes inside closed solids, also when the segments it counts
@@ -621,10 +624,11 @@ TEST(LightMesh, ImagesAreIdenticalForAnyThreadCount) {
         });
         EXPECT_EQ(one.image.pixels, many.image.pixels) << variant;
         EXPECT_EQ(nodesOne, nodesMany) << variant;
-        EXPECT_EQ(one.counters.localSegments, many.counters.localSegments) << variant;
-        EXPECT_EQ(one.counters.uniformCellPoints, many.counters.uniformCellPoints) << variant;
-        EXPECT_EQ(one.counters.culledSegments, many.counters.culledSegments) << variant;
-        EXPECT_EQ(one.counters.patchSegments, many.counters.patchSegments) << variant;
+        EXPECT_EQ(Count(one.counters, Lmc::kLocalSegments), Count(many.counters, Lmc::kLocalSegments)) << variant;
+        EXPECT_EQ(Count(one.counters, Lmc::kUniformCellPoints), Count(many.counters, Lmc::kUniformCellPoints))
+            << variant;
+        EXPECT_EQ(Count(one.counters, Lmc::kCulledSegments), Count(many.counters, Lmc::kCulledSegments)) << variant;
+        EXPECT_EQ(Count(one.counters, Lmc::kPatchSegments), Count(many.counters, Lmc::kPatchSegments)) << variant;
     }
 }
 

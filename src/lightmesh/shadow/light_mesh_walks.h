@@ -14,7 +14,7 @@ namespace {
 template <typename Word>
 inline void LightMesh<Word>::Candidate(const Vec3& x, uint64_t index, const ShadingPoint& sp, Accumulator& acc,
                                        RenderCounters& counters) const {
-    ++counters.candidates;
+    ++Count(counters, LightMeshCount::kCandidates);
     switch (variant_.local) {
         case LocalVisibility::Object:
         case LocalVisibility::Reduced:    // only on the cube loop's fallback path: test all
@@ -75,7 +75,7 @@ inline void LightMesh<Word>::CubeWalk(const ShadingPoint& sp, Word neededMask, A
 template <typename Word>
 inline void LightMesh<Word>::CubePenumbra(const ShadingPoint& sp, Word neededMask, std::vector<PenumbraNode>& nodes,
                                           Accumulator& acc, RenderCounters& counters) const {
-    counters.candidates += nodes.size();
+    Count(counters, LightMeshCount::kCandidates) += nodes.size();
     bool agree = true;
     for (const PenumbraNode& c : nodes) agree &= ((c.w ^ nodes.front().w) & neededMask) == 0;
     if (!agree) {
@@ -157,7 +157,7 @@ inline bool LightMesh<Word>::TemplateWalk(const ShadingPoint& sp, Word neededMas
             // cell's tolerance (the uniform one only needs the nodes' side of Π).
             planar = onPlane && (c.flags & (side == 0 ? kClear0 : kClear1)) &&
                      Dot(sp.origin - sp.p, sp.n) > 4 * c.delta;
-            if (planar) ++counters.planarCellPoints;
+            if (planar) ++Count(counters, LightMeshCount::kPlanarCellPoints);
         }
         const SideSummary sideSummary = side >= 0 ? Side(c, brick, slot, side, ci, cj, ck) : SideSummary{};
         if (side >= 0 && (neededMask & ~sideSummary.uniform) == 0) {
@@ -179,7 +179,7 @@ inline bool LightMesh<Word>::TemplateWalk(const ShadingPoint& sp, Word neededMas
                 int tested = 0;
                 if (!some)
                     some = all.Any([&](const FrontBlock& b, int k) {
-                        ++counters.candidates;
+                        ++Count(counters, LightMeshCount::kCandidates);
                         if (tested++ == 1) FindBlockers(c, base, sp, &blockers);
                         return SeesPointCulled(node(b, k), sp, blockers, counters);
                     });
@@ -195,7 +195,7 @@ inline bool LightMesh<Word>::TemplateWalk(const ShadingPoint& sp, Word neededMas
     }
     if (variant_.local == LocalVisibility::None) {
         UseAll(all, base, acc);  // Нет: every node in front
-        counters.candidates += acc.m;
+        Count(counters, LightMeshCount::kCandidates) += acc.m;
         return true;
     }
     if (variant_.local != LocalVisibility::Reduced) {
@@ -208,12 +208,12 @@ inline bool LightMesh<Word>::TemplateWalk(const ShadingPoint& sp, Word neededMas
     // nodes without testing them, otherwise test the inner nodes too.
     bool allSee = true;
     boundary.ForEach([&](const FrontBlock& b, int k) {
-        ++counters.candidates;
+        ++Count(counters, LightMeshCount::kCandidates);
         if (SeesPoint(node(b, k), sp, counters)) Use(acc, Evaluate(static_cast<uint64_t>(base + b.linear[k])));
         else allSee = false;
     });
     inner.ForEach([&](const FrontBlock& b, int k) {
-        ++counters.candidates;
+        ++Count(counters, LightMeshCount::kCandidates);
         if (allSee || SeesPoint(node(b, k), sp, counters)) Use(acc, Evaluate(static_cast<uint64_t>(base + b.linear[k])));
     });
     return true;
@@ -234,7 +234,7 @@ inline void LightMesh<Word>::ConsensusWalk(const ShadingPoint& sp, Word neededMa
                                            Blockers& blockers, Accumulator& acc, RenderCounters& counters) const {
     if (planar && lightRadius_ == 0) {
         UseAll(all, base, acc);
-        counters.candidates += acc.m;
+        Count(counters, LightMeshCount::kCandidates) += acc.m;
         return;
     }
     // Pass 1: evaluate the candidates and count, per light, those that see it (Нет's
@@ -251,7 +251,7 @@ inline void LightMesh<Word>::ConsensusWalk(const ShadingPoint& sp, Word neededMa
         agree &= counts.visible[l] == 0 || counts.visible[l] == n;
         if (2 * counts.visible[l] > n) majority |= Word(1) << l;
     }
-    counters.candidates += n;
+    Count(counters, LightMeshCount::kCandidates) += n;
     if (lightRadius_ > 0) {
         if (!agree) {
             thread_local std::vector<PenumbraNode> nodes;
@@ -313,7 +313,7 @@ inline void LightMesh<Word>::MinorityFirst(const ShadingPoint& sp, Word neededMa
     auto sees = [&](const FrontBlock& b, int k) {
         const Vec3 x = EntryNode(ci, cj, ck, b, k);
         if (patch && PatchSees(*patch, b, k, x)) {
-            ++counters.patchSegments;
+            ++Count(counters, LightMeshCount::kPatchSegments);
             return true;
         }
         if (summary && !blockers.tried) FindBlockers(*summary, base, sp, &blockers);

@@ -19,6 +19,7 @@ namespace lm {
 namespace {
 
 using testing::AddBox;
+using Lmc = LightMeshCount;
 using testing::FloorPoint;
 using testing::FloorScene;
 
@@ -128,11 +129,11 @@ TEST(Penumbra, WidthGrowsWithTheOccluderDistanceAsTheLawSays) {
         // Which regime answered: rays to the light's disc below 1.5·h = 0.3 of support
         // (1.44·w), the nodes' kernel above.
         if (H < 3) {
-            EXPECT_GT(c.penumbraSampled, 100u) << H;
-            EXPECT_EQ(c.penumbraKernel, 0u) << H;
+            EXPECT_GT(Count(c, Lmc::kPenumbraSampled), 100u) << H;
+            EXPECT_EQ(Count(c, Lmc::kPenumbraKernel), 0u) << H;
         } else {
-            EXPECT_GT(c.penumbraKernel, 100u) << H;
-            EXPECT_EQ(c.penumbraSampled, 0u) << H;
+            EXPECT_GT(Count(c, Lmc::kPenumbraKernel), 100u) << H;
+            EXPECT_EQ(Count(c, Lmc::kPenumbraSampled), 0u) << H;
         }
         std::printf("plate at height %g: w %.3f, 25-75%% band %.4f, analytic %.4f (%+.0f%%)\n", H, w, measured,
                     analytic, 100 * (measured / analytic - 1));
@@ -191,10 +192,10 @@ TEST(Penumbra, PointsOnTheSceneBoxsFarFacesGetItToo) {
         sp.prim = 2;
         differ += p.Vis(sp, &c) != fixed.Vis(sp, &cFixed);
     }
-    EXPECT_GT(c.penumbraLights, 10u);
-    EXPECT_EQ(cFixed.penumbraLights, 0u);
+    EXPECT_GT(Count(c, Lmc::kPenumbraLights), 10u);
+    EXPECT_EQ(Count(cFixed, Lmc::kPenumbraLights), 0u);
     EXPECT_GT(differ, 10);
-    EXPECT_EQ(c.uniformCellPoints, 0u) << "the cube loop, not the templates, must have answered";
+    EXPECT_EQ(Count(c, Lmc::kUniformCellPoints), 0u) << "the cube loop, not the templates, must have answered";
 }
 
 TEST(Penumbra, StaysLeakFree) {
@@ -235,8 +236,8 @@ TEST(Penumbra, ImagesAreIdenticalForAnyThreadCount) {
         many = WhittedRenderer(s, *accel, *lmm, s.render).Render();
     });
     EXPECT_EQ(one.image.pixels, many.image.pixels);
-    EXPECT_GT(one.counters.penumbraLights, 0u);
-    EXPECT_EQ(one.counters.penumbraLights, many.counters.penumbraLights);
+    EXPECT_GT(Count(one.counters, Lmc::kPenumbraLights), 0u);
+    EXPECT_EQ(Count(one.counters, Lmc::kPenumbraLights), Count(many.counters, Lmc::kPenumbraLights));
     EXPECT_EQ(one.counters.shadowRays, many.counters.shadowRays);
     // And the light radius changes the image (it is not ignored by lmm).
     s.render.areaLight.radius = 0.0f;

@@ -24,6 +24,8 @@ struct ShadingPoint {
 
 /// Named figures for --stats.
 using ShadowFigures = std::vector<std::pair<std::string, std::string>>;
+/// Lines for --stats, one per pair: the line's label ("lmm") and its text.
+using StatsLines = std::vector<std::pair<std::string, std::string>>;
 
 /// Computes V(L_i, P) of formula (1), or its replacement in formula (2).
 class ShadowMethod {
@@ -35,11 +37,15 @@ class ShadowMethod {
     /// with needed[i] true must be filled (the others light P from behind); the rest may
     /// be left as they are. Must be thread-safe and deterministic: the result may depend
     /// only on the point, never on the thread or on which points were shaded before.
+    /// Counts its shadow rays in counters.shadowRays and its own work in counters.method.
     virtual void Visibility(const ShadingPoint& sp, const bool* needed, float* vis,
                             RenderCounters& counters) const = 0;
 
     /// Figures gathered during rendering and set-up, for --stats.
     virtual ShadowFigures Figures() const { return {}; }
+    /// The method's own counts of a render (the slots of counters.method it fills), as
+    /// lines for --stats; none for methods that count nothing of their own.
+    virtual StatsLines CounterLines(const RenderCounters& /*counters*/) const { return {}; }
     /// Light-mesh nodes evaluated so far; 0 for methods without nodes.
     virtual uint64_t NodesEvaluated() const { return 0; }
 };

@@ -303,4 +303,15 @@ std::string FormatBytes(uint64_t bytes) {
                   : StringPrintf("%.1f %s", v, units[u]);
 }
 
+std::string FormatCount(uint64_t n) {
+    const std::string digits = std::to_string(n);
+    std::string s;
+    s.reserve(digits.size() + digits.size() / 3);
+    for (size_t i = 0; i < digits.size(); ++i) {
+        if (i > 0 && (digits.size() - i) % 3 == 0) s += ',';
+        s += digits[i];
+    }
+    return s;
+}
+
 }  // namespace lm

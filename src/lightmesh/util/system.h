@@ -71,4 +71,7 @@ uint64_t ParseByteCount(const std::string& text);
 /// "1.5 GiB", "320 MiB", "12 KiB", "17 B".
 std::string FormatBytes(uint64_t bytes);
 
+/// "1,234,567": a count with thousands separators.
+std::string FormatCount(uint64_t n);
+
 }  // namespace lm
