@@ -1,4 +1,5 @@
-// Tests of LoadScene: the JSON scene format, its error messages, and bare-mesh framing.
+// Tests of LoadScene: the JSON scene format, its error messages, and bare-mesh framing. Over
+// 500 lines as one concept: most of it is the table of bad inputs and their exact messages.
 #include "lightmesh/scene/scene_file.h"
 #include "lightmesh/settings/render_settings.h"
 

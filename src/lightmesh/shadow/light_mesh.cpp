@@ -1,3 +1,7 @@
+// light_mesh.cpp -- the light mesh method's entry points (paper §2-4): the lattice, the
+// variants' names, LightMesh's construction, node evaluation and figures, its --stats lines
+// and the factory; the class and its other parts are light_mesh_impl.h and the headers it
+// names. A little over 500 lines as one concept: what builds and reports one light mesh.
 #include "lightmesh/shadow/light_mesh.h"
 
 #include <algorithm>
