@@ -1,5 +1,6 @@
-// The bad-input corpus (issue 8; over 500 lines as one concept: a table of cases): every kind of bad scene, mesh, option and output path the
-// renderer may be given, run through the real executable. Each case checks the exit code
+// The bad-input corpus (issue 8; over 500 lines as one concept: a table of cases): every
+// kind of bad scene, mesh, option and output path the renderer may be given, run through
+// the real executable. Each case checks the exit code
 // (1: bad input; never a crash), the message (the whole line where it is stable, else a
 // distinctive part naming the file and JSON path), and that the output file does not
 // appear -- or, when it existed before, is byte-identical afterwards with no temporary
