@@ -9,18 +9,6 @@
 
 namespace lm {
 
-float SrgbEncode(float v) {
-    if (!(v > 0)) return 0;  // also NaN
-    if (v >= 1) return 1;
-    return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
-}
-
-float SrgbDecode(float s) {
-    if (!(s > 0)) return 0;
-    if (s >= 1) return 1;
-    return s <= 0.04045f ? s / 12.92f : std::pow((s + 0.055f) / 1.055f, 2.4f);
-}
-
 Color TurboColormap(float x) {
     // Polynomial approximation by Ruofei Du of Anton Mikhailov's Turbo map (Google, 2019,
     // Apache-2.0): https://research.google/blog/turbo-an-improved-rainbow-colormap-for-visualization/

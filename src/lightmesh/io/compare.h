@@ -49,10 +49,6 @@ void WriteDiffImage(const std::string& path, const Image& a, const Image& b, flo
 /// "identical":true (JSON has no infinity).
 std::string ImageMetricsJson(const ImageMetrics& m, const std::string& a, const std::string& b);
 
-/// The display value of a linear channel: clamped to [0, 1], exact sRGB curve.
-float SrgbEncode(float linear);
-/// The inverse: the linear value of a display value in [0, 1].
-float SrgbDecode(float encoded);
 /// Turbo (Mikhailov 2019), Ruofei Du's polynomial fit: x in [0, 1] → sRGB in [0, 1].
 Color TurboColormap(float x);
 

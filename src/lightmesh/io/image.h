@@ -34,6 +34,11 @@ void WriteImage(const std::string& path, const Image& image);
 /// Reads a PNG (decoded from sRGB to linear) or an EXR. Throws Error naming the file.
 Image ReadImage(const std::string& path);
 
+/// The display value of a linear channel: clamped to [0, 1], exact sRGB curve (the one
+/// place it is written: the PNG bytes, their decoding and the comparison's metrics use it).
+float SrgbEncode(float linear);
+/// The inverse: the linear value of a display value in [0, 1].
+float SrgbDecode(float encoded);
 /// The 8-bit sRGB bytes of a linear value (clamped to [0, 1], rounded to nearest; NaN is 0).
 /// A table lookup, exactly EncodeSrgb8Reference's result for every float.
 unsigned char EncodeSrgb8(float linear);

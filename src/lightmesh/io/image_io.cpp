@@ -51,17 +51,23 @@ ImageFormat ImageFormatFor(const std::string& path) {
     ThrowErrorAt({path}, "unknown image extension \"%s\" (use .png or .exr)", ext.c_str());
 }
 
-unsigned char EncodeSrgb8Reference(float v) {
-    if (!(v > 0)) return 0;  // also maps NaN to 0
-    if (v >= 1) return 255;
-    const float s = v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
-    return static_cast<unsigned char>(std::lround(s * 255.0f));
+float SrgbEncode(float v) {
+    if (!(v > 0)) return 0;  // also NaN
+    if (v >= 1) return 1;
+    return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
 }
 
-float DecodeSrgb8(unsigned char e) {
-    const float s = static_cast<float>(e) / 255.0f;
+float SrgbDecode(float s) {
+    if (!(s > 0)) return 0;
+    if (s >= 1) return 1;
     return s <= 0.04045f ? s / 12.92f : std::pow((s + 0.055f) / 1.055f, 2.4f);
 }
+
+unsigned char EncodeSrgb8Reference(float v) {
+    return static_cast<unsigned char>(std::lround(SrgbEncode(v) * 255.0f));  // NaN: 0
+}
+
+float DecodeSrgb8(unsigned char e) { return SrgbDecode(static_cast<float>(e) / 255.0f); }
 
 namespace {
 

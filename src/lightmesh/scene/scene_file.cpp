@@ -543,11 +543,8 @@ Scene LoadBuiltin(const std::string& spec, std::vector<std::string>* warnings) {
 }  // namespace
 
 std::string ModelCacheDir() {
-    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg)
-        return (fs::path(xdg) / "lightmesh" / "models").string();
-    if (const char* home = std::getenv("HOME"); home && *home)
-        return (fs::path(home) / ".cache" / "lightmesh" / "models").string();
-    return "lightmesh-models";
+    const std::string dir = CacheDir("models");
+    return dir.empty() ? "lightmesh-models" : dir;
 }
 
 Scene LoadScene(const std::string& spec, const SceneLoadOptions& options,

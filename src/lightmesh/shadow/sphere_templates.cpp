@@ -184,13 +184,7 @@ SphereTemplates ParseSphereTemplates(std::string_view bytes, const std::string& 
     return t;
 }
 
-std::string DefaultTemplateDir() {
-    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg)
-        return (std::filesystem::path(xdg) / "lightmesh" / "templates").string();
-    if (const char* home = std::getenv("HOME"); home && *home)
-        return (std::filesystem::path(home) / ".cache" / "lightmesh" / "templates").string();
-    return {};
-}
+std::string DefaultTemplateDir() { return CacheDir("templates"); }
 
 std::string TemplateFileName(const std::string& dir, int ns, float ki) {
     // kI with 9 significant digits names a float uniquely.

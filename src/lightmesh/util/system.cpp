@@ -314,4 +314,12 @@ std::string FormatCount(uint64_t n) {
     return s;
 }
 
+std::string CacheDir(const char* kind) {
+    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg)
+        return (std::filesystem::path(xdg) / "lightmesh" / kind).string();
+    if (const char* home = std::getenv("HOME"); home && *home)
+        return (std::filesystem::path(home) / ".cache" / "lightmesh" / kind).string();
+    return {};
+}
+
 }  // namespace lm

@@ -74,4 +74,8 @@ std::string FormatBytes(uint64_t bytes);
 /// "1,234,567": a count with thousands separators.
 std::string FormatCount(uint64_t n);
 
+/// The folder of lightmesh's cache `kind` ("templates", "models"):
+/// $XDG_CACHE_HOME/lightmesh/KIND, else $HOME/.cache/lightmesh/KIND; empty if neither is set.
+std::string CacheDir(const char* kind);
+
 }  // namespace lm
