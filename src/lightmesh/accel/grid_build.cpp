@@ -387,12 +387,8 @@ void NestedGridAccel::ComputeEmptyReach() {
         ForEachIndex(cells, minParallel, [&](size_t c) {
             const int x = int(c % nx), y = int(c / nx % ny), z = int(c / (size_t(nx) * ny));
             const int i = axis == 1 ? y : z;
-            int best = K;
-            for (int j = std::max(0, i - K); j <= std::min(n - 1, i + K) && best > 0; ++j) {
-                const int v = src[axis == 1 ? at(x, j, z) : at(x, y, j)];
-                best = std::min(best, std::max(std::abs(j - i), v));
-            }
-            dst[c] = uint8_t(best);
+            auto value = [&](int j) { return int(src[axis == 1 ? at(x, j, z) : at(x, y, j)]); };
+            dst[c] = uint8_t(grid_detail::WindowMinOfMax(value, i, n, K));
         });
     };
     pass(d, e, 1);

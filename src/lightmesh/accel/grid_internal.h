@@ -2,6 +2,7 @@
 // share; not part of the grid's interface.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 
 #include "lightmesh/accel/grid.h"
@@ -15,5 +16,20 @@ uint64_t FilterBlocks4(const NestedGridAccel::TriBlock* blocks, uint32_t count, 
 uint64_t FilterBlocks8(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray);
 /// Whether this CPU runs FilterBlocks8's AVX2 code.
 bool HasAvx2();
+
+/// The empty-space pass along one axis (NestedGridAccel::ComputeEmptyReach): the minimum over
+/// 0 <= j < n with |j − i| <= k of max(|j − i|, value(j)), and at most k, for value(j) >= 0.
+/// Searched outward from i: a cell at distance d gives at least d, so the search stops once
+/// d reaches the best found, which is the whole window's minimum in a few steps near
+/// geometry instead of 2k + 1.
+template <typename Value>
+int WindowMinOfMax(Value&& value, int i, int n, int k) {
+    int best = std::min(k, value(i));
+    for (int d = 1; d < best; ++d) {
+        if (i - d >= 0) best = std::min(best, std::max(d, value(i - d)));
+        if (i + d < n) best = std::min(best, std::max(d, value(i + d)));
+    }
+    return best;
+}
 
 }  // namespace lm::grid_detail

@@ -4,8 +4,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
+#include <random>
 #include <string>
+#include <vector>
+
+#include "lightmesh/accel/grid_internal.h"
 
 #include "lightmesh/accel/brute_force.h"
 #include "lightmesh/geometry/triangle.h"
@@ -59,6 +64,28 @@ TEST(GridResolution, AutoHeuristicBounds) {
     const auto capped = NestedGridAccel::AutoResolution(10000000, Bounds3(Vec3(0), Vec3(4, 1, 1)));
     EXPECT_EQ(capped[0], NestedGridAccel::kMaxAutoResolution);
     EXPECT_EQ(capped[1], NestedGridAccel::kMaxAutoResolution / 4);
+}
+
+// The empty-space pass's outward search gives the minimum over the whole window, which the
+// build computed before by scanning all 2k + 1 cells.
+TEST(GridEmptySpace, OutwardSearchEqualsTheWholeWindow) {
+    std::mt19937 rng(7);
+    int checked = 0, belowK = 0;
+    for (int trial = 0; trial < 2000; ++trial) {
+        const int n = 1 + static_cast<int>(rng() % 40), k = 1 + static_cast<int>(rng() % 10);
+        std::vector<int> v(n);
+        for (int& x : v) x = static_cast<int>(rng() % (k + 2));  // values up to k + 1
+        for (int i = 0; i < n; ++i) {
+            int whole = k;
+            for (int j = std::max(0, i - k); j <= std::min(n - 1, i + k); ++j)
+                whole = std::min(whole, std::max(std::abs(j - i), v[j]));
+            const int outward = grid_detail::WindowMinOfMax([&](int j) { return v[j]; }, i, n, k);
+            ASSERT_EQ(outward, whole) << "n " << n << " k " << k << " i " << i;
+            ++checked;
+            belowK += whole < k;
+        }
+    }
+    EXPECT_GT(belowK, checked / 4);  // the cases where the search stops early are many
 }
 
 TEST(GridResolution, OptionOverridesLongestSide) {
