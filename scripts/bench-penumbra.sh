@@ -2,9 +2,10 @@
 # Contact-hardening penumbrae against true soft shadows (README, "Contact-hardening
 # penumbrae against true soft shadows"): per scene, the area-light reference (REF samples,
 # light radius R = FRAC × the scene's diagonal), then RUNS interleaved rounds of no shadows,
-# RT, the light mesh with its fixed radius, the light mesh with --light-radius R, and naive
-# soft shadows with 1, 2 and 4 rays per light; prints the median render times as ratios to
-# RT from the same rounds and PSNR/SSIM against the reference.
+# RT, the light mesh with its fixed radius, the light mesh with --light-radius R (with the
+# default --thin-check all, and with off and lit), and naive soft shadows with 1, 2 and 4
+# rays per light; prints the median render times as ratios to RT from the same rounds and
+# PSNR/SSIM against the reference.
 #   scripts/bench-penumbra.sh [SCENE...]   (default: gazebo, playground, castle, garden)
 # Environment: W, H (1024×768), RUNS (3), FRAC (0.015), REF (256), LM (the binary), OUT
 # (folder of the images, default a temporary one).
@@ -15,7 +16,7 @@ W=${W:-1024}; H=${H:-768}; RUNS=${RUNS:-3}; FRAC=${FRAC:-0.015}; REF=${REF:-256}
 OUT=${OUT:-$(mktemp -d)}
 mkdir -p "$OUT"
 [ $# -gt 0 ] || set -- builtin:gazebo scenes/real/parque.json scenes/real/castle.json scenes/real/garden.json
-methods=(none rt lmm penumbra area1 area2 area4)
+methods=(none rt lmm penumbra-off penumbra-lit penumbra area1 area2 area4)
 median() { tr ' ' '\n' | grep . | sort -g | awk '{a[NR]=$1} END {print a[int((NR+1)/2)]}'; }
 for scene in "$@"; do
   tag=$(basename "$scene" .json | sed 's/^builtin://')
@@ -33,6 +34,7 @@ for scene in "$@"; do
         rt) args=(--shadows rt) ;;
         lmm) args=(--shadows lmm) ;;
         penumbra) args=(--shadows lmm --light-radius "$R") ;;
+        penumbra-*) args=(--shadows lmm --light-radius "$R" --thin-check "${m#penumbra-}") ;;
         area*) args=(--shadows area --light-radius "$R" --samples "${m#area}") ;;
       esac
       t=$("$LM" render "${common[@]}" "${args[@]}" -o "$OUT/$tag-$m.png" | grep -o 'render [0-9.]*' | cut -d' ' -f2)

@@ -57,6 +57,7 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
     if (cmd.templateDir) options.lightMesh.templateDir = *cmd.templateDir;
     if (cmd.cellSummaries) options.lightMesh.cellSummaries = *cmd.cellSummaries;
     if (cmd.lightRadius) options.areaLight.radius = *cmd.lightRadius;
+    if (cmd.thinCheck) options.lightMesh.thinCheck = *cmd.thinCheck;
     if (cmd.samples) options.areaLight.samples = *cmd.samples;
 
     if (cmd.variant && cmd.variant->empty())
@@ -79,6 +80,7 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
         {"template_dir", cmd.templateDir.has_value()},
         {"cell_summaries", cmd.cellSummaries.has_value()},
         {"light_radius", cmd.lightRadius.has_value()},
+        {"thin_check", cmd.thinCheck.has_value()},
         {"samples", cmd.samples.has_value()},
         {"grid", cmd.grid.has_value()},
     };
@@ -95,6 +97,8 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
         if (options.shadows == "lmm") lm::ParseLightMeshVariant(options.lightMesh.variant);
         if (options.shadows == "area" || cmd.lightRadius || cmd.samples) lm::ValidateAreaLightOptions(options.areaLight);
     });
+    if (cmd.thinCheck && options.shadows == "lmm" && !(options.areaLight.radius > 0))
+        lm::LogWarning("--thin-check is used only with a light radius (--light-radius > 0); ignored");
     if (options.shadows == "area") {
         if (options.areaLight.radius == 0)
             lm::LogWarning("--shadows area with light radius 0: point lights, the same image as --shadows rt "

@@ -75,7 +75,7 @@ struct RenderCommand {
     std::optional<int> width, height, aa, maxDepth, grid, cc, ns;
     std::optional<float> ki, lightRadius;
     std::optional<int> samples;
-    std::optional<std::string> shadows, accel, variant, templateDir, cellSummaries;
+    std::optional<std::string> shadows, accel, variant, templateDir, cellSummaries, thinCheck;
     bool stats = false;
 };
 int RunRender(const RenderCommand& cmd);

@@ -43,6 +43,7 @@ int main(int argc, char** argv) {
     AddSetting(renderCmd, "template_dir", &render.templateDir);
     AddSetting(renderCmd, "cell_summaries", &render.cellSummaries);
     AddSetting(renderCmd, "light_radius", &render.lightRadius);
+    AddSetting(renderCmd, "thin_check", &render.thinCheck);
     AddSetting(renderCmd, "samples", &render.samples);
     renderCmd->add_flag("--stats", render.stats, "Print rays by kind, time by phase, back-end figures, peak memory");
 

@@ -39,8 +39,9 @@
 //                "cc" (1..4096), "ki" (0.01..16), "variant" (string), "ns" (0..64),
 //                "template_dir" (string), "cell_summaries" ("auto" | "on" | "off"),
 //                "light_radius" (≥ 0: the sphere each point light stands for: sampled by
-//                "shadows": "area", sizing the penumbrae of "lmm"), "samples" (1..4096,
-//                shadow rays per light).
+//                "shadows": "area", sizing the penumbrae of "lmm"), "thin_check" ("off" |
+//                "lit" | "all": with a light radius, P's own ray checks the nodes), "samples"
+//                (1..4096, shadow rays per light).
 //                The ranges and choices are the settings table's (settings/render_settings.cpp).
 //
 // A colour is a number (grey) or [r, g, b]; all numbers must be finite and colours ≥ 0.
@@ -273,6 +274,7 @@ void ReadRender(const Reader& r, const Json& j, RenderOptions* ro) {
     }
     if (const Json* v = o.Find("cell_summaries")) ro->lightMesh.cellSummaries = choice(*v, "cell_summaries");
     if (const Json* v = o.Find("light_radius")) ro->areaLight.radius = number(*v, "light_radius");
+    if (const Json* v = o.Find("thin_check")) ro->lightMesh.thinCheck = choice(*v, "thin_check");
     if (const Json* v = o.Find("samples")) ro->areaLight.samples = integer(*v, "samples");
     // Where each value came from, for the messages of the factories that read it.
     for (const RenderSetting& s : RenderSettings())

@@ -173,13 +173,15 @@ TEST(SceneFile, AreaLightSettings) {
         "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0]},
         "lights": [{"position": [0, 5, 0]}],
         "meshes": [{"file": ")" + DataDir + R"(/quad.ply"}],
-        "render": {"shadows": "area", "light_radius": 0.25, "samples": 64}})");
+        "render": {"shadows": "area", "light_radius": 0.25, "samples": 64, "thin_check": "lit"}})");
     std::vector<std::string> warnings;
     const Scene scene = LoadScene(path, {}, &warnings);
     EXPECT_TRUE(warnings.empty());
     EXPECT_EQ(scene.render.shadows, "area");
     EXPECT_EQ(scene.render.areaLight.radius, 0.25f);
     EXPECT_EQ(scene.render.areaLight.samples, 64);
+    EXPECT_EQ(scene.render.lightMesh.thinCheck, "lit");
+    EXPECT_EQ(RenderOptions().lightMesh.thinCheck, "all");
 }
 
 // One bad scene and the exact error it must produce. The scene is the base scene below
@@ -442,6 +444,9 @@ TEST(SceneFile, BadInputsGiveExactMessages) {
         {.name = "light_radius_negative",
          .expected = "scene.json /render/light_radius: must not be negative, got -0.5",
          .extra = R"(, "render": {"light_radius": -0.5})"},
+        {.name = "thin_check",
+         .expected = "scene.json /render/thin_check: must be one of \"off\", \"lit\", \"all\"; got \"on\"",
+         .extra = R"(, "render": {"thin_check": "on"})"},
         {.name = "samples_0",
          .expected = "scene.json /render/samples: must be between 1 and 4096, got 0",
          .extra = R"(, "render": {"samples": 0})"},

@@ -38,6 +38,12 @@ struct LightMeshOptions {
     /// LightMeshShadows); 0 is the paper's fixed radius r = kI·h. Filled from the render's
     /// "light_radius" setting (AreaLightOptions::radius), which the area reference shares.
     float lightRadius = 0.0f;
+    /// With a light radius (ours): where the nodes agree on a light, P's own shadow ray
+    /// checks their answer, so that occluders ("lit": the points the nodes call lit) and
+    /// also gaps ("all": the points they call shadowed too) thinner than the mesh step,
+    /// which the nodes fall between, keep their effect; where the ray disagrees the
+    /// light's disc decides. "off": the nodes' answer stands. Filled from "thin_check".
+    std::string thinCheck = "all";
 };
 
 /// Settings of the area-light reference ("--shadows area", issue 7): every point light

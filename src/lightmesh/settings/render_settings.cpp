@@ -46,6 +46,10 @@ const std::vector<RenderSetting>& RenderSettings() {
         {"light_radius", "--light-radius", K::Float, 0, kNoLimit, {},
          "Radius of the sphere each point light stands for: area shadows sample it, lmm sizes its "
          "penumbrae by it (contact hardening; default 0: point lights)", "shadows", {"area", "lmm"}},
+        {"thin_check", "--thin-check", K::Choice, 0, 0, {"off", "lit", "all"},
+         "Light mesh with --light-radius: P's own shadow ray checks where the nodes agree, so occluders (lit) "
+         "and also gaps (all) thinner than the mesh step keep their effect; off: the nodes decide (default all)",
+         "shadows", {"lmm"}},
         {"samples", "--samples", K::Int, 1, 4096, {},
          "Area shadows: stratified shadow rays per light and shading point (default 16)", "shadows", {"area"}},
     };

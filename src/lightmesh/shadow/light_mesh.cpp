@@ -134,6 +134,12 @@ StatsLines LightMeshShadows::CounterLines(const RenderCounters& counters) const 
                                       FormatCount(penumbra).c_str(), 100.0 * static_cast<double>(penumbra) / points,
                                       FormatCount(n(LightMeshCount::kPenumbraKernel)).c_str(),
                                       FormatCount(n(LightMeshCount::kPenumbraSampled)).c_str())});
+    const uint64_t thin = n(LightMeshCount::kThinChecks);
+    if (thin > 0)
+        lines.push_back({"thin", StringPrintf("(point, light) pairs where P's own ray checked the nodes' answer %s, of "
+                                              "them %s where it disagreed (an occluder or gap thinner than h: the "
+                                              "light's disc decided)",
+                                              FormatCount(thin).c_str(), FormatCount(n(LightMeshCount::kThinFound)).c_str())});
     return lines;
 }
 
@@ -165,6 +171,10 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
       sumFront_(ChooseSumFrontFunction(options.simdWidth)),
       nodes_(ZeroedArray<Word>(lattice.NodeCount() + kNodePadding)),
       lightRadius_(options.lightRadius) {
+    if (lightRadius_ > 0)
+        thinCheck_ = options.thinCheck == "all" ? ThinCheck::kAll
+                     : options.thinCheck == "lit" ? ThinCheck::kLit
+                                                  : ThinCheck::kOff;
     const std::string& cellSummaries = options.cellSummaries;
     if (lightRadius_ > 0) blockerT_ = ZeroedArray<uint16_t>(lattice.NodeCount() * scene.lights.size());
     if (variant_.enumeration == SphereEnumeration::Templates) ConvertTemplates();
@@ -224,6 +234,32 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
 template <typename Word>
 inline void LightMesh<Word>::Visibility(const ShadingPoint& sp, const bool* needed, float* vis,
                                         RenderCounters& counters) const {
+    const uint64_t ownRays = Interpolate(sp, needed, vis, counters);
+    if (thinCheck_ != ThinCheck::kOff) CheckThin(sp, needed, ownRays, vis, counters);
+}
+
+template <typename Word>
+inline void LightMesh<Word>::CheckThin(const ShadingPoint& sp, const bool* needed, uint64_t ownRays, float* vis,
+                                       RenderCounters& counters) const {
+    for (size_t l = 0; l < scene_.lights.size(); ++l) {
+        if (!needed[l] || ((ownRays >> l) & 1)) continue;
+        const bool lit = vis[l] == 1.0f;
+        if (!lit && !(thinCheck_ == ThinCheck::kAll && vis[l] == 0.0f)) continue;
+        const Vec3& light = scene_.lights[l].position;
+        ++Count(counters, LightMeshCount::kThinChecks);
+        ++counters.shadowRays;
+        if (LightVisible(accel_, sp.origin, light) == lit) continue;
+        ++Count(counters, LightMeshCount::kThinFound);
+        int rays = 0;
+        vis[l] = DiscLightVisibility(accel_, sp.origin, light, lightRadius_, kNarrowPerRing,
+                                     AreaLightSeed(sp, static_cast<uint32_t>(l)), &rays);
+        counters.shadowRays += static_cast<uint64_t>(rays);
+    }
+}
+
+template <typename Word>
+inline uint64_t LightMesh<Word>::Interpolate(const ShadingPoint& sp, const bool* needed, float* vis,
+                                             RenderCounters& counters) const {
     const size_t nLights = scene_.lights.size();
     Accumulator acc(nLights);
     Word neededMask = 0;
@@ -239,7 +275,7 @@ inline void LightMesh<Word>::Visibility(const ShadingPoint& sp, const bool* need
             ++Count(counters, LightMeshCount::kInterpolations);
             ++Count(counters, LightMeshCount::kUniformCellPoints);
             for (size_t l = 0; l < nLights; ++l) vis[l] = static_cast<float>((uniform >> l) & 1);
-            return;
+            return 0;
         }
     } else {
         CubeWalk(sp, neededMask, acc, counters);
@@ -249,7 +285,7 @@ inline void LightMesh<Word>::Visibility(const ShadingPoint& sp, const bool* need
         Count(counters, LightMeshCount::kNodesUsed) += acc.m;
         for (size_t l = 0; l < nLights; ++l)
             if (needed[l]) vis[l] = acc.vis[l];
-        return;
+        return acc.ownRays;
     }
     if (acc.m == 0) {
         // No node left (a crevice, or a sphere cut off by occluders): one shadow ray
@@ -260,7 +296,7 @@ inline void LightMesh<Word>::Visibility(const ShadingPoint& sp, const bool* need
             ++counters.shadowRays;
             vis[l] = LightVisible(accel_, sp.origin, scene_.lights[l].position) ? 1.0f : 0.0f;
         }
-        return;
+        return ~uint64_t(0);  // every light from P's own ray
     }
     if constexpr (sizeof(Word) == 1) acc.Flush();
     ++Count(counters, LightMeshCount::kInterpolations);
@@ -268,6 +304,7 @@ inline void LightMesh<Word>::Visibility(const ShadingPoint& sp, const bool* need
     // A true division, so that m visible nodes out of m give exactly 1 (as RT does).
     for (size_t l = 0; l < nLights; ++l)
         vis[l] = static_cast<float>(acc.visible[l]) / static_cast<float>(acc.m);
+    return 0;
 }
 
 template <typename Word>
@@ -496,6 +533,8 @@ std::unique_ptr<LightMeshShadows> CreateLightMeshShadows(const Scene& scene, con
         templates = LoadOrBuildSphereTemplates(ns, options.ki, options.templateDir);
         if (!templates.note.empty()) LogWarning("templates: " + templates.note);
     }
+    if (options.thinCheck != "off" && options.thinCheck != "lit" && options.thinCheck != "all")
+        ThrowSettingError("thin_check", "thin check \"%s\": choose off, lit or all", options.thinCheck.c_str());
     const std::string& summaries = options.cellSummaries;
     if (summaries != "auto" && summaries != "on" && summaries != "off")
         ThrowSettingError("cell_summaries", "cell summaries \"%s\": choose auto, on or off", summaries.c_str());

@@ -88,11 +88,13 @@ inline constexpr const char* kDefaultLightMeshVariant = "consensus";
 /// a radius following w (up to r) with P's own shadow ray at its centre, or, where w is
 /// below what the lattice resolves, P's own ray where the nodes near P agree with it and
 /// else 4 to 8 rays to the light's disc (DiscLightVisibility). Elsewhere V is the
-/// consensus variant's.
+/// consensus variant's, checked by P's own shadow ray (LightMeshOptions::thinCheck) so that
+/// occluders and gaps thinner than the mesh step, which the nodes miss, keep their effect:
+/// where that ray contradicts the nodes, the light's disc decides.
 class LightMeshShadows : public ShadowMethod {
   public:
     std::string_view Name() const override { return "lmm"; }
-    /// The "lmm", "cells" and "penumbra" lines of --stats, from the LightMeshCount slots.
+    /// The "lmm", "cells", "penumbra" and "thin" lines of --stats, from the LightMeshCount slots.
     StatsLines CounterLines(const RenderCounters& counters) const override;
 
     virtual const LightMeshLattice& Lattice() const = 0;

@@ -23,6 +23,8 @@ enum class LightMeshCount : size_t {
     kPenumbraLights,     ///< (point, light) pairs whose radius followed the light's size
     kPenumbraKernel,     ///< … of them answered by the nodes' kernel
     kPenumbraSampled,    ///< … by rays to the light's disc (the rest: the lattice and P's ray)
+    kThinChecks,         ///< (point, light) pairs where P's own ray checked the nodes' answer
+    kThinFound,          ///< … of them where it disagreed (an occluder or gap thinner than h)
     kNumber,             ///< how many there are (not a count)
 };
 static_assert(static_cast<size_t>(LightMeshCount::kNumber) <= kMethodCounterSlots,

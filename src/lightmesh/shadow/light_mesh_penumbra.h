@@ -94,9 +94,13 @@ inline void LightMesh<Word>::PenumbraInterpolate(const ShadingPoint& sp, Word ne
     for (size_t i = 0; i < n; ++i)
         if (nodes[i].d2 < rhoMax2) test(i);
     int firstKept = -1;
-    for (size_t i = 0; i < n && firstKept < 0; ++i) {
-        if (!kept[i] && nodes[i].d2 >= rhoMax2 && (neededMask & ~mixed)) test(i);
-        if (kept[i]) firstKept = static_cast<int>(i);
+    if (OwnRayChecksAgreement()) {
+        firstKept = 0;  // any node's bit: P's own ray checks it (CheckThin)
+    } else {
+        for (size_t i = 0; i < n && firstKept < 0; ++i) {
+            if (!kept[i] && nodes[i].d2 >= rhoMax2 && (neededMask & ~mixed)) test(i);
+            if (kept[i]) firstKept = static_cast<int>(i);
+        }
     }
     for (size_t l = 0; l < nLights; ++l) {
         if (!((neededMask >> l) & 1)) continue;
@@ -106,12 +110,15 @@ inline void LightMesh<Word>::PenumbraInterpolate(const ShadingPoint& sp, Word ne
             if (firstKept >= 0) {
                 acc.vis[l] = static_cast<float>((nodes[firstKept].w >> l) & 1);
             } else {
+                acc.ownRays |= uint64_t(1) << l;
                 ++counters.shadowRays;
                 acc.vis[l] = LightVisible(accel_, sp.origin, light) ? 1.0f : 0.0f;
             }
             continue;
         }
         ++Count(counters, LightMeshCount::kPenumbraLights);
+        // The kernel has P's own ray at its centre; a narrow penumbra P's ray or the disc's.
+        acc.ownRays |= uint64_t(1) << l;
         if (Sampled(rho2[l])) {
             acc.vis[l] = NarrowPenumbra(sp, l, std::sqrt(rho2[l]), nodes, counters);
             continue;

@@ -84,6 +84,10 @@ inline void LightMesh<Word>::CubePenumbra(const ShadingPoint& sp, Word neededMas
         PenumbraInterpolate(sp, neededMask, nodes, 0, false, nullptr, blockers, acc, counters);
         return;
     }
+    if (OwnRayChecksAgreement() && !nodes.empty()) {
+        Use(acc, nodes.front().w);
+        return;
+    }
     for (const PenumbraNode& c : nodes)
         if (SeesPoint(c.x, sp, counters)) {
             Use(acc, c.w);
@@ -170,7 +174,7 @@ inline bool LightMesh<Word>::TemplateWalk(const ShadingPoint& sp, Word neededMas
                 some = all.Any([&](const FrontBlock& b, int k) {
                     return !(Evaluate(static_cast<uint64_t>(base + b.linear[k])) & kInside);
                 });
-            } else if (variant_.local != LocalVisibility::Consensus || planar) {
+            } else if (variant_.local != LocalVisibility::Consensus || planar || OwnRayChecksAgreement()) {
                 some = all.Any([](const FrontBlock&, int) { return true; });
             } else {
                 some = PatchWitness(c, base, ci, cj, ck, sp, all, counters) != nullptr;
@@ -264,7 +268,7 @@ inline void LightMesh<Word>::ConsensusWalk(const ShadingPoint& sp, Word neededMa
             PenumbraInterpolate(sp, neededMask, nodes, base, planar, summary, blockers, acc, counters);
             return;
         }
-        if (planar) {
+        if (planar || OwnRayChecksAgreement()) {
             UseAll(all, base, acc);
             return;
         }

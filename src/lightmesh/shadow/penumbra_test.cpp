@@ -1,6 +1,7 @@
 // Contact-hardening penumbrae of the light mesh (a light radius R > 0; light_mesh.h): the
 // blocker distances the nodes store, the width law w = R·(d_P − d_b)/d_b against the
-// analytic penumbra of a sphere light over a plane, determinism and leak-freedom.
+// analytic penumbra of a sphere light over a plane, the thin-occluder check, determinism
+// and leak-freedom.
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
@@ -245,6 +246,93 @@ TEST(Penumbra, ImagesAreIdenticalForAnyThreadCount) {
     EXPECT_NE(WhittedRenderer(s, *accel, *fixed, s.render).Render().image.pixels, one.image.pixels);
 }
 
+// A rod (or, with `slit`, a plate with a slit) thinner than the mesh step at height 1,
+// along z, placed halfway between two columns of nodes so that no node's shadow segment
+// meets it (or passes through it), under a light of radius 0.1 straight above it at
+// height 8. The rod's strip seen from the floor below it covers the light's whole disc
+// (0.03·8/1 = 0.24 > 0.2), so the true V there is 0 (through the slit: 1).
+struct ThinScene {
+    Scene scene;
+    float x = 0;  // the rod's (slit's) centre line
+    static constexpr float kHalfWidth = 0.015f, kHeight = 1.0f, kLightY = 8.0f;
+    explicit ThinScene(bool slit) {
+        // The lattice's columns do not depend on where the rod is (it stays inside the
+        // floor's box in x and z): find them with the rod at 0, then move it between two.
+        for (int pass = 0; pass < 2; ++pass) {
+            scene = FloorScene();
+            if (slit) {
+                AddBox(&scene, {-6.0f, kHeight, -6.0f}, {x - kHalfWidth, kHeight + 0.02f, 6.0f});
+                AddBox(&scene, {x + kHalfWidth, kHeight, -6.0f}, {6.0f, kHeight + 0.02f, 6.0f});
+            } else {
+                AddBox(&scene, {x - kHalfWidth, kHeight, -6.0f}, {x + kHalfWidth, kHeight + 0.02f, 6.0f});
+            }
+            scene.lights = {{{x, kLightY, 0.0f}, Color(1.0f), Falloff::None}};
+            const LightMeshLattice L = LightMeshLattice::Make(scene.mesh.Bounds(), 100, 2.0f);
+            const float column = L.origin.x + std::round((0.0f - L.origin.x) / L.h) * L.h;
+            x = column + 0.5f * L.h;
+        }
+    }
+};
+
+TEST(Penumbra, ThinCheckGivesOccludersThinnerThanTheMeshTheirShadow) {
+    const ThinScene t(false);
+    const float R = 0.1f;
+    LightMeshOptions options = testing::LightMeshSettings(100, 2.0f, "", R);
+    options.thinCheck = "off";
+    const testing::LightMeshProbe off(t.scene, options);
+    options.thinCheck = "lit";
+    const testing::LightMeshProbe lit(t.scene, options);
+    const float h = off.lmm->Lattice().h;
+    ASSERT_GT(h, 8 * ThinScene::kHalfWidth);
+    // The nodes fall on both sides of the rod: without the check the floor under it is lit.
+    EXPECT_EQ(off.Vis(FloorPoint(t.x, 0.3f)), 1.0f);
+    RenderCounters c;
+    int darker = 0;
+    for (float dx = -0.3f; dx <= 0.3f; dx += 0.005f) {
+        const ShadingPoint sp = FloorPoint(t.x + dx, 0.3f);
+        const float vOff = off.Vis(sp), vLit = lit.Vis(sp, 0, &c);
+        // The check only lowers a 1 to what rays to the light see: never more light.
+        EXPECT_LE(vLit, vOff) << dx;
+        darker += vLit < vOff;
+        // The true shadow: the disc fully covered within 0.0054 of the line, fully visible
+        // beyond 0.046 (the rod's half-width plus the penumbra w = R·H/(D − H) = 0.0143,
+        // projected from height 1 to the floor: ×8/7).
+        if (std::abs(dx) < 0.004f) EXPECT_EQ(vLit, 0.0f) << dx;
+        if (std::abs(dx) > 0.05f) EXPECT_EQ(vLit, 1.0f) << dx;
+    }
+    // The points whose own ray the rod blocks (|dx| < 0.017: 7 of these); the outer part
+    // of its penumbra, where P's ray passes, keeps the nodes' 1 (a limit of the check).
+    EXPECT_GE(darker, 5);
+    EXPECT_GT(Count(c, Lmc::kThinFound), 0u);
+    EXPECT_GT(Count(c, Lmc::kThinChecks), Count(c, Lmc::kThinFound));
+}
+
+TEST(Penumbra, ThinCheckAllLetsLightThroughGapsThinnerThanTheMesh) {
+    const ThinScene t(true);
+    const float R = 0.1f;
+    LightMeshOptions options = testing::LightMeshSettings(100, 2.0f, "", R);
+    options.thinCheck = "lit";
+    const testing::LightMeshProbe lit(t.scene, options);
+    options.thinCheck = "all";
+    const testing::LightMeshProbe all(t.scene, options);
+    // Under the slit the nodes are all in the plate's shadow; P sees the whole disc.
+    EXPECT_EQ(lit.Vis(FloorPoint(t.x, 0.3f)), 0.0f);
+    EXPECT_EQ(all.Vis(FloorPoint(t.x, 0.3f)), 1.0f);
+    for (float dx = -0.3f; dx <= 0.3f; dx += 0.005f) {
+        const ShadingPoint sp = FloorPoint(t.x + dx, 0.3f);
+        const float vLit = lit.Vis(sp), vAll = all.Vis(sp);
+        EXPECT_GE(vAll, vLit) << dx;
+        if (std::abs(dx) > 0.05f) EXPECT_EQ(vAll, 0.0f) << dx;
+    }
+    // Without a light radius the setting does nothing: the fixed-radius method.
+    options.lightRadius = 0.0f;
+    const testing::LightMeshProbe fixedAll(t.scene, options);
+    options.thinCheck = "off";
+    const testing::LightMeshProbe fixedOff(t.scene, options);
+    for (float dx = -0.3f; dx <= 0.3f; dx += 0.01f)
+        EXPECT_EQ(fixedAll.Vis(FloorPoint(t.x + dx, 0.3f)), fixedOff.Vis(FloorPoint(t.x + dx, 0.3f))) << dx;
+}
+
 TEST(Penumbra, BadLightRadiusOrVariantIsAnError) {
     const Scene s = PlateScene(2.0f);
     auto accel = CreateAccelerator("grid", s.mesh);
@@ -254,6 +342,9 @@ TEST(Penumbra, BadLightRadiusOrVariantIsAnError) {
     o.lightRadius = std::nanf("");
     EXPECT_THROW(CreateLightMeshShadows(s, *accel, o), Error);
     o.lightRadius = 0.3f;
+    o.thinCheck = "some";
+    EXPECT_THROW(CreateLightMeshShadows(s, *accel, o), Error);
+    o.thinCheck = "all";
     o.variant = "none";
     try {
         CreateLightMeshShadows(s, *accel, o);
