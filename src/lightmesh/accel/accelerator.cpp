@@ -11,6 +11,10 @@
 
 namespace lm {
 
+void Accelerator::OccludedMany(const Ray* rays, size_t count, bool* occluded) const {
+    for (size_t i = 0; i < count; ++i) occluded[i] = Occluded(rays[i]);
+}
+
 std::vector<std::string> AcceleratorNames() { return {"brute", "grid", "embree"}; }
 
 std::unique_ptr<Accelerator> CreateAccelerator(std::string_view name, const TriangleMesh& mesh,

@@ -40,6 +40,11 @@ class Accelerator {
     /// True if any triangle is hit (shadow rays and local-visibility segments).
     virtual bool Occluded(const Ray& ray) const = 0;
 
+    /// Occluded for each of `count` rays, into occluded[0 … count-1]: for a few coherent
+    /// rays at once (from one point to a light's disc), which a back-end may trace as a
+    /// packet. The default, which brute force and the grid keep, is Occluded ray by ray.
+    virtual void OccludedMany(const Ray* rays, size_t count, bool* occluded) const;
+
     /// The number of surface crossings along the ray: each triangle hit counts once, and
     /// a ray through a shared edge or vertex of a closed mesh counts one crossing (the
     /// tie-breaking rule of IntersectTriangle). Parity gives inside/outside (paper §4).

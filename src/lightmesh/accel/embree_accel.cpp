@@ -95,6 +95,7 @@ struct EmbreeAccel::Impl {
         static_cast<Impl*>(user)->embreeBytes.fetch_add(bytes, std::memory_order_relaxed);
         return true;
     }
+    bool packets = false;  // native rtcOccluded4/8 kernels (OccludedMany)
     std::mutex errorMutex;
     std::string error;  // first error Embree reported
 
@@ -185,6 +186,8 @@ EmbreeAccel::EmbreeAccel(const TriangleMesh& mesh) : impl_(std::make_unique<Impl
         ThrowError("cannot create the Embree device: %s", ErrorName(rtcGetDeviceError(nullptr)));
     rtcSetDeviceErrorFunction(m.device, &Impl::OnError, &m);
     rtcSetDeviceMemoryMonitorFunction(m.device, &Impl::OnMemory, &m);
+    m.packets = rtcGetDeviceProperty(m.device, RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED) > 0 &&
+                rtcGetDeviceProperty(m.device, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED) > 0;
 
     // Scene: robust traversal (no precision-reducing shortcuts). Build quality stays
     // Embree's default (medium), what a renderer gets without tuning.
@@ -249,6 +252,56 @@ bool EmbreeAccel::Occluded(const Ray& ray) const {
     SetRay(&er, r.o, ray.d, r.tnear, r.tfar);
     rtcOccluded1(impl_->scene, &context, &er);
     return er.tfar < 0;  // Embree sets tfar to -inf when something is hit
+}
+
+namespace {
+
+// Fills lane k of a packet (RTCRay4 or RTCRay8) from our ray; false if its range is empty.
+template <typename Packet>
+bool SetLane(Packet* p, int k, const Ray& ray) {
+    const EmbreeRayRange r = ToEmbree(ray);
+    if (!(r.tnear <= r.tfar)) return false;
+    p->org_x[k] = r.o.x, p->org_y[k] = r.o.y, p->org_z[k] = r.o.z;
+    p->dir_x[k] = ray.d.x, p->dir_y[k] = ray.d.y, p->dir_z[k] = ray.d.z;
+    p->tnear[k] = r.tnear, p->tfar[k] = r.tfar;
+    p->time[k] = 0.0f;
+    p->mask[k] = 0xFFFFFFFFu;
+    p->id[k] = 0;
+    p->flags[k] = 0;
+    return true;
+}
+
+template <int N, typename Packet, typename Trace>
+void OccludedPacket(RTCScene scene, const Ray* rays, size_t count, bool* occluded, Trace trace) {
+    alignas(32) int valid[N];
+    alignas(32) Packet packet;
+    for (int k = 0; k < N; ++k) {
+        valid[k] = k < static_cast<int>(count) && SetLane(&packet, k, rays[k]) ? -1 : 0;
+        if (valid[k] == 0) packet.tfar[k] = 0.0f;  // an empty range is not occluded
+    }
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    trace(valid, scene, &context, &packet);
+    for (size_t k = 0; k < count; ++k) occluded[k] = packet.tfar[k] < 0;  // -inf where hit
+}
+
+}  // namespace
+
+void EmbreeAccel::OccludedMany(const Ray* rays, size_t count, bool* occluded) const {
+    if (!impl_->packets) {
+        Accelerator::OccludedMany(rays, count, occluded);
+        return;
+    }
+    for (size_t first = 0; first < count;) {
+        const size_t n = std::min<size_t>(count - first, 8);
+        if (n == 1)
+            occluded[first] = Occluded(rays[first]);
+        else if (n <= 4)
+            OccludedPacket<4, RTCRay4>(impl_->scene, rays + first, n, occluded + first, rtcOccluded4);
+        else
+            OccludedPacket<8, RTCRay8>(impl_->scene, rays + first, n, occluded + first, rtcOccluded8);
+        first += n;
+    }
 }
 
 int EmbreeAccel::CountCrossings(const Ray& ray) const {

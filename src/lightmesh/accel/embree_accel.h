@@ -34,6 +34,11 @@ class EmbreeAccel final : public Accelerator {
     std::string_view Name() const override { return "embree"; }
     bool Intersect(const Ray& ray, Hit* hit) const override;
     bool Occluded(const Ray& ray) const override;
+    /// In packets of up to 4 or 8 (rtcOccluded4/8) where Embree has native packet kernels,
+    /// else ray by ray. A packet ray's answer can differ from rtcOccluded1's only where
+    /// Embree's own rounding decides (a ray grazing an edge), as Embree makes no promise
+    /// that its kernels agree there.
+    void OccludedMany(const Ray* rays, size_t count, bool* occluded) const override;
     int CountCrossings(const Ray& ray) const override;
     AccelFigures Figures() const override;
 
