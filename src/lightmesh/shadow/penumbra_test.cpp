@@ -272,16 +272,17 @@ struct ThinScene {
             x = column + 0.5f * L.h;
         }
     }
+    // The light mesh over it with the thin check `check` and light radius R.
+    testing::LightMeshProbe Probe(const char* check, float R = 0.1f) const {
+        LightMeshOptions options = testing::LightMeshSettings(100, 2.0f, "", R);
+        options.thinCheck = check;
+        return testing::LightMeshProbe(scene, options);
+    }
 };
 
 TEST(Penumbra, ThinCheckGivesOccludersThinnerThanTheMeshTheirShadow) {
     const ThinScene t(false);
-    const float R = 0.1f;
-    LightMeshOptions options = testing::LightMeshSettings(100, 2.0f, "", R);
-    options.thinCheck = "off";
-    const testing::LightMeshProbe off(t.scene, options);
-    options.thinCheck = "lit";
-    const testing::LightMeshProbe lit(t.scene, options);
+    const testing::LightMeshProbe off = t.Probe("off"), lit = t.Probe("lit");
     const float h = off.lmm->Lattice().h;
     ASSERT_GT(h, 8 * ThinScene::kHalfWidth);
     // The nodes fall on both sides of the rod: without the check the floor under it is lit.
@@ -309,12 +310,7 @@ TEST(Penumbra, ThinCheckGivesOccludersThinnerThanTheMeshTheirShadow) {
 
 TEST(Penumbra, ThinCheckAllLetsLightThroughGapsThinnerThanTheMesh) {
     const ThinScene t(true);
-    const float R = 0.1f;
-    LightMeshOptions options = testing::LightMeshSettings(100, 2.0f, "", R);
-    options.thinCheck = "lit";
-    const testing::LightMeshProbe lit(t.scene, options);
-    options.thinCheck = "all";
-    const testing::LightMeshProbe all(t.scene, options);
+    const testing::LightMeshProbe lit = t.Probe("lit"), all = t.Probe("all");
     // Under the slit the nodes are all in the plate's shadow; P sees the whole disc.
     EXPECT_EQ(lit.Vis(FloorPoint(t.x, 0.3f)), 0.0f);
     EXPECT_EQ(all.Vis(FloorPoint(t.x, 0.3f)), 1.0f);
@@ -325,10 +321,7 @@ TEST(Penumbra, ThinCheckAllLetsLightThroughGapsThinnerThanTheMesh) {
         if (std::abs(dx) > 0.05f) EXPECT_EQ(vAll, 0.0f) << dx;
     }
     // Without a light radius the setting does nothing: the fixed-radius method.
-    options.lightRadius = 0.0f;
-    const testing::LightMeshProbe fixedAll(t.scene, options);
-    options.thinCheck = "off";
-    const testing::LightMeshProbe fixedOff(t.scene, options);
+    const testing::LightMeshProbe fixedAll = t.Probe("all", 0.0f), fixedOff = t.Probe("off", 0.0f);
     for (float dx = -0.3f; dx <= 0.3f; dx += 0.01f)
         EXPECT_EQ(fixedAll.Vis(FloorPoint(t.x + dx, 0.3f)), fixedOff.Vis(FloorPoint(t.x + dx, 0.3f))) << dx;
 }
