@@ -107,6 +107,9 @@ Vec3 SampleConeStratified(const Vec3& axis, float oneMinusCosMax, int index, int
     return SampleCone(e1, e2, axis, oneMinusCosMax, index, samples, shift0, shift1);
 }
 
+// Rays handed to Accelerator::OccludedMany at once: Embree's widest packet here (8, AVX2).
+constexpr int kRayBatch = 8;
+
 float SphereLightVisibility(const Accelerator& accel, const Vec3& origin, const Vec3& center,
                             float radius, int samples, uint64_t seed, int* rays) {
     if (rays) *rays = 0;
@@ -123,13 +126,12 @@ float SphereLightVisibility(const Accelerator& accel, const Vec3& origin, const 
     Vec3 e1, e2;
     CoordinateSystem(axis, &e1, &e2);
     int visible = 0;
-    // Eight rays at a time: from one point into a narrow cone, coherent enough for a
+    // kRayBatch rays at a time: from one point into a narrow cone, coherent enough for a
     // packet (Accelerator::OccludedMany).
-    constexpr int kBatch = 8;
-    Ray batch[kBatch];
-    bool blocked[kBatch];
-    for (int first = 0; first < samples; first += kBatch) {
-        const int n = std::min(kBatch, samples - first);
+    Ray batch[kRayBatch];
+    bool blocked[kRayBatch];
+    for (int first = 0; first < samples; first += kRayBatch) {
+        const int n = std::min(kRayBatch, samples - first);
         for (int k = 0; k < n; ++k) {
             const Vec3 w = SampleCone(e1, e2, axis, oneMinusCosMax, first + k, samples, shift0, shift1);
             // The near intersection with the sphere, from the perpendicular distance of C to
@@ -168,20 +170,23 @@ float DiscLightVisibility(const Accelerator& accel, const Vec3& origin, const Ve
         s = s * cs + c * sn;
         c = c2;
     };
-    // One ring's rays at once: from one point to a small disc, the coherent rays a packet
-    // traces best (Accelerator::OccludedMany).
-    Ray ring[32];
-    bool blocked[32];
+    // One ring's rays at once, up to kRayBatch at a time: from one point to a small disc,
+    // the coherent rays a packet traces best (Accelerator::OccludedMany).
+    Ray batch[kRayBatch];
+    bool blocked[kRayBatch];
     auto ringVisible = [&](float ringRadius) {
         const float r = ringRadius * radius;
-        for (int k = 0; k < perRing; ++k, advance(), advance()) {
-            const Vec3 to = oc + e1 * (r * c) + e2 * (r * s);
-            // Like LightVisible, stop just short of the light itself.
-            ring[k] = Ray{origin, to, 0.0f, 1.0f - 1e-5f};
-        }
-        accel.OccludedMany(ring, static_cast<size_t>(perRing), blocked);
         int visible = 0;
-        for (int k = 0; k < perRing; ++k) visible += !blocked[k];
+        for (int first = 0; first < perRing; first += kRayBatch) {
+            const int n = std::min(kRayBatch, perRing - first);
+            for (int k = 0; k < n; ++k, advance(), advance()) {
+                const Vec3 to = oc + e1 * (r * c) + e2 * (r * s);
+                // Like LightVisible, stop just short of the light itself.
+                batch[k] = Ray{origin, to, 0.0f, 1.0f - 1e-5f};
+            }
+            accel.OccludedMany(batch, static_cast<size_t>(n), blocked);
+            for (int k = 0; k < n; ++k) visible += !blocked[k];
+        }
         return visible;
     };
     // The outer ring first (radius sqrt(3/4): the middle of the outer half of the area),
