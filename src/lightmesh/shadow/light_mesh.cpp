@@ -215,6 +215,7 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
                 pl.d = Dot(pl.n, a);
                 pl.lo = Min(a, Min(b, c)) - Vec3(cullMargin_);
                 pl.hi = Max(a, Max(b, c)) + Vec3(cullMargin_);
+                pl.magnitude = std::max({MaxComponent(Abs(a)), MaxComponent(Abs(b)), MaxComponent(Abs(c))});
             });
         }
         if (!BinTrianglesByBrick(bricksZ)) {

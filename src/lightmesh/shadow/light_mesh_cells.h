@@ -180,18 +180,17 @@ inline auto LightMesh<Word>::ComputeSummary(int ci, int cj, int ck, const Summar
         return pl.hi.x >= b.lo.x && pl.lo.x <= b.hi.x && pl.hi.y >= b.lo.y && pl.lo.y <= b.hi.y &&
                pl.hi.z >= b.lo.z && pl.lo.z <= b.hi.z;
     };
+    // The cell's tolerance: every coordinate its tests compute with lies in the reach box
+    // (nodes, points, origins) or is a vertex of a reach triangle (planes, patches).
+    float magnitude = std::max(MaxComponent(Abs(reachBox.lo)), MaxComponent(Abs(reachBox.hi)));
     for (uint32_t i = 0; i < brick.nearCount; ++i) {
         const uint32_t t = brick.near[i];
         const TrianglePlane& pl = planes_[t];
         if (!meets(pl, reachBox)) continue;
         reach.push_back(t);
+        magnitude = std::max(magnitude, pl.magnitude);
         if (meets(pl, cellBox)) tris.push_back(t);
     }
-    // The cell's tolerance: every coordinate its tests compute with lies in the reach box
-    // (nodes, points, origins) or is a vertex of a reach triangle (planes, patches).
-    float magnitude = std::max(MaxComponent(Abs(reachBox.lo)), MaxComponent(Abs(reachBox.hi)));
-    for (const uint32_t t : reach)
-        for (int k = 0; k < 3; ++k) magnitude = std::max(magnitude, MaxComponent(Abs(mesh.Vertex(t, k))));
     c.delta = std::min(planeDelta_, PlaneDelta(magnitude));
     if (variant_.local == LocalVisibility::Consensus) {
         if (reach.size() > kMaxReach) {
@@ -229,15 +228,23 @@ inline auto LightMesh<Word>::ComputeSummary(int ci, int cj, int ck, const Summar
         // whose bounding box is in reach: more triangles can only make it stricter).
         // In float from a vertex of Π: v - v0 is short and exact to half an ulp of the
         // coordinates, so the error stays below the delta / 2 compared with.
+        // A triangle wholly beyond the slab that the segments of points on Π stay in (the
+        // nodes within pointReach_ of Π, as in Side) cannot block one of them, so it does
+        // not make its side unclear (a table top above a floor cell, a ceiling).
         const Vec3 np(c.n[0], c.n[1], c.n[2]);
         const float limit = 0.5f * c.delta;
+        const float slab = pointReach_ + 4 * planeDelta_;
         bool up = false, down = false;  // a vertex above Π (side 0), below (side 1)
-        for (size_t i = 0; i < reach.size() && !(up && down); ++i)
+        for (size_t i = 0; i < reach.size() && !(up && down); ++i) {
+            float hv[3];
+            for (int k = 0; k < 3; ++k) hv[k] = Dot(np, mesh.Vertex(reach[i], k) - v0);
+            const bool aboveSlab = hv[0] > slab && hv[1] > slab && hv[2] > slab;
+            const bool belowSlab = hv[0] < -slab && hv[1] < -slab && hv[2] < -slab;
             for (int k = 0; k < 3; ++k) {
-                const float hv = Dot(np, mesh.Vertex(reach[i], k) - v0);
-                up |= hv > limit;
-                down |= hv < -limit;
+                up |= hv[k] > limit && !aboveSlab;
+                down |= hv[k] < -limit && !belowSlab;
             }
+        }
         if (!up) c.flags |= kClear0;
         if (!down) c.flags |= kClear1;
     }
@@ -256,6 +263,12 @@ inline auto LightMesh<Word>::Side(const CellSummary& c, SummaryBrick* brick, int
     const LightMeshLattice& L = lattice_;
     const int64_t base = static_cast<int64_t>(L.Index(ci, cj, ck));
     const double nf[3] = {c.n[0], c.n[1], c.n[2]};
+    // Only the slab of Π that points on Π can reach: a point uses nodes within r of its
+    // snapped sub-position, so within pointReach_ of itself, and it lies within
+    // 2·planeDelta_ of Π (TemplateWalk's test); hx's rounding is far below the rest of the
+    // margin. The nodes of the cell's cube beyond it (a third of a side's nodes over a
+    // floor at kI 2) are neither evaluated nor compared.
+    const double slab = static_cast<double>(pointReach_) + 4.0 * planeDelta_;
     Word all = kVisMask, any = 0;
     for (size_t e = 0; e < cellNodes_.size(); ++e) {
         const uint64_t index = static_cast<uint64_t>(base + cellNodes_[e]);
@@ -263,6 +276,7 @@ inline auto LightMesh<Word>::Side(const CellSummary& c, SummaryBrick* brick, int
         const Vec3 x = L.Node(ci + o[0], cj + o[1], ck + o[2]);  // NodeAt(index), without its divisions
         const double hx = nf[0] * x.x + nf[1] * x.y + nf[2] * x.z - c.d;
         if (side == 0 ? !(hx > 0) : !(hx < 0)) continue;  // the other side, or on Π
+        if (std::abs(hx) > slab) continue;                 // out of reach of every point on Π
         const Word w = Evaluate(index) & kVisMask;
         all &= w;
         any |= w;

@@ -158,8 +158,8 @@ class LightMesh final : public LightMeshShadows {
     // the cell that lie on Π (within planeDelta_, normal within kPlaneEps; the planar
     // argument below within the cell's own tolerance delta), which is most points of
     // floors, walls and other flat faces. For each side s of Π:
-    //  - uniform_s: every node a point of the cell may use (cellNodes_) that lies on side
-    //    s of Π has the same visibility bits bits_s (and, for СТ, the same inside flag).
+    //  - uniform_s: every node a point of the cell on Π may use (cellNodes_ within
+    //    pointReach_ of Π) that lies on side s of Π has the same visibility bits bits_s.
     //    A point on Π seen from side s uses only such nodes (its front test keeps nodes
     //    more than frontEps_ steps in front of its own plane, which is within the
     //    tolerances of Π), so any non-empty subset averages to exactly bits_s: formula (2)
@@ -544,6 +544,7 @@ class LightMesh final : public LightMeshShadows {
         Vec3 n;
         float d;
         Vec3 lo, hi;
+        float magnitude;  // the largest |coordinate| of its vertices (a cell's tolerance)
     };
     // (These two on huge pages: on the garden 18 and 15 MiB, filled at once.)
     std::vector<TrianglePlane, HugePageAllocator<TrianglePlane>> planes_;

@@ -509,6 +509,65 @@ TEST(LightMesh, CellSummaryAnswersOpenFloorWithoutSegments) {
     EXPECT_EQ(vis[0], 1.0f);
 }
 
+// A cell's summary serves the points on its plane Π, whose spheres reach at most
+// pointReach_ (r and half a sub-step) off Π: nodes of the cell's cube beyond that slab are
+// neither evaluated nor compared, and a triangle wholly beyond it (a plate just above a
+// floor's spheres) does not stop the planar argument. The image stays ОТ's.
+TEST(LightMesh, CellSummariesLookOnlyAsFarAsTheirPlanesPointsReach) {
+    Scene s = FloorScene();
+    AddBox(&s, {5.0f, 0.46f, -1.0f}, {7.0f, 0.56f, 1.0f});      // the plate
+    AddBox(&s, {-9.5f, -0.1f, -9.5f}, {-9.0f, -0.05f, -9.0f});  // puts the floor mid-cell
+    s.lights = {{{0, 6, 0}, Color(1.0f), Falloff::None}};
+    auto accel = CreateAccelerator("grid", s.mesh);
+    LightMeshOptions o;
+    o.variant = "consensus";
+    auto lmm = CreateLightMeshShadows(s, *accel, o);
+    const LightMeshLattice& L = lmm->Lattice();
+    const float reach = L.r + L.h / 8 + 2e-3f * L.h;  // pointReach_ at ns 8, with room for its margin
+    ASSERT_GT(0.46f, reach);
+    const int ci = static_cast<int>(std::floor((6.0f - L.origin.x) / L.h));
+    const int cj = static_cast<int>(std::floor((0.0f - L.origin.y) / L.h));
+    const int ck = static_cast<int>(std::floor((0.3f - L.origin.z) / L.h));
+    ASSERT_GT(L.Node(0, cj + 3, 0).y, reach);  // the cube's top layer is beyond every floor sphere
+    ASSERT_LT(0.46f, L.Node(0, cj + 3, 0).y);  // and the plate within the cube's reach
+
+    bool needed[kMaxLights] = {true};
+    float vis[kMaxLights] = {};
+    RenderCounters c;
+    lmm->Visibility(FloorPoint(6.0f, 0.3f), needed, vis, c);
+    EXPECT_EQ(Count(c, Lmc::kPlanarCellPoints), 1u);
+    EXPECT_EQ(Count(c, Lmc::kLocalSegments), 0u);
+    int beyond = 0;
+    for (int k = ck - 2; k <= ck + 3; ++k)
+        for (int j = cj - 2; j <= cj + 3; ++j)
+            for (int i = ci - 2; i <= ci + 3; ++i)
+                if (L.Node(i, j, k).y > reach) {
+                    ++beyond;
+                    EXPECT_FALSE(lmm->IsEvaluated(L.Index(i, j, k))) << i << " " << j << " " << k;
+                }
+    EXPECT_GT(beyond, 0);
+
+    LightMeshOptions ot = o;
+    ot.variant = "object";
+    auto object = CreateLightMeshShadows(s, *accel, ot);
+    float visObject[kMaxLights] = {};
+    RenderCounters co;
+    object->Visibility(FloorPoint(6.0f, 0.3f), needed, visObject, co);
+    EXPECT_EQ(vis[0], visObject[0]);
+    EXPECT_LT(vis[0], 1.0f);  // the plate's shadow reaches the point's sphere
+
+    s.camera = Camera{{6, 3, 4}, {6, 0, 0}, {0, 1, 0}, 50.0f};
+    RenderResult images[2];
+    int n = 0;
+    for (const char* variant : {"object", "consensus"}) {
+        s.render.lightMesh.variant = variant;
+        auto method = CreateShadowMethod("lmm", s, *accel, s.render);
+        images[n++] = WhittedRenderer(s, *accel, *method, s.render).Render();
+    }
+    EXPECT_EQ(images[0].image.pixels, images[1].image.pixels);
+    EXPECT_GT(Count(images[1].counters, Lmc::kPlanarCellPoints), 0u);
+}
+
 // У (§3.2) skips the inner nodes' segments only when every boundary node sees P; when no
 // occluder lies inside any sphere that is always the case, so У gives Ш's image exactly.
 TEST(LightMesh, ReducedEqualsTemplatesWithoutOccludersInSpheres) {
