@@ -207,9 +207,11 @@ class LightMesh final : public LightMeshShadows {
         Vec3 qlo, qhi;     // the box of the patch's origins, grown by reachMargin_
         uint64_t known[kCubeWords], sees[kCubeWords];  // node states, by CubeBit
     };
-    // A few lists per thread, replaced in turn: a tile's row of pixels crosses cells and
-    // triangles back and forth, and its next row comes back to them.
-    static constexpr int kFrontLists = 8;
+    // Lists per thread, kept in sets of two by a hash of (cell, triangle, side), the older
+    // of a set replaced: a tile's row of pixels crosses cells and triangles back and forth,
+    // and its next rows come back to them. (Eight lists replaced in turn rebuilt each one
+    // 1.8 times on the castle at 1024×768: 17.2k builds for 9.5k lists.)
+    static constexpr int kFrontSets = 32, kFrontWays = 2;
     // Segments decided without rays (light_mesh_patches.h): a point's front triangles, its
     // cell patch and the node that sees all of it, its blockers, the segment culling.
     FrontList& FrontTriangles(const CellSummary& c, int64_t base, const ShadingPoint& sp) const;

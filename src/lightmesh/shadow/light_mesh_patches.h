@@ -12,14 +12,22 @@ namespace {
 template <typename Word>
 inline auto LightMesh<Word>::FrontTriangles(const CellSummary& c, int64_t base, const ShadingPoint& sp) const
     -> FrontList& {
-    thread_local FrontList lists[kFrontLists];
-    thread_local int next = 0;
+    thread_local FrontList lists[kFrontSets][kFrontWays];
+    thread_local uint8_t older[kFrontSets] = {};
     const TrianglePlane& own = planes_[sp.prim];
     const float sign = Dot(own.n, sp.n) >= 0 ? 1.0f : -1.0f;
-    for (FrontList& list : lists)
-        if (list.owner == serial_ && list.base == base && list.prim == sp.prim && list.sign == sign) return list;
-    FrontList& list = lists[next];
-    next = (next + 1) % kFrontLists;
+    const uint64_t key = (static_cast<uint64_t>(base) * 0x9E3779B97F4A7C15ull) ^
+                         (static_cast<uint64_t>(sp.prim) * 0xC2B2AE3D27D4EB4Full) ^ (sign > 0 ? 1u : 0u);
+    const int set = static_cast<int>((key >> 40) % kFrontSets);
+    for (int way = 0; way < kFrontWays; ++way) {
+        FrontList& list = lists[set][way];
+        if (list.owner == serial_ && list.base == base && list.prim == sp.prim && list.sign == sign) {
+            older[set] = static_cast<uint8_t>(1 - way);
+            return list;
+        }
+    }
+    FrontList& list = lists[set][older[set]];
+    older[set] = static_cast<uint8_t>(1 - older[set]);
     const TriangleMesh& mesh = scene_.mesh;
     const Vec3 n = own.n * sign;
     const float d = own.d * sign;
