@@ -542,6 +542,70 @@ TEST(AccelBatch, OccludedManyMatchesOccludedRayByRay) {
     }
 }
 
+// The light mesh hands local-visibility segments to OccludedMany in batches of up to 8
+// (MinorityFirst) while ОТ and the first segments of a point go one by one, and consensus
+// promises ОТ's image bit for bit: so a segment must get the same answer in a packet,
+// whatever its companions, as alone. Embree's packet and single-ray kernels share the
+// triangle test's operations (Plücker, the same expressions instantiated for the packet
+// width); this holds them to it where rounding decides: segments ending exactly on
+// vertices, on edges and on faces, grazing along faces, on closed and open meshes and
+// on a heightfield, in packets of 1 to 8 with random companions.
+TEST(AccelBatch, SegmentsInPacketsGetTheAnswersTheyGetAlone) {
+    for (const char* sceneName : {"sphere", "soup", "heightfield", "box"}) {
+        const TriangleMesh& mesh = GetScene(sceneName).mesh;
+        const Bounds3 box = mesh.Bounds();
+        for (const char* name : {"brute", "grid", "embree"}) {
+            if (std::string(name) == "embree" && !HasEmbree()) continue;
+            const auto accel = CreateAccelerator(name, mesh);
+            std::mt19937 rng(29);
+            std::uniform_real_distribution<float> u(-0.1f, 1.1f), unit(0.0f, 1.0f);
+            std::uniform_int_distribution<uint32_t> pick(0, static_cast<uint32_t>(mesh.triangles.size() - 1));
+            auto inBox = [&] {
+                const Vec3 d = box.Diagonal();
+                return box.lo + Vec3(u(rng) * d.x, u(rng) * d.y, u(rng) * d.z);
+            };
+            // An end where rounding decides: a vertex, an edge's point, a face's point.
+            auto onMesh = [&](int kind) {
+                const uint32_t t = pick(rng);
+                const Vec3 &a = mesh.Vertex(t, 0), &b = mesh.Vertex(t, 1), &c = mesh.Vertex(t, 2);
+                if (kind == 0) return a;
+                const float f = unit(rng), g = unit(rng) * (1 - f);
+                if (kind == 1) return a + (b - a) * f;
+                return a + (b - a) * f + (c - a) * g;
+            };
+            int segments = 0, differ = 0, blocked = 0;
+            for (int packet = 0; packet < 3000; ++packet) {
+                const size_t n = 1 + static_cast<size_t>(packet % 8);
+                std::vector<Ray> rays(n);
+                for (size_t k = 0; k < n; ++k) {
+                    const int kind = static_cast<int>((packet + k) % 5);
+                    if (kind < 3) {  // from a random point to the mesh, ending on it
+                        rays[k] = Segment(inBox(), onMesh(kind));
+                    } else if (kind == 3) {  // through a vertex or an edge, ending beyond it
+                        const Vec3 from = inBox(), through = onMesh(static_cast<int>(k % 2));
+                        rays[k] = Ray{from, through - from, 0.0f, 1.0f + 1e-3f * unit(rng)};
+                    } else {  // grazing: along a triangle's plane, from one of its points
+                        const uint32_t t = pick(rng);
+                        const Vec3 &a = mesh.Vertex(t, 0), &b = mesh.Vertex(t, 1), &c = mesh.Vertex(t, 2);
+                        const Vec3 from = a + (b - a) * 0.5f, to = c + (c - from) * unit(rng);
+                        rays[k] = Segment(from, to);
+                    }
+                }
+                std::unique_ptr<bool[]> many(new bool[n]);
+                accel->OccludedMany(rays.data(), n, many.get());
+                for (size_t k = 0; k < n; ++k, ++segments) {
+                    const bool alone = accel->Occluded(rays[k]);
+                    differ += alone != many[k];
+                    blocked += alone;
+                }
+            }
+            EXPECT_GT(blocked, segments / 20) << sceneName << " " << name;
+            EXPECT_LT(blocked, segments - segments / 20) << sceneName << " " << name;
+            EXPECT_EQ(differ, 0) << sceneName << " " << name << ": " << differ << " of " << segments;
+        }
+    }
+}
+
 TEST(AccelFactory, NamesAndErrors) {
     EXPECT_EQ(AcceleratorNames(), (std::vector<std::string>{"brute", "grid", "embree"}));
     const TriangleMesh mesh = ts::Soup(10, 1);

@@ -212,6 +212,8 @@ class LightMesh final : public LightMeshShadows {
     // and its next rows come back to them. (Eight lists replaced in turn rebuilt each one
     // 1.8 times on the castle at 1024×768: 17.2k builds for 9.5k lists.)
     static constexpr int kFrontSets = 32, kFrontWays = 2;
+    // Local-visibility segments handed to the back-end at once (MinorityFirst).
+    static constexpr size_t kSegmentBatch = 8;
     // Segments decided without rays (light_mesh_patches.h): a point's front triangles, its
     // cell patch and the node that sees all of it, its blockers, the segment culling.
     FrontList& FrontTriangles(const CellSummary& c, int64_t base, const ShadingPoint& sp) const;
@@ -323,8 +325,39 @@ class LightMesh final : public LightMeshShadows {
         return !accel_.Occluded(Segment(x, sp.origin));
     }
 
+    // Local-visibility segments from nodes to one point that are all to be decided (ОТ, У,
+    // consensus where a minority node sees P), handed to the back-end kSegmentBatch at a
+    // time: Accelerator::OccludedMany, as Embree's packets, whose lanes compute each
+    // segment with the single-ray test's operations, so every answer is the one the
+    // segment gets alone (AccelBatch.SegmentsInPacketsGetTheAnswersTheyGetAlone); the
+    // nodes that see P are used (and evaluated, if need be) as the answers come.
+    struct SegmentBatch {
+        Ray rays[kSegmentBatch];
+        uint64_t nodes[kSegmentBatch];
+        bool blocked[kSegmentBatch];
+        size_t pending = 0;
+        size_t seen = 0;  // nodes used so far
+    };
+    void Queue(SegmentBatch& batch, const Vec3& x, uint64_t index, const ShadingPoint& sp, Accumulator& acc,
+               RenderCounters& counters) const {
+        batch.rays[batch.pending] = Segment(x, sp.origin);
+        batch.nodes[batch.pending] = index;
+        if (++batch.pending == kSegmentBatch) Flush(batch, acc, counters);
+    }
+    void Flush(SegmentBatch& batch, Accumulator& acc, RenderCounters& counters) const {
+        if (batch.pending == 0) return;
+        Count(counters, LightMeshCount::kLocalSegments) += batch.pending;
+        accel_.OccludedMany(batch.rays, batch.pending, batch.blocked);
+        for (size_t q = 0; q < batch.pending; ++q)
+            if (!batch.blocked[q]) {
+                Use(acc, Evaluate(batch.nodes[q]));
+                ++batch.seen;
+            }
+        batch.pending = 0;
+    }
+
     // The sphere walks and the variants' local visibility (light_mesh_walks.h).
-    void Candidate(const Vec3& x, uint64_t index, const ShadingPoint& sp, Accumulator& acc,
+    void Candidate(const Vec3& x, uint64_t index, const ShadingPoint& sp, Accumulator& acc, SegmentBatch& batch,
                    RenderCounters& counters) const;
 
     // A candidate node for the penumbra mode (PenumbraInterpolate).

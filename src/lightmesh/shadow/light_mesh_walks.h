@@ -13,14 +13,14 @@ namespace {
 // node by node (all but У).
 template <typename Word>
 inline void LightMesh<Word>::Candidate(const Vec3& x, uint64_t index, const ShadingPoint& sp, Accumulator& acc,
-                                       RenderCounters& counters) const {
+                                       SegmentBatch& batch, RenderCounters& counters) const {
     ++Count(counters, LightMeshCount::kCandidates);
     switch (variant_.local) {
         case LocalVisibility::Object:
         case LocalVisibility::Reduced:    // only on the cube loop's fallback path: test all
         case LocalVisibility::Consensus:
-            if (!SeesPoint(x, sp, counters)) return;
-            break;
+            Queue(batch, x, index, sp, acc, counters);
+            return;
         case LocalVisibility::Inside: {
             const Word w = Evaluate(index);
             if (!(w & kInside)) Use(acc, w);
@@ -50,6 +50,7 @@ inline void LightMesh<Word>::CubeWalk(const ShadingPoint& sp, Word neededMask, A
     const int k0 = lo(sp.p.z, L.origin.z, L.nz), k1 = hi(sp.p.z, L.origin.z, L.nz);
     thread_local std::vector<PenumbraNode> cubeNodes;
     cubeNodes.clear();
+    SegmentBatch batch;
     for (int k = k0; k <= k1; ++k)
         for (int j = j0; j <= j1; ++j)
             for (int i = i0; i <= i1; ++i) {
@@ -63,8 +64,9 @@ inline void LightMesh<Word>::CubeWalk(const ShadingPoint& sp, Word neededMask, A
                     cubeNodes.push_back({x, LengthSquared(d), index, Evaluate(index)});
                     continue;
                 }
-                Candidate(x, L.Index(i, j, k), sp, acc, counters);
+                Candidate(x, L.Index(i, j, k), sp, acc, batch, counters);
             }
+    Flush(batch, acc, counters);
     if (lightRadius_ > 0) CubePenumbra(sp, neededMask, cubeNodes, acc, counters);
 }
 
@@ -202,24 +204,31 @@ inline bool LightMesh<Word>::TemplateWalk(const ShadingPoint& sp, Word neededMas
         Count(counters, LightMeshCount::kCandidates) += acc.m;
         return true;
     }
+    SegmentBatch batch;
     if (variant_.local != LocalVisibility::Reduced) {
         all.ForEach([&](const FrontBlock& b, int k) {
-            Candidate(node(b, k), static_cast<uint64_t>(base + b.linear[k]), sp, acc, counters);
+            Candidate(node(b, k), static_cast<uint64_t>(base + b.linear[k]), sp, acc, batch, counters);
         });
+        Flush(batch, acc, counters);
         return true;
     }
     // У (§3.2): test the boundary nodes first; if all of them see P, take the inner
     // nodes without testing them, otherwise test the inner nodes too.
-    bool allSee = true;
+    size_t boundaryCount = 0;
     boundary.ForEach([&](const FrontBlock& b, int k) {
         ++Count(counters, LightMeshCount::kCandidates);
-        if (SeesPoint(node(b, k), sp, counters)) Use(acc, Evaluate(static_cast<uint64_t>(base + b.linear[k])));
-        else allSee = false;
+        ++boundaryCount;
+        Queue(batch, node(b, k), static_cast<uint64_t>(base + b.linear[k]), sp, acc, counters);
     });
+    Flush(batch, acc, counters);
+    const bool allSee = batch.seen == boundaryCount;
     inner.ForEach([&](const FrontBlock& b, int k) {
         ++Count(counters, LightMeshCount::kCandidates);
-        if (allSee || SeesPoint(node(b, k), sp, counters)) Use(acc, Evaluate(static_cast<uint64_t>(base + b.linear[k])));
+        const uint64_t index = static_cast<uint64_t>(base + b.linear[k]);
+        if (allSee) Use(acc, Evaluate(index));
+        else Queue(batch, node(b, k), index, sp, acc, counters);
     });
+    Flush(batch, acc, counters);
     return true;
 }
 
@@ -314,28 +323,55 @@ inline void LightMesh<Word>::MinorityFirst(const ShadingPoint& sp, Word neededMa
                                            int64_t base, int ci, int cj, int ck, const CellSummary* summary,
                                            Blockers& blockers, Accumulator& acc, RenderCounters& counters) const {
     FrontList* patch = summary ? Patch(*summary, base, ci, cj, ck, sp) : nullptr;
-    auto sees = [&](const FrontBlock& b, int k) {
-        const Vec3 x = EntryNode(ci, cj, ck, b, k);
+    // A segment decided without the back-end (the cell patch, the point's blockers): 1
+    // sees, 0 blocked, -1 for the back-end.
+    auto decide = [&](const FrontBlock& b, int k, const Vec3& x) {
         if (patch && PatchSees(*patch, b, k, x)) {
             ++Count(counters, LightMeshCount::kPatchSegments);
-            return true;
+            return 1;
         }
         if (summary && !blockers.tried) FindBlockers(*summary, base, sp, &blockers);
-        return SeesPointCulled(x, sp, blockers, counters);
-    };
-    bool minoritySeen = false;
-    all.ForEach([&](const FrontBlock& b, int k) {
-        const Word w = Evaluate(static_cast<uint64_t>(base + b.linear[k]));  // evaluated by pass 1
-        if ((w & neededMask) != majority && sees(b, k)) {
-            Use(acc, w);
-            minoritySeen = true;
+        if (blockers.known) {
+            const int culled = cull_(blockers, x, sp.origin, blockers.margin);
+            if (culled >= 0) {
+                ++Count(counters, LightMeshCount::kCulledSegments);
+                return culled == 0 ? 1 : 0;
+            }
         }
-    });
+        return -1;
+    };
+    SegmentBatch batch;
+    size_t seenWithoutRays = 0;
+    // Decides every segment of the candidates `select` takes, and uses those that see P.
+    auto useAllSeeing = [&](auto&& select) {
+        all.ForEach([&](const FrontBlock& b, int k) {
+            const Word w = Evaluate(static_cast<uint64_t>(base + b.linear[k]));  // evaluated by pass 1
+            if (!select(w)) return;
+            const Vec3 x = EntryNode(ci, cj, ck, b, k);
+            const int d = decide(b, k, x);
+            if (d == 1) {
+                Use(acc, w);
+                ++seenWithoutRays;
+            } else if (d < 0) {
+                Queue(batch, x, static_cast<uint64_t>(base + b.linear[k]), sp, acc, counters);
+            }
+        });
+        Flush(batch, acc, counters);
+    };
+    useAllSeeing([&](Word w) { return (w & neededMask) != majority; });
+    if (seenWithoutRays + batch.seen > 0) {  // a minority node sees P: ОТ's average needs every segment
+        useAllSeeing([&](Word w) { return (w & neededMask) == majority; });
+        return;
+    }
+    // No minority node sees P: the first W-node that does settles it.
     all.Any([&](const FrontBlock& b, int k) {
         const Word w = Evaluate(static_cast<uint64_t>(base + b.linear[k]));
-        if ((w & neededMask) != majority || !sees(b, k)) return false;
+        if ((w & neededMask) != majority) return false;
+        const Vec3 x = EntryNode(ci, cj, ck, b, k);
+        const int d = decide(b, k, x);
+        if (d == 0 || (d < 0 && !SeesPoint(x, sp, counters))) return false;
         Use(acc, w);
-        return !minoritySeen;  // with no minority node in S, one W-node settles it
+        return true;
     });
 }
 
