@@ -434,7 +434,7 @@ inline Word LightMesh<Word>::EvaluateVisibility(const Vec3& x, uint64_t index) c
         for (size_t l = 0; l < nLights; ++l) {
             const Vec3& light = scene_.lights[l].position;
             Hit hit;
-            if (!accel_.Intersect(Ray{x, light - x, 0.0f, 1.0f - 1e-5f}, &hit)) {
+            if (!accel_.Intersect(LightSegment(x, light), &hit)) {
                 value |= Word(1) << l;
                 continue;
             }
@@ -465,7 +465,7 @@ inline Word LightMesh<Word>::EvaluateWithInside(const Vec3& x) const {
     for (size_t l = 0; l < nLights; ++l) {
         const Vec3& light = scene_.lights[l].position;
         if (votes < 3) {
-            const int crossings = accel_.CountCrossings(Ray{x, light - x, 0.0f, 1.0f - 1e-5f});
+            const int crossings = accel_.CountCrossings(LightSegment(x, light));
             if (crossings == 0) value |= Word(1) << l;
             odd += crossings & 1;
             ++votes;

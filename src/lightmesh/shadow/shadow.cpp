@@ -8,8 +8,7 @@
 namespace lm {
 
 bool LightVisible(const Accelerator& accel, const Vec3& origin, const Vec3& light) {
-    // The segment stops just short of the light so geometry touching it does not count.
-    return !accel.Occluded(Ray{origin, light - origin, 0.0f, 1.0f - 1e-5f});
+    return !accel.Occluded(LightSegment(origin, light));
 }
 
 namespace {

@@ -59,6 +59,10 @@ std::unique_ptr<ShadowMethod> CreateShadowMethod(std::string_view name, const Sc
 /// The names CreateShadowMethod accepts.
 std::vector<std::string> ShadowMethodNames();
 
+/// The shadow segment from `origin` to a point light. It stops just short of the light so
+/// geometry touching the light does not count.
+inline Ray LightSegment(const Vec3& origin, const Vec3& light) { return Ray{origin, light - origin, 0.0f, 1.0f - 1e-5f}; }
+
 /// One shadow ray from sp.origin to the light: the hard-shadow visibility of formula (1).
 bool LightVisible(const Accelerator& accel, const Vec3& origin, const Vec3& light);
 
