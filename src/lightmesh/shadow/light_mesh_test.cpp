@@ -557,15 +557,10 @@ TEST(LightMesh, CellSummariesLookOnlyAsFarAsTheirPlanesPointsReach) {
     EXPECT_LT(vis[0], 1.0f);  // the plate's shadow reaches the point's sphere
 
     s.camera = Camera{{6, 3, 4}, {6, 0, 0}, {0, 1, 0}, 50.0f};
-    RenderResult images[2];
-    int n = 0;
-    for (const char* variant : {"object", "consensus"}) {
-        s.render.lightMesh.variant = variant;
-        auto method = CreateShadowMethod("lmm", s, *accel, s.render);
-        images[n++] = WhittedRenderer(s, *accel, *method, s.render).Render();
-    }
-    EXPECT_EQ(images[0].image.pixels, images[1].image.pixels);
-    EXPECT_GT(Count(images[1].counters, Lmc::kPlanarCellPoints), 0u);
+    const RenderResult objectImage = RenderLmm(s, *accel, "object", "auto", 2.0f);
+    const RenderResult consensusImage = RenderLmm(s, *accel, "consensus", "auto", 2.0f);
+    EXPECT_EQ(objectImage.image.pixels, consensusImage.image.pixels);
+    EXPECT_GT(Count(consensusImage.counters, Lmc::kPlanarCellPoints), 0u);
 }
 
 // У (§3.2) skips the inner nodes' segments only when every boundary node sees P; when no
