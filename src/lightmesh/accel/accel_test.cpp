@@ -542,14 +542,14 @@ TEST(AccelBatch, OccludedManyMatchesOccludedRayByRay) {
     }
 }
 
-// The light mesh hands local-visibility segments to OccludedMany in batches of up to 8
+// The light mesh hands local-visibility segments to OccludedMany in batches of up to 16
 // (MinorityFirst) while ОТ and the first segments of a point go one by one, and consensus
 // promises ОТ's image bit for bit: so a segment must get the same answer in a packet,
 // whatever its companions, as alone. Embree's packet and single-ray kernels share the
 // triangle test's operations (Plücker, the same expressions instantiated for the packet
 // width); this holds them to it where rounding decides: segments ending exactly on
 // vertices, on edges and on faces, grazing along faces, on closed and open meshes and
-// on a heightfield, in packets of 1 to 8 with random companions.
+// on a heightfield, in packets of 1 to 16 with random companions.
 TEST(AccelBatch, SegmentsInPacketsGetTheAnswersTheyGetAlone) {
     for (const char* sceneName : {"sphere", "soup", "heightfield", "box"}) {
         const TriangleMesh& mesh = GetScene(sceneName).mesh;
@@ -574,8 +574,8 @@ TEST(AccelBatch, SegmentsInPacketsGetTheAnswersTheyGetAlone) {
                 return a + (b - a) * f + (c - a) * g;
             };
             int segments = 0, differ = 0, blocked = 0;
-            for (int packet = 0; packet < 3000; ++packet) {
-                const size_t n = 1 + static_cast<size_t>(packet % 8);
+            for (int packet = 0; packet < 2000; ++packet) {
+                const size_t n = 1 + static_cast<size_t>(packet % 16);
                 std::vector<Ray> rays(n);
                 for (size_t k = 0; k < n; ++k) {
                     const int kind = static_cast<int>((packet + k) % 5);

@@ -40,9 +40,12 @@ class Accelerator {
     /// True if any triangle is hit (shadow rays and local-visibility segments).
     virtual bool Occluded(const Ray& ray) const = 0;
 
-    /// Occluded for each of `count` rays, into occluded[0 … count-1]: for a few coherent
-    /// rays at once (from one point to a light's disc), which a back-end may trace as a
-    /// packet. The default, which brute force and the grid keep, is Occluded ray by ray.
+    /// Occluded for each of `count` rays, into occluded[0 … count-1]: for a few rays at
+    /// once that share an end or a target (a point's rays to a light's disc, the light
+    /// mesh's segments from nodes to a point), which a back-end may trace as a packet. Each
+    /// ray must get the answer Occluded gives it, whatever its companions
+    /// (AccelBatch tests hold every back-end to it). The default, which brute force and
+    /// the grid keep, is Occluded ray by ray.
     virtual void OccludedMany(const Ray* rays, size_t count, bool* occluded) const;
 
     /// The number of surface crossings along the ray: each triangle hit counts once, and

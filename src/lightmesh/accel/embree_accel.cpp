@@ -95,7 +95,8 @@ struct EmbreeAccel::Impl {
         static_cast<Impl*>(user)->embreeBytes.fetch_add(bytes, std::memory_order_relaxed);
         return true;
     }
-    bool packets = false;  // native rtcOccluded4/8 kernels (OccludedMany)
+    bool packets = false;    // native rtcOccluded4/8 kernels (OccludedMany)
+    bool packets16 = false;  // and rtcOccluded16 (AVX-512)
     std::mutex errorMutex;
     std::string error;  // first error Embree reported
 
@@ -188,6 +189,7 @@ EmbreeAccel::EmbreeAccel(const TriangleMesh& mesh) : impl_(std::make_unique<Impl
     rtcSetDeviceMemoryMonitorFunction(m.device, &Impl::OnMemory, &m);
     m.packets = rtcGetDeviceProperty(m.device, RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED) > 0 &&
                 rtcGetDeviceProperty(m.device, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED) > 0;
+    m.packets16 = m.packets && rtcGetDeviceProperty(m.device, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) > 0;
 
     // Scene: robust traversal (no precision-reducing shortcuts). Build quality stays
     // Embree's default (medium), what a renderer gets without tuning.
@@ -273,8 +275,8 @@ bool SetLane(Packet* p, int k, const Ray& ray) {
 
 template <int N, typename Packet, typename Trace>
 void OccludedPacket(RTCScene scene, const Ray* rays, size_t count, bool* occluded, Trace trace) {
-    alignas(32) int valid[N];
-    alignas(32) Packet packet;
+    alignas(64) int valid[N];
+    alignas(64) Packet packet;
     for (int k = 0; k < N; ++k) {
         valid[k] = k < static_cast<int>(count) && SetLane(&packet, k, rays[k]) ? -1 : 0;
         if (valid[k] == 0) packet.tfar[k] = 0.0f;  // an empty range is not occluded
@@ -293,8 +295,10 @@ void EmbreeAccel::OccludedMany(const Ray* rays, size_t count, bool* occluded) co
         return;
     }
     for (size_t first = 0; first < count;) {
-        const size_t n = std::min<size_t>(count - first, 8);
-        if (n == 1)
+        const size_t n = std::min<size_t>(count - first, impl_->packets16 ? 16 : 8);
+        if (n > 8)
+            OccludedPacket<16, RTCRay16>(impl_->scene, rays + first, n, occluded + first, rtcOccluded16);
+        else if (n == 1)
             occluded[first] = Occluded(rays[first]);
         else if (n <= 4)
             OccludedPacket<4, RTCRay4>(impl_->scene, rays + first, n, occluded + first, rtcOccluded4);

@@ -34,10 +34,12 @@ class EmbreeAccel final : public Accelerator {
     std::string_view Name() const override { return "embree"; }
     bool Intersect(const Ray& ray, Hit* hit) const override;
     bool Occluded(const Ray& ray) const override;
-    /// In packets of up to 4 or 8 (rtcOccluded4/8) where Embree has native packet kernels,
-    /// else ray by ray. A packet ray's answer can differ from rtcOccluded1's only where
-    /// Embree's own rounding decides (a ray grazing an edge), as Embree makes no promise
-    /// that its kernels agree there.
+    /// In packets of up to 4, 8 or 16 (rtcOccluded4/8/16) where Embree has native packet
+    /// kernels for them (16: AVX-512), else ray by ray. Embree does not promise that its
+    /// packet and single-ray kernels round alike, but both evaluate the same triangle test
+    /// (the Plücker test's expressions, instantiated for the packet's width), and
+    /// AccelBatch.SegmentsInPacketsGetTheAnswersTheyGetAlone finds them equal on rays that
+    /// end on vertices, edges and faces.
     void OccludedMany(const Ray* rays, size_t count, bool* occluded) const override;
     int CountCrossings(const Ray& ray) const override;
     AccelFigures Figures() const override;
