@@ -342,7 +342,8 @@ inline void LightMesh<Word>::MinorityFirst(const ShadingPoint& sp, Word neededMa
     };
     SegmentBatch batch;
     size_t seenWithoutRays = 0;
-    // Decides every segment of the candidates `select` takes, and uses those that see P.
+    // Decides every segment of the candidates `select` takes, and uses those that see P
+    // (the back-end's answers may still be pending in `batch`).
     auto useAllSeeing = [&](auto&& select) {
         all.ForEach([&](const FrontBlock& b, int k) {
             const Word w = Evaluate(static_cast<uint64_t>(base + b.linear[k]));  // evaluated by pass 1
@@ -356,11 +357,14 @@ inline void LightMesh<Word>::MinorityFirst(const ShadingPoint& sp, Word neededMa
                 Queue(batch, x, static_cast<uint64_t>(base + b.linear[k]), sp, acc, counters);
             }
         });
-        Flush(batch, acc, counters);
     };
     useAllSeeing([&](Word w) { return (w & neededMask) != majority; });
+    // Whether a minority node sees P; if one is already known to, the minority's pending
+    // segments share their packets with the majority's, which are all needed then.
+    if (seenWithoutRays + batch.seen == 0) Flush(batch, acc, counters);
     if (seenWithoutRays + batch.seen > 0) {  // a minority node sees P: ОТ's average needs every segment
         useAllSeeing([&](Word w) { return (w & neededMask) == majority; });
+        Flush(batch, acc, counters);
         return;
     }
     // No minority node sees P: the first W-node that does settles it.
