@@ -242,14 +242,21 @@ inline void LightMesh<Word>::Visibility(const ShadingPoint& sp, const bool* need
 template <typename Word>
 inline void LightMesh<Word>::CheckThin(const ShadingPoint& sp, const bool* needed, uint64_t ownRays, float* vis,
                                        RenderCounters& counters) const {
+    // P's own rays to the lights the nodes decided alone, traced together.
+    uint64_t checked = 0;
     for (size_t l = 0; l < scene_.lights.size(); ++l) {
         if (!needed[l] || ((ownRays >> l) & 1)) continue;
+        if (vis[l] == 1.0f || (thinCheck_ == ThinCheck::kAll && vis[l] == 0.0f)) checked |= uint64_t(1) << l;
+    }
+    if (!checked) return;
+    const uint64_t visible = LightsVisible(accel_, sp.origin, scene_.lights, checked);
+    for (size_t l = 0; l < scene_.lights.size(); ++l) {
+        if (!((checked >> l) & 1)) continue;
         const bool lit = vis[l] == 1.0f;
-        if (!lit && !(thinCheck_ == ThinCheck::kAll && vis[l] == 0.0f)) continue;
         const Vec3& light = scene_.lights[l].position;
         ++Count(counters, LightMeshCount::kThinChecks);
         ++counters.shadowRays;
-        if (LightVisible(accel_, sp.origin, light) == lit) continue;
+        if ((((visible >> l) & 1) != 0) == lit) continue;
         ++Count(counters, LightMeshCount::kThinFound);
         int rays = 0;
         vis[l] = DiscLightVisibility(accel_, sp.origin, light, lightRadius_, kNarrowPerRing,

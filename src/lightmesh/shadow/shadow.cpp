@@ -11,6 +11,25 @@ bool LightVisible(const Accelerator& accel, const Vec3& origin, const Vec3& ligh
     return !accel.Occluded(LightSegment(origin, light));
 }
 
+uint64_t LightsVisible(const Accelerator& accel, const Vec3& origin, const std::vector<PointLight>& lights,
+                       uint64_t mask) {
+    Ray rays[64];
+    int which[64];
+    bool blocked[64];
+    size_t n = 0;
+    for (uint64_t m = mask; m; m &= m - 1) {
+        const int l = __builtin_ctzll(m);
+        if (static_cast<size_t>(l) >= lights.size()) break;
+        rays[n] = LightSegment(origin, lights[static_cast<size_t>(l)].position);
+        which[n++] = l;
+    }
+    accel.OccludedMany(rays, n, blocked);
+    uint64_t visible = 0;
+    for (size_t k = 0; k < n; ++k)
+        if (!blocked[k]) visible |= uint64_t(1) << which[k];
+    return visible;
+}
+
 namespace {
 
 /// "none": every light is visible everywhere (the floor that shadow work sits on).
@@ -33,11 +52,13 @@ class HardShadows final : public ShadowMethod {
     std::string_view Name() const override { return "rt"; }
     void Visibility(const ShadingPoint& sp, const bool* needed, float* vis,
                     RenderCounters& counters) const override {
-        for (size_t i = 0; i < scene_.lights.size(); ++i) {
-            if (!needed[i]) continue;
-            ++counters.shadowRays;
-            vis[i] = LightVisible(accel_, sp.origin, scene_.lights[i].position) ? 1.0f : 0.0f;
-        }
+        uint64_t mask = 0;
+        for (size_t i = 0; i < scene_.lights.size(); ++i)
+            if (needed[i]) mask |= uint64_t(1) << i;
+        counters.shadowRays += static_cast<uint64_t>(__builtin_popcountll(mask));
+        const uint64_t visible = LightsVisible(accel_, sp.origin, scene_.lights, mask);
+        for (size_t i = 0; i < scene_.lights.size(); ++i)
+            if (needed[i]) vis[i] = (visible >> i) & 1 ? 1.0f : 0.0f;
     }
 
   private:
