@@ -67,7 +67,7 @@ inline Ray LightSegment(const Vec3& origin, const Vec3& light) { return Ray{orig
 bool LightVisible(const Accelerator& accel, const Vec3& origin, const Vec3& light);
 
 /// LightVisible for the lights in `mask` (bit l: lights[l]; the first 64 lights) from one
-/// origin, traced together (Accelerator::OccludedMany: a packet on Embree, 8–11 % faster
+/// origin, traced together (Accelerator::OccludedMany: a packet on Embree, 2–11 % faster
 /// RT on the 6-light garden; each ray's answer is LightVisible's). Bit l of the result is
 /// set where light l of the mask is visible.
 uint64_t LightsVisible(const Accelerator& accel, const Vec3& origin, const std::vector<PointLight>& lights,
