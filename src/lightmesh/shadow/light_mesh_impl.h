@@ -226,6 +226,9 @@ class LightMesh final : public LightMeshShadows {
                                    const FrontRun& all, RenderCounters& counters, int* lane = nullptr) const;
     void FindBlockers(const CellSummary& c, int64_t base, const ShadingPoint& sp, Blockers* b) const;
     bool SeesPointCulled(const Vec3& x, const ShadingPoint& sp, const Blockers& b, RenderCounters& counters) const;
+    // The segment from node x to P's origin against P's blockers: 1 it sees P, 0 blocked,
+    // -1 undecided (for the back-end).
+    int CullSegment(const Vec3& x, const ShadingPoint& sp, const Blockers& b, RenderCounters& counters) const;
     static constexpr uint8_t kHasPlane = 1, kClear0 = 8, kClear1 = 16;
     static constexpr int kBrick = 4;  // summaries are stored by bricks of 4³ cells
     struct SideSummary {

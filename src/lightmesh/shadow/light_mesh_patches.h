@@ -259,16 +259,20 @@ inline void LightMesh<Word>::FindBlockers(const CellSummary& c, int64_t base, co
 // so when every blocker is missed the answer is "sees", when one is hit "blocked", and
 // otherwise the back-end decides, as for ОТ. The image is ОТ's either way.
 template <typename Word>
+inline int LightMesh<Word>::CullSegment(const Vec3& x, const ShadingPoint& sp, const Blockers& b,
+                                        RenderCounters& counters) const {
+    if (!b.known) return -1;
+    const int blocked = cull_(b, x, sp.origin, b.margin);
+    if (blocked < 0) return -1;
+    ++Count(counters, LightMeshCount::kCulledSegments);
+    return blocked == 0 ? 1 : 0;
+}
+
+template <typename Word>
 inline bool LightMesh<Word>::SeesPointCulled(const Vec3& x, const ShadingPoint& sp, const Blockers& b,
                                              RenderCounters& counters) const {
-    if (b.known) {
-        const int decided = cull_(b, x, sp.origin, b.margin);
-        if (decided >= 0) {
-            ++Count(counters, LightMeshCount::kCulledSegments);
-            return decided == 0;
-        }
-    }
-    return SeesPoint(x, sp, counters);
+    const int sees = CullSegment(x, sp, b, counters);
+    return sees >= 0 ? sees == 1 : SeesPoint(x, sp, counters);
 }
 
 }  // namespace

@@ -331,14 +331,7 @@ inline void LightMesh<Word>::MinorityFirst(const ShadingPoint& sp, Word neededMa
             return 1;
         }
         if (summary && !blockers.tried) FindBlockers(*summary, base, sp, &blockers);
-        if (blockers.known) {
-            const int culled = cull_(blockers, x, sp.origin, blockers.margin);
-            if (culled >= 0) {
-                ++Count(counters, LightMeshCount::kCulledSegments);
-                return culled == 0 ? 1 : 0;
-            }
-        }
-        return -1;
+        return CullSegment(x, sp, blockers, counters);
     };
     SegmentBatch batch;
     size_t seenWithoutRays = 0;
