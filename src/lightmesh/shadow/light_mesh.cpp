@@ -192,6 +192,7 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
     cullMargin_ = CullMargin(planeDelta_);
     // A point's segments end at nodes within r of its snapped sub-position.
     pointReach_ = lattice_.r + 0.87f * lattice_.h / static_cast<float>(std::max(templates_.templates.ns, 1)) + reachMargin_;
+    planeSlab_ = pointReach_ + 4 * planeDelta_;
     summaries_ = variant_.enumeration == SphereEnumeration::Templates &&
                  (variant_.local == LocalVisibility::Consensus
                       ? cellSummaries != "off"

@@ -228,12 +228,12 @@ inline auto LightMesh<Word>::ComputeSummary(int ci, int cj, int ck, const Summar
         // whose bounding box is in reach: more triangles can only make it stricter).
         // In float from a vertex of Π: v - v0 is short and exact to half an ulp of the
         // coordinates, so the error stays below the delta / 2 compared with.
-        // A triangle wholly beyond the slab that the segments of points on Π stay in (the
-        // nodes within pointReach_ of Π, as in Side) cannot block one of them, so it does
-        // not make its side unclear (a table top above a floor cell, a ceiling).
+        // A triangle wholly beyond the slab that the segments of points on Π stay in
+        // (planeSlab_, as in Side) cannot block one of them, so it does not make its side
+        // unclear (a table top above a floor cell, a ceiling).
         const Vec3 np(c.n[0], c.n[1], c.n[2]);
         const float limit = 0.5f * c.delta;
-        const float slab = pointReach_ + 4 * planeDelta_;
+        const float slab = planeSlab_;
         bool up = false, down = false;  // a vertex above Π (side 0), below (side 1)
         for (size_t i = 0; i < reach.size() && !(up && down); ++i) {
             float hv[3];
@@ -263,12 +263,12 @@ inline auto LightMesh<Word>::Side(const CellSummary& c, SummaryBrick* brick, int
     const LightMeshLattice& L = lattice_;
     const int64_t base = static_cast<int64_t>(L.Index(ci, cj, ck));
     const double nf[3] = {c.n[0], c.n[1], c.n[2]};
-    // Only the slab of Π that points on Π can reach: a point uses nodes within r of its
-    // snapped sub-position, so within pointReach_ of itself, and it lies within
-    // 2·planeDelta_ of Π (TemplateWalk's test); hx's rounding is far below the rest of the
+    // Only the slab of Π that points on Π can reach (planeSlab_: a point uses nodes within
+    // r of its snapped sub-position, so within pointReach_ of itself, and it lies within
+    // 2·planeDelta_ of Π, TemplateWalk's test); hx's rounding is far below the rest of the
     // margin. The nodes of the cell's cube beyond it (a third of a side's nodes over a
     // floor at kI 2) are neither evaluated nor compared.
-    const double slab = static_cast<double>(pointReach_) + 4.0 * planeDelta_;
+    const double slab = planeSlab_;
     Word all = kVisMask, any = 0;
     for (size_t e = 0; e < cellNodes_.size(); ++e) {
         const uint64_t index = static_cast<uint64_t>(base + cellNodes_[e]);

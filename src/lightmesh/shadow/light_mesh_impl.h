@@ -536,6 +536,9 @@ class LightMesh final : public LightMeshShadows {
     float invH_ = 0;
     Bounds3 sceneBox_;
     float planeDelta_ = 0, frontEps_ = 0, reachMargin_ = 0, cullMargin_ = 0, pointReach_ = 0;
+    // How far off its main plane Π a cell's summary looks (Side, the clear flags): a point
+    // on Π (within 2·planeDelta_ of it) uses nodes within pointReach_ of itself.
+    float planeSlab_ = 0;
     // The plane margin of the segment culling and the patches' test for a tolerance delta:
     // cullMargin_ at the scene's (the triangles' grown boxes), a cell's at its own.
     static float CullMargin(float delta) { return 4 * delta; }
