@@ -13,20 +13,28 @@ bool LightVisible(const Accelerator& accel, const Vec3& origin, const Vec3& ligh
 
 uint64_t LightsVisible(const Accelerator& accel, const Vec3& origin, const std::vector<PointLight>& lights,
                        uint64_t mask) {
-    Ray rays[64];
-    int which[64];
-    bool blocked[64];
+    // 16 rays at a time, Embree's widest packet: a Ray is initialised where it is
+    // declared, and this runs once per shading point, so the buffer stays small.
+    constexpr size_t kChunk = 16;
+    Ray rays[kChunk];
+    int which[kChunk];
+    bool blocked[kChunk];
+    uint64_t visible = 0;
     size_t n = 0;
+    auto trace = [&] {
+        accel.OccludedMany(rays, n, blocked);
+        for (size_t k = 0; k < n; ++k)
+            if (!blocked[k]) visible |= uint64_t(1) << which[k];
+        n = 0;
+    };
     for (uint64_t m = mask; m; m &= m - 1) {
         const int l = __builtin_ctzll(m);
         if (static_cast<size_t>(l) >= lights.size()) break;
         rays[n] = LightSegment(origin, lights[static_cast<size_t>(l)].position);
-        which[n++] = l;
+        which[n] = l;
+        if (++n == kChunk) trace();
     }
-    accel.OccludedMany(rays, n, blocked);
-    uint64_t visible = 0;
-    for (size_t k = 0; k < n; ++k)
-        if (!blocked[k]) visible |= uint64_t(1) << which[k];
+    if (n) trace();
     return visible;
 }
 
