@@ -61,18 +61,31 @@ struct FrontArrays {
     float *sMin, *sMax;
     static constexpr int kArrays = 21;
     std::unique_ptr<float[], void (*)(float*)> block{nullptr, [](float* p) { std::free(p); }};
+    // Entries that fit with their padding: (count + 8) rounded down to a multiple of 8.
+    static constexpr uint32_t Room(uint32_t count) { return (count + 8) & ~7u; }
     // Room for `count` entries and their padding (the contents are not kept).
     void Reserve(uint32_t count) {
-        const uint32_t need = (count + 8) & ~7u;
+        const uint32_t need = Room(count);
         if (need <= capacity) return;
         const uint32_t grown = std::max(need, 2 * capacity);  // a multiple of 8: the size is of 32
         void* p = std::aligned_alloc(32, sizeof(float) * kArrays * grown);
         if (!p) throw std::bad_alloc();
         block.reset(static_cast<float*>(p));
-        capacity = grown;
+        Point(block.get(), grown);
+    }
+    // The arrays in `storage`, owned by the caller: kArrays·room floats, 32-byte aligned,
+    // room a multiple of 8 (Reserve up to room - 8 entries then allocates nothing).
+    void Attach(float* storage, uint32_t room) {
+        block.reset();
+        Point(storage, room);
+    }
+
+private:
+    void Point(float* storage, uint32_t room) {
+        capacity = room;
         float** arrays[kArrays] = {&nx,  &ny,  &nz,  &d,   &lox, &loy, &loz, &hix, &hiy, &hiz, &v0x,
                                    &v0y, &v0z, &v1x, &v1y, &v1z, &v2x, &v2y, &v2z, &sMin, &sMax};
-        for (int a = 0; a < kArrays; ++a) *arrays[a] = block.get() + static_cast<size_t>(a) * capacity;
+        for (int a = 0; a < kArrays; ++a) *arrays[a] = storage + static_cast<size_t>(a) * room;
     }
 };
 /// What FindBlockers needs of the point: its segments' box and origin, and the margins.

@@ -12,8 +12,10 @@ namespace {
 template <typename Word>
 inline auto LightMesh<Word>::FrontTriangles(const CellSummary& c, int64_t base, const ShadingPoint& sp) const
     -> FrontList& {
-    thread_local FrontList lists[kFrontSets][kFrontWays];
-    thread_local uint8_t older[kFrontSets] = {};
+    thread_local std::unique_ptr<FrontCache, typename FrontCache::Deleter> cache;
+    if (!cache) cache = FrontCache::Make();
+    auto& lists = cache->lists;
+    auto& older = cache->older;
     const TrianglePlane& own = planes_[sp.prim];
     const float sign = Dot(own.n, sp.n) >= 0 ? 1.0f : -1.0f;
     const uint64_t key = (static_cast<uint64_t>(base) * 0x9E3779B97F4A7C15ull) ^
