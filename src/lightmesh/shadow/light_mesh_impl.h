@@ -268,6 +268,11 @@ class LightMesh final : public LightMeshShadows {
         // reach of one of its cells; kTooMany if more than kMaxBrickNear.
         const uint32_t* near = nullptr;
         uint32_t nearCount = 0;
+        // Per near triangle, which of the brick's cells its box meets, axis by axis (the
+        // same float comparisons ComputeSummary's box tests make, see NearCodes): bits
+        // 4a + p, the cells at position p along axis a whose reach box it meets; bits
+        // 12 + 4a + p, those whose own box (grown by reachMargin_) it meets.
+        const uint32_t* nearCodes = nullptr;
         std::atomic<uint8_t> sideState[kBrick * kBrick * kBrick][2];  // like state, per side of Π
         SideSummary side[kBrick * kBrick * kBrick][2];
     };
@@ -282,6 +287,11 @@ class LightMesh final : public LightMeshShadows {
 
     // The box of everything cell (ci, cj, ck)'s summary looks at: every node any of its
     // points may use, so every segment of theirs.
+    // Cell (ci, cj, ck)'s box grown by reachMargin_ (the triangles that may choose its Π).
+    Bounds3 CellBox(int ci, int cj, int ck) const {
+        const LightMeshLattice& L = lattice_;
+        return Bounds3(L.Node(ci, cj, ck) - Vec3(reachMargin_), L.Node(ci + 1, cj + 1, ck + 1) + Vec3(reachMargin_));
+    }
     Bounds3 ReachBox(int ci, int cj, int ck) const {
         const LightMeshLattice& L = lattice_;
         return Bounds3(L.Node(ci + minOffset_, cj + minOffset_, ck + minOffset_) - Vec3(reachMargin_),
@@ -289,6 +299,8 @@ class LightMesh final : public LightMeshShadows {
     }
 
     SummaryBrick* AllocateBrick(uint64_t brick) const;
+    void NearCodes(uint64_t brick, const uint32_t* near, uint32_t count, uint32_t* codes) const;
+    uint32_t* ReachSlots(size_t n) const;  // from reachArena_; brickMutex_ held
 
     CellSummary ComputeSummary(int ci, int cj, int ck, const SummaryBrick& brick) const;
 

@@ -88,6 +88,26 @@ private:
         for (int a = 0; a < kArrays; ++a) *arrays[a] = storage + static_cast<size_t>(a) * room;
     }
 };
+/// Which cells of a brick of 4×4×4 cells a box meets, coordinate by coordinate. Cells'
+/// boxes along an axis depend on their position along that axis only (lattice nodes and
+/// bounds are computed per coordinate), so `lo[a][p]`, `hi[a][p]` are the bounds along axis
+/// a of the cells at position p, and a box meets cell (px, py, pz) exactly when it meets
+/// the three bounds: BrickAxisBits sets bit 4a + p when the box's extent along a meets
+/// [lo[a][p], hi[a][p]] (the comparisons of a box test, hi ≥ lo and lo ≤ hi); CellBits is
+/// the mask a cell needs all of.
+struct BrickAxes {
+    float lo[3][4], hi[3][4];
+};
+inline uint32_t BrickAxisBits(const BrickAxes& cells, const Vec3& lo, const Vec3& hi) {
+    const float l[3] = {lo.x, lo.y, lo.z}, h[3] = {hi.x, hi.y, hi.z};
+    uint32_t bits = 0;
+    for (int a = 0; a < 3; ++a)
+        for (int p = 0; p < 4; ++p)
+            bits |= static_cast<uint32_t>((h[a] >= cells.lo[a][p]) & (l[a] <= cells.hi[a][p])) << (4 * a + p);
+    return bits;
+}
+constexpr uint32_t CellBits(int px, int py, int pz) { return (1u << px) | (1u << (4 + py)) | (1u << (8 + pz)); }
+
 /// What FindBlockers needs of the point: its segments' box and origin, and the margins.
 struct BlockerQuery {
     Vec3 lo, hi;        // P ± pointReach_: every node a segment of P's ends at lies inside

@@ -38,6 +38,65 @@ FrontArrays RandomFrontList(std::mt19937& rng, uint32_t count) {
     return f;
 }
 
+// A brick's axis bits decide, for every one of its 64 cells, what the box test against
+// the cell's box decides: boxes touching the cells' bounds exactly, inside, around, apart
+// (the cell summaries' reach lists are built from them instead of from box tests).
+TEST(LightMeshKernels, BrickAxisBitsAgreeWithTheBoxTestOfEveryCell) {
+    std::mt19937 rng(20261203);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    uint64_t meets = 0, apart = 0;
+    for (int brick = 0; brick < 50; ++brick) {
+        // Cells of a lattice with step h from an origin, grown by a margin as ReachBox does.
+        const float h = 0.1f + 3 * unit(rng), margin = h * unit(rng) * 0.5f, grow = 3 * unit(rng);
+        const Vec3 origin(100 * unit(rng) - 50, 100 * unit(rng) - 50, 100 * unit(rng) - 50);
+        const int first = static_cast<int>(40 * unit(rng));
+        auto cellBox = [&](int px, int py, int pz, Vec3* lo, Vec3* hi) {
+            const int i[3] = {first + px, first + py, first + pz};
+            float l[3], u[3];
+            for (int a = 0; a < 3; ++a) {
+                l[a] = origin[a] + static_cast<float>(i[a]) * h - margin - grow * h;
+                u[a] = origin[a] + static_cast<float>(i[a] + 1) * h + margin + grow * h;
+            }
+            *lo = Vec3(l[0], l[1], l[2]), *hi = Vec3(u[0], u[1], u[2]);
+        };
+        BrickAxes axes;
+        for (int p = 0; p < 4; ++p) {
+            Vec3 lo, hi;
+            cellBox(p, p, p, &lo, &hi);
+            for (int a = 0; a < 3; ++a) axes.lo[a][p] = lo[a], axes.hi[a][p] = hi[a];
+        }
+        for (int b = 0; b < 200; ++b) {
+            // Corners on the cells' bounds (exact touches), or anywhere around the brick.
+            Vec3 lo, hi, l2, h2;
+            cellBox(static_cast<int>(4 * unit(rng)), static_cast<int>(4 * unit(rng)), static_cast<int>(4 * unit(rng)), &lo, &hi);
+            cellBox(static_cast<int>(4 * unit(rng)), static_cast<int>(4 * unit(rng)), static_cast<int>(4 * unit(rng)), &l2, &h2);
+            Vec3 blo, bhi;
+            for (int a = 0; a < 3; ++a) {
+                const float pick[4] = {lo[a], hi[a], l2[a], h2[a]};
+                const float x = unit(rng) < 0.5f ? pick[static_cast<int>(4 * unit(rng))]
+                                                 : origin[a] + (first - 3 + 10 * unit(rng)) * h;
+                const float y = unit(rng) < 0.5f ? pick[static_cast<int>(4 * unit(rng))]
+                                                 : origin[a] + (first - 3 + 10 * unit(rng)) * h;
+                blo[a] = std::min(x, y), bhi[a] = std::max(x, y);
+            }
+            const uint32_t bits = BrickAxisBits(axes, blo, bhi);
+            for (int pz = 0; pz < 4; ++pz)
+                for (int py = 0; py < 4; ++py)
+                    for (int px = 0; px < 4; ++px) {
+                        Vec3 clo, chi;
+                        cellBox(px, py, pz, &clo, &chi);
+                        const bool box = bhi.x >= clo.x && blo.x <= chi.x && bhi.y >= clo.y && blo.y <= chi.y &&
+                                         bhi.z >= clo.z && blo.z <= chi.z;
+                        const uint32_t need = CellBits(px, py, pz);
+                        ASSERT_EQ(box, (bits & need) == need) << "brick " << brick << " box " << b << " cell " << px << py << pz;
+                        (box ? meets : apart) += 1;
+                    }
+        }
+    }
+    EXPECT_GT(meets, 1000u);
+    EXPECT_GT(apart, 1000u);
+}
+
 bool SameBits(float a, float b) { return std::bit_cast<uint32_t>(a) == std::bit_cast<uint32_t>(b); }
 
 // The vectorised passes over a front list decide exactly as their scalar oracles: a point's
