@@ -100,6 +100,9 @@ int main(int argc, char** argv) {
     benchCmd->add_option("--cell-summaries", bench.matrix.cellSummaries,
                          "Light mesh cell summaries for every LMM cell: auto (consensus only), on or off")
         ->check(CLI::IsMember({"auto", "on", "off"}));
+    benchCmd->add_option("--thin-check", bench.matrix.thinCheck,
+                         "With --quality, the penumbra mode's thin-occluder check: all (default, as render), lit or off")
+        ->check(CLI::IsMember({"off", "lit", "all"}));
     CLI::Option* benchTable = benchCmd->add_option("--table", bench.table,
                          "Reproduce the paper's table 1, 2, 3 or 4 on scenes/real (replaces --scene --size --cc --ki --variants)")
         ->check(CLI::Range(1, 4));

@@ -38,6 +38,9 @@ struct BenchMatrix {
     /// penumbrae (method "penumbra": --shadows lmm with the light radius of the main
     /// reference, R = r of the first (CC, kI)), timed like the other cells.
     bool penumbrae = true;
+    /// The penumbra cells' thin-occluder check (LightMeshOptions::thinCheck): "all" (the
+    /// render default), "lit" or "off".
+    std::string thinCheck = "all";
 };
 
 /// One cell of the matrix, measured.
@@ -51,6 +54,7 @@ struct BenchResult {
     int cc = 0;
     float ki = 0;
     float lightRadius = 0;        ///< "penumbra" only
+    std::string thinCheck;        ///< "penumbra" only: its --thin-check
     std::vector<double> seconds;  ///< render wall time of each timed run
     double median = 0;
     double setupSeconds = 0;      ///< shadow-method set-up of the last run (templates, mesh)

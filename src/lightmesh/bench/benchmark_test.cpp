@@ -33,7 +33,7 @@ std::string ErrorOf(const std::string& json) {
 
 TEST(LoadBenchMatrix, ReadsEveryKey) {
     const fs::path p = WriteTemp("ok.json", R"({"scenes": ["builtin:gazebo", "x/s.json"], "sizes": [[64, 48], [32, 16]],
-        "cc": [50, 100], "ki": [1.5, 3], "variants": ["grid", "inside"], "accels": ["brute"], "repeat": 2})");
+        "cc": [50, 100], "ki": [1.5, 3], "variants": ["grid", "inside"], "accels": ["brute"], "repeat": 2, "thin_check": "lit"})");
     const BenchMatrix m = LoadBenchMatrix(p.string());
     ASSERT_EQ(m.scenes.size(), 2u);
     EXPECT_EQ(m.scenes[0], "builtin:gazebo");
@@ -44,6 +44,7 @@ TEST(LoadBenchMatrix, ReadsEveryKey) {
     EXPECT_EQ(m.variants, (std::vector<std::string>{"grid", "inside"}));
     EXPECT_EQ(m.accels, (std::vector<std::string>{"brute"}));
     EXPECT_EQ(m.repeat, 2);
+    EXPECT_EQ(m.thinCheck, "lit");
     EXPECT_EQ(LoadBenchMatrix(WriteTemp("empty.json", "{}").string()).repeat, BenchMatrix().repeat);
 }
 
@@ -57,6 +58,9 @@ TEST(LoadBenchMatrix, ErrorsNameTheJsonPath) {
     EXPECT_NE(ErrorOf(R"({"scenes": []})").find("/scenes: must not be empty"), std::string::npos);
     EXPECT_NE(ErrorOf(R"({"repeat": 0})").find("/repeat: must be between 1 and 100, got 0"), std::string::npos);
     EXPECT_NE(ErrorOf(R"({"ki": [0.001]})").find("/ki/0: must be between 0.01 and 16"), std::string::npos);
+    EXPECT_NE(ErrorOf(R"({"thin_check": "some"})").find("/thin_check: expected \"off\", \"lit\" or \"all\", got \"some\""),
+              std::string::npos);
+    EXPECT_NE(ErrorOf(R"({"thin_check": 1})").find("/thin_check: expected a string"), std::string::npos);
     EXPECT_NE(ErrorOf(R"({"sizez": []})").find("/sizez: unknown key; did you mean \"sizes\"?"), std::string::npos);
     // The scene files' reader: duplicate keys, and syntax errors by line and column.
     EXPECT_NE(ErrorOf(R"({"cc": [1], "cc": [2]})").find("/cc: duplicate key"), std::string::npos);
@@ -138,6 +142,14 @@ TEST(RunBenchmark, QuickHtmlReport) {
             EXPECT_GT(Count(r.counters, Lmc::kPenumbraLights), 0u);
         }
     EXPECT_EQ(penumbrae, 2);
+    // The penumbra cells' thin check: P's own rays check the nodes' unanimous answers
+    // ("all", the default), or not at all with "off".
+    for (const BenchResult& r : report.results)
+        if (r.method == "penumbra") {
+            EXPECT_EQ(r.thinCheck, "all");
+            EXPECT_GT(Count(r.counters, Lmc::kThinChecks), 0u);
+        }
+    EXPECT_NE(BenchCsv(report.results).find(",all,"), std::string::npos);
     ASSERT_EQ(report.quality.size(), 1u);
     EXPECT_EQ(report.quality[0].radii.size(), 3u);
     EXPECT_EQ(report.quality[0].rows.size(), 1u + 4u + 2u + 2u);  // RT, the LMM cells, penumbrae, area N = 1, 4
@@ -154,6 +166,31 @@ TEST(RunBenchmark, QuickHtmlReport) {
     EXPECT_NE(html.find("area-light reference, R ="), std::string::npos);  // beside the reference
     EXPECT_TRUE(fs::exists(report.quality[0].refImage));
     fs::remove_all(dir);
+}
+
+// --thin-check off: the penumbra cells trace no checking rays (the default's do, above).
+TEST(RunBenchmark, ThinCheckOffReachesThePenumbraCells) {
+    BenchMatrix m;
+    m.scenes = {"builtin:gazebo"};
+    m.sizes = {{48, 32}};
+    m.variants = {"consensus"};
+    m.noShadows = false;
+    m.repeat = 1;
+    m.quality = true;
+    m.refSamples = 4;
+    m.areaSamples = {1};
+    m.thinCheck = "off";
+    const BenchReport report = RunBenchmarkReport(m, nullptr, nullptr);
+    int penumbrae = 0;
+    for (const BenchResult& r : report.results)
+        if (r.method == "penumbra") {
+            ++penumbrae;
+            EXPECT_EQ(r.thinCheck, "off");
+            EXPECT_GT(Count(r.counters, Lmc::kPenumbraLights), 0u);
+            EXPECT_EQ(Count(r.counters, Lmc::kThinChecks), 0u);
+        }
+    EXPECT_EQ(penumbrae, 1);
+    EXPECT_NE(BenchQualityMarkdown(report).find("thin check off"), std::string::npos);
 }
 
 }  // namespace

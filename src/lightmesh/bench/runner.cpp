@@ -236,6 +236,10 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                 options.lightMesh.variant = name;
                 options.lightMesh.cellSummaries = m.cellSummaries;
                 options.areaLight.radius = lightRadius;
+                if (lightRadius > 0) {
+                    options.lightMesh.thinCheck = m.thinCheck;
+                    r.thinCheck = m.thinCheck;
+                }
                 add(r, lmmAccel, options);
             };
             for (int cc : m.cc)
@@ -265,8 +269,9 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                     if (!m.imageDir.empty()) {
                         std::string name = SceneStem(spec) + StringPrintf("-%dx%d-", width, height) +
                                            (r.method == "lmm"        ? StringPrintf("cc%d-ki%g-%s", r.cc, r.ki, r.variant.c_str())
-                                            : r.method == "penumbra" ? StringPrintf("cc%d-ki%g-%s-R%g", r.cc, r.ki,
-                                                                                    r.variant.c_str(), r.lightRadius)
+                                            : r.method == "penumbra" ? StringPrintf("cc%d-ki%g-%s-R%g-thin-%s", r.cc, r.ki,
+                                                                                    r.variant.c_str(), r.lightRadius,
+                                                                                    r.thinCheck.c_str())
                                                                      : r.method + "-" + r.accel) + ".png";
                         r.image = (std::filesystem::path(m.imageDir) / name).string();
                         WriteImage(r.image, rr.image);
@@ -346,9 +351,9 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                 row.ki = r.ki;
                 row.seconds = r.median;
                 row.label = r.method == "rt"         ? "RT (" + r.accel + ")"
-                            : r.method == "penumbra" ? StringPrintf("%s (%s) CC %d kI %g, light radius %.3g",
+                            : r.method == "penumbra" ? StringPrintf("%s (%s) CC %d kI %g, light radius %.3g, thin check %s",
                                                                     r.paperName.c_str(), r.variant.c_str(), r.cc, r.ki,
-                                                                    r.lightRadius)
+                                                                    r.lightRadius, r.thinCheck.c_str())
                                                      : StringPrintf("%s (%s) CC %d kI %g", r.paperName.c_str(),
                                                                     r.variant.c_str(), r.cc, r.ki);
                 judge(row, images[i]);
@@ -481,6 +486,11 @@ BenchMatrix LoadBenchMatrix(const std::string& path) {
             m.ki.push_back(json::SettingFloat(r, (*l)[i], json::Index("/ki", i), RenderSettingFor("ki")));
     }
     if (const Json* v = o.Find("repeat")) m.repeat = json::Int(r, *v, "/repeat", 1, 100);
+    if (const Json* v = o.Find("thin_check")) {
+        m.thinCheck = json::String(r, *v, "/thin_check");
+        if (m.thinCheck != "off" && m.thinCheck != "lit" && m.thinCheck != "all")
+            r.Fail("/thin_check", StringPrintf("expected \"off\", \"lit\" or \"all\", got \"%s\"", m.thinCheck.c_str()));
+    }
     o.Finish();
     return m;
 }

@@ -66,8 +66,8 @@ std::string BenchMarkdown(const std::vector<BenchResult>& rs) {
         out += rtLine + StringPrintf(" (median of %zu runs after a warm-up).\n\n", g->seconds.size());
         for (const BenchResult& r : rs)
             if (r.method == "penumbra" && r.scene == g->scene && r.width == g->width && r.height == g->height)
-                out += StringPrintf("Contact-hardening penumbrae (%s, light radius %.3g), CC %d kI %g: %.3f s%s.\n\n",
-                                    r.variant.c_str(), r.lightRadius, r.cc, r.ki, r.median,
+                out += StringPrintf("Contact-hardening penumbrae (%s, light radius %.3g, thin check %s), CC %d kI %g: %.3f s%s.\n\n",
+                                    r.variant.c_str(), r.lightRadius, r.thinCheck.c_str(), r.cc, r.ki, r.median,
                                     rt && rt->median > 0 ? StringPrintf(", %.2f× RT", r.median / rt->median).c_str() : "");
         // A (CC, kI) × variant table of one figure per cell.
         auto variantTable = [&](bool longNames, const char* format, auto&& value) {
@@ -119,7 +119,8 @@ std::string BenchCsv(const std::vector<BenchResult>& rs) {
     std::string out =
         "scene,width,height,method,variant,paper_name,accel,cc,ki,median_s,runs_s,setup_s,camera_rays,shadow_rays,"
         "reflection_rays,local_segments,interpolations,mean_m,fallbacks,nodes_evaluated,peak_memory_bytes,image,"
-        "uniform_cell_points,culled_segments,light_radius,penumbra_lights,patch_segments\n";
+        "uniform_cell_points,culled_segments,light_radius,penumbra_lights,patch_segments,thin_check,thin_checks,"
+        "thin_found\n";
     for (const BenchResult& r : rs) {
         std::string runs;
         for (double s : r.seconds) runs += StringPrintf("%s%.4f", runs.empty() ? "" : " ", s);
@@ -129,7 +130,7 @@ std::string BenchCsv(const std::vector<BenchResult>& rs) {
         const bool lightMesh = r.method == "lmm" || r.method == "penumbra";
         const auto lmm = [&](LightMeshCount k) -> unsigned long long { return lightMesh ? Count(c, k) : 0; };
         const uint64_t interpolations = lmm(LightMeshCount::kInterpolations);
-        out += StringPrintf("%s,%d,%d,%s,%s,%s,%s,%d,%g,%.4f,%s,%.4f,%llu,%llu,%llu,%llu,%llu,%.2f,%llu,%llu,%llu,%s,%llu,%llu,%g,%llu,%llu\n",
+        out += StringPrintf("%s,%d,%d,%s,%s,%s,%s,%d,%g,%.4f,%s,%.4f,%llu,%llu,%llu,%llu,%llu,%.2f,%llu,%llu,%llu,%s,%llu,%llu,%g,%llu,%llu,%s,%llu,%llu\n",
                             r.scene.c_str(), r.width, r.height, r.method.c_str(), r.variant.c_str(),
                             r.paperName.c_str(), r.accel.c_str(), r.cc, r.ki, r.median, runs.c_str(), r.setupSeconds,
                             static_cast<unsigned long long>(c.cameraRays), static_cast<unsigned long long>(c.shadowRays),
@@ -142,7 +143,8 @@ std::string BenchCsv(const std::vector<BenchResult>& rs) {
                             static_cast<unsigned long long>(r.peakMemoryBytes), r.image.c_str(),
                             lmm(LightMeshCount::kUniformCellPoints), lmm(LightMeshCount::kCulledSegments),
                             r.lightRadius,
-                            lmm(LightMeshCount::kPenumbraLights), lmm(LightMeshCount::kPatchSegments));
+                            lmm(LightMeshCount::kPenumbraLights), lmm(LightMeshCount::kPatchSegments),
+                            r.thinCheck.c_str(), lmm(LightMeshCount::kThinChecks), lmm(LightMeshCount::kThinFound));
     }
     return out;
 }
