@@ -221,7 +221,6 @@ class LightMesh final : public LightMeshShadows {
         FrontList lists[kFrontSets][kFrontWays];
         uint8_t older[kFrontSets] = {};
         static constexpr uint32_t kRoom = FrontArrays::Room(kMaxReach);
-        static constexpr size_t kArraysOffset = (sizeof(FrontList) * kFrontSets * kFrontWays + kFrontSets + 63) & ~size_t(63);
         struct Deleter {
             void operator()(FrontCache* c) const {
                 c->~FrontCache();
@@ -230,9 +229,10 @@ class LightMesh final : public LightMeshShadows {
         };
         static std::unique_ptr<FrontCache, Deleter> Make() {
             const size_t arrays = sizeof(float) * FrontArrays::kArrays * kRoom;
-            void* block = AllocateLarge(kArraysOffset + arrays * kFrontSets * kFrontWays, 64);
+            const size_t arraysOffset = (sizeof(FrontCache) + 63) & ~size_t(63);  // the lists, then their arrays
+            void* block = AllocateLarge(arraysOffset + arrays * kFrontSets * kFrontWays, 64);
             std::unique_ptr<FrontCache, Deleter> cache(new (block) FrontCache());
-            char* storage = static_cast<char*>(block) + kArraysOffset;
+            char* storage = static_cast<char*>(block) + arraysOffset;
             for (int set = 0; set < kFrontSets; ++set)
                 for (int way = 0; way < kFrontWays; ++way, storage += arrays)
                     cache->lists[set][way].arrays.Attach(reinterpret_cast<float*>(storage), kRoom);
@@ -285,13 +285,13 @@ class LightMesh final : public LightMeshShadows {
 
     const uint32_t* StoreReach(const std::vector<uint32_t>& ids) const;
 
-    // The box of everything cell (ci, cj, ck)'s summary looks at: every node any of its
-    // points may use, so every segment of theirs.
     // Cell (ci, cj, ck)'s box grown by reachMargin_ (the triangles that may choose its Π).
     Bounds3 CellBox(int ci, int cj, int ck) const {
         const LightMeshLattice& L = lattice_;
         return Bounds3(L.Node(ci, cj, ck) - Vec3(reachMargin_), L.Node(ci + 1, cj + 1, ck + 1) + Vec3(reachMargin_));
     }
+    // The box of everything cell (ci, cj, ck)'s summary looks at: every node any of its
+    // points may use, so every segment of theirs.
     Bounds3 ReachBox(int ci, int cj, int ck) const {
         const LightMeshLattice& L = lattice_;
         return Bounds3(L.Node(ci + minOffset_, cj + minOffset_, ck + minOffset_) - Vec3(reachMargin_),
@@ -617,6 +617,7 @@ class LightMesh final : public LightMeshShadows {
     ThinCheck thinCheck_ = ThinCheck::kOff;
     ZeroedPtr<std::atomic<uint16_t>> blockerT_;
     static constexpr size_t kReachChunk = 1 << 18;
+    static_assert(kMaxBrickNear <= kReachChunk, "a brick's near codes must fit in one reach chunk (ReachSlots)");
     mutable std::vector<std::unique_ptr<uint32_t[], FreeDeleter>> reachArena_;
     mutable size_t reachUsed_ = 0, reachBytes_ = 0;
     // Cell summaries: each triangle's plane (unit normal, offset) and bounding box (grown
