@@ -102,7 +102,7 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"auto", "on", "off"}));
     benchCmd->add_option("--thin-check", bench.matrix.thinCheck,
                          "With --quality, the penumbra mode's thin-occluder check: all (default, as render), lit or off")
-        ->check(CLI::IsMember({"off", "lit", "all"}));
+        ->check(CLI::IsMember(lm::RenderSettingFor("thin_check").choices));
     CLI::Option* benchTable = benchCmd->add_option("--table", bench.table,
                          "Reproduce the paper's table 1, 2, 3 or 4 on scenes/real (replaces --scene --size --cc --ki --variants)")
         ->check(CLI::Range(1, 4));
