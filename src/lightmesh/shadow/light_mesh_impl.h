@@ -375,7 +375,12 @@ class LightMesh final : public LightMeshShadows {
     // segment gets alone (AccelBatch.SegmentsInPacketsGetTheAnswersTheyGetAlone); the
     // nodes that see P are used (and evaluated, if need be) as the answers come.
     struct SegmentBatch {
-        Ray rays[kSegmentBatch];
+        // Written before read (Queue), so not initialised: a walk makes a batch per point,
+        // and most never queue a segment.
+        SegmentBatch() {}
+        union {
+            Ray rays[kSegmentBatch];
+        };
         uint64_t nodes[kSegmentBatch];
         bool blocked[kSegmentBatch];
         size_t pending = 0;
