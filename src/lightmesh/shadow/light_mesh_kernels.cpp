@@ -174,6 +174,19 @@ __attribute__((target("avx2"))) bool PatchSeesAvx2(const FrontArrays& f, const P
     return true;
 }
 
+// Whether any lane of a comparison's mask is set: the halves OR-ed down to one lane
+// (shuffles the compiler keeps in registers), not a loop over lanes.
+template <int W>
+[[gnu::always_inline]] inline bool AnyLane(typename SimdVectors<W>::I v) {
+    SimdVectors<4>::I low;
+    if constexpr (W == 8)
+        low = __builtin_shufflevector(v, v, 0, 1, 2, 3) | __builtin_shufflevector(v, v, 4, 5, 6, 7);
+    else
+        low = v;
+    low |= __builtin_shufflevector(low, low, 2, 3, 0, 1);
+    return (low[0] | low[1]) != 0;
+}
+
 /// The culling loop of LightMesh::SeesPointCulled over W blockers at a time (GCC/clang
 /// vector extensions): 1 if a blocker is certainly hit, 0 if every blocker is certainly
 /// missed, -1 if undecided.
@@ -185,7 +198,7 @@ template <int W>
     const VF xx = zero + x.x, xy = zero + x.y, xz = zero + x.z, mm = zero + m;
     const Vec3 dv = x - o;
     const VF dx = zero + dv.x, dy = zero + dv.y, dz = zero + dv.z;
-    VI maybe = {}, hit = {};
+    VI maybe = {};
     for (uint32_t i = 0; i < b.count; i += W) {
 #define LM_AT(a) (*reinterpret_cast<const VF*>((a) + i))
         // Both ends clearly on one side of the plane (miss), or on both sides (a hit if
@@ -202,15 +215,13 @@ template <int W>
         const VI outside = (pos0 | pos1 | pos2) & (neg0 | neg1 | neg2);
         const VI inside = (pos0 & pos1 & pos2) | (neg0 & neg1 & neg2);
         maybe |= ~(sameSide | outside);
-        hit |= inside & across;
+        // A blocker certainly hit decides the segment, whatever the others say: stop (a
+        // blocked minority node, the common case where candidates disagree, often meets
+        // its blocker in the first eight).
+        if (AnyLane<W>(inside & across)) return 1;
 #undef LM_AT
     }
-    int anyHit = 0, anyMaybe = 0;
-    for (int k = 0; k < W; ++k) {
-        anyHit |= hit[k];
-        anyMaybe |= maybe[k];
-    }
-    return anyHit ? 1 : (anyMaybe ? -1 : 0);
+    return AnyLane<W>(maybe) ? -1 : 0;
 }
 int CullSegmentSse(const Blockers& b, const Vec3& x, const Vec3& o, float m) { return CullSegment<4>(b, x, o, m); }
 // The same eight at a time where the processor has AVX2 (chosen once, at run time).
