@@ -486,11 +486,8 @@ BenchMatrix LoadBenchMatrix(const std::string& path) {
             m.ki.push_back(json::SettingFloat(r, (*l)[i], json::Index("/ki", i), RenderSettingFor("ki")));
     }
     if (const Json* v = o.Find("repeat")) m.repeat = json::Int(r, *v, "/repeat", 1, 100);
-    if (const Json* v = o.Find("thin_check")) {
-        m.thinCheck = json::String(r, *v, "/thin_check");
-        if (m.thinCheck != "off" && m.thinCheck != "lit" && m.thinCheck != "all")
-            r.Fail("/thin_check", StringPrintf("expected \"off\", \"lit\" or \"all\", got \"%s\"", m.thinCheck.c_str()));
-    }
+    if (const Json* v = o.Find("thin_check"))
+        m.thinCheck = json::SettingChoice(r, *v, "/thin_check", RenderSettingFor("thin_check"));
     o.Finish();
     return m;
 }
