@@ -343,12 +343,34 @@ inline void LightMesh<Word>::MinorityFirst(const ShadingPoint& sp, Word neededMa
     };
     SegmentBatch batch;
     size_t seenWithoutRays = 0;
-    // Decides every segment of the candidates `select` takes, and uses those that see P
-    // (the back-end's answers may still be pending in `batch`).
-    auto useAllSeeing = [&](auto&& select) {
-        all.ForEach([&](const FrontBlock& b, int k) {
+    // The minority's and the majority's entries as masks per block (every entry in front
+    // was evaluated by pass 1), so that the passes below visit their own entries only, in
+    // the template's order as before, without a branch per entry on its word (about every
+    // other one mispredicted where the two are mixed).
+    uint8_t maskBuffer[2 * 128];
+    std::vector<uint8_t> maskHeap;
+    uint8_t* minorityMasks = maskBuffer;
+    if (2 * all.count > sizeof(maskBuffer)) {
+        maskHeap.resize(2 * all.count);
+        minorityMasks = maskHeap.data();
+    }
+    uint8_t* majorityMasks = minorityMasks + all.count;
+    for (uint32_t b = 0; b < all.count; ++b) {
+        unsigned minority = 0;
+        for (unsigned m = all.masks[b]; m; m &= m - 1) {
+            const int k = __builtin_ctz(m);
+            const Word w = Evaluate(static_cast<uint64_t>(base + all.blocks[b].linear[k]));
+            minority |= static_cast<unsigned>((w & neededMask) != majority) << k;
+        }
+        minorityMasks[b] = static_cast<uint8_t>(minority);
+        majorityMasks[b] = static_cast<uint8_t>(all.masks[b] & ~minority);
+    }
+    const FrontRun minorityRun{all.blocks, minorityMasks, all.count}, majorityRun{all.blocks, majorityMasks, all.count};
+    // Decides every segment of the run's candidates, and uses those that see P (the
+    // back-end's answers may still be pending in `batch`).
+    auto useAllSeeing = [&](const FrontRun& run) {
+        run.ForEach([&](const FrontBlock& b, int k) {
             const Word w = Evaluate(static_cast<uint64_t>(base + b.linear[k]));  // evaluated by pass 1
-            if (!select(w)) return;
             const Vec3 x = EntryNode(ci, cj, ck, b, k);
             const int d = decide(b, k, x);
             if (d == 1) {
@@ -359,19 +381,18 @@ inline void LightMesh<Word>::MinorityFirst(const ShadingPoint& sp, Word neededMa
             }
         });
     };
-    useAllSeeing([&](Word w) { return (w & neededMask) != majority; });
+    useAllSeeing(minorityRun);
     // Whether a minority node sees P; if one is already known to, the minority's pending
     // segments share their packets with the majority's, which are all needed then.
     if (seenWithoutRays + batch.seen == 0) Flush(batch, acc, counters);
     if (seenWithoutRays + batch.seen > 0) {  // a minority node sees P: ОТ's average needs every segment
-        useAllSeeing([&](Word w) { return (w & neededMask) == majority; });
+        useAllSeeing(majorityRun);
         Flush(batch, acc, counters);
         return;
     }
     // No minority node sees P: the first W-node that does settles it.
-    all.Any([&](const FrontBlock& b, int k) {
+    majorityRun.Any([&](const FrontBlock& b, int k) {
         const Word w = Evaluate(static_cast<uint64_t>(base + b.linear[k]));
-        if ((w & neededMask) != majority) return false;
         const Vec3 x = EntryNode(ci, cj, ck, b, k);
         const int d = decide(b, k, x);
         if (d == 0 || (d < 0 && !SeesPoint(x, sp, counters))) return false;
