@@ -24,6 +24,15 @@ inline float NextFloatUp(float x) {
 }
 inline float NextFloatDown(float x) { return -NextFloatUp(-x); }
 
+/// static_cast<int>(std::floor(f)) for f within int's range, without libm's floorf (an
+/// out-of-line call per coordinate on a baseline x86-64 build, ~1 % of a light-mesh
+/// render's instructions): truncate, then step down where that rounded a negative value
+/// up. Outside int's range (and for NaN) the result is as undefined as the cast's.
+inline int FloorToInt(float f) {
+    const int t = static_cast<int>(f);
+    return t - (f < static_cast<float>(t));
+}
+
 /// A 3-component float vector, used for points, directions and normals alike
 /// (the scene is small enough that separate types cost more clarity than they buy).
 struct Vec3 {

@@ -64,6 +64,27 @@ TEST(Ray, SegmentSpansZeroToOne) {
     EXPECT_EQ(r.At(0.5f), Vec3(2, 1, 1));
 }
 
+// FloorToInt is the floor's cast on every kind of float within int's range: whole numbers
+// (where the truncation must not step down), ±0, halves, values an ulp either side of a
+// whole number, denormals, negatives, and the range's ends.
+TEST(Vec3, FloorToIntIsTheFloorsCast) {
+    const float specials[] = {0.0f, -0.0f, 0.5f, -0.5f, 1.0f, -1.0f, 0.99999994f, -0.99999994f, 1.0000001f,
+                              -1.0000001f, std::numeric_limits<float>::denorm_min(),
+                              -std::numeric_limits<float>::denorm_min(), 1e-30f, -1e-30f, 8388607.5f, -8388607.5f,
+                              16777216.0f, -16777216.0f, 2147483520.0f, -2147483648.0f};
+    for (float x : specials) EXPECT_EQ(FloorToInt(x), static_cast<int>(std::floor(x))) << x;
+    uint32_t bits = 777;
+    int tested = 0;
+    for (int i = 0; i < 200000; ++i) {
+        bits = bits * 1664525u + 1013904223u;
+        const float x = std::bit_cast<float>(bits);
+        if (!(std::abs(x) < 2147483520.0f)) continue;  // NaN, ±∞ and beyond int's range: undefined for both
+        ++tested;
+        ASSERT_EQ(FloorToInt(x), static_cast<int>(std::floor(x))) << x;
+    }
+    EXPECT_GT(tested, 100000);
+}
+
 // NextFloatUp/Down are std::nextafter towards ±∞, bit for bit, on every kind of float.
 TEST(Vec3, NextFloatUpAndDownAreNextafter) {
     const float specials[] = {0.0f, -0.0f, 1.0f, -1.0f, 1e-30f, -1e-30f, std::numeric_limits<float>::denorm_min(),

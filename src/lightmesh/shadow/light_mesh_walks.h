@@ -109,16 +109,8 @@ inline bool LightMesh<Word>::TemplateWalk(const ShadingPoint& sp, Word neededMas
                                           RenderCounters& counters, Word* uniform) const {
     const LightMeshLattice& L = lattice_;
     const Vec3 q = (sp.p - L.origin) * invH_;
-    // static_cast<int>(std::floor(f)) without libm's floorf (a call per coordinate on a
-    // baseline x86-64 build, ~1 % of the gazebo's instructions): truncate, then step down
-    // where that rounded a negative value up. The same int for every f, NaN and values
-    // beyond int's range included (x86's truncating conversion gives INT_MIN for them,
-    // which is never stepped down).
-    auto floorToInt = [](float f) {
-        const int t = static_cast<int>(f);
-        return t - (t != std::numeric_limits<int>::min() && f < static_cast<float>(t));
-    };
-    const int ci = floorToInt(q.x), cj = floorToInt(q.y), ck = floorToInt(q.z);
+    // P lies in the scene's box, so q within the lattice's range (as for the cast before).
+    const int ci = FloorToInt(q.x), cj = FloorToInt(q.y), ck = FloorToInt(q.z);
     if (ci + minOffset_ < 0 || cj + minOffset_ < 0 || ck + minOffset_ < 0 || ci + maxOffset_ >= L.nx ||
         cj + maxOffset_ >= L.ny || ck + maxOffset_ >= L.nz)
         return false;
