@@ -55,6 +55,27 @@ ZeroedPtr<std::atomic<T>> ZeroedArray(uint64_t count) {
     return ZeroedPtr<std::atomic<T>>(static_cast<std::atomic<T>*>(p), deleter);
 }
 
+/// Per-point scratch of n elements: on the stack up to N (the usual template or reach),
+/// on the heap beyond (a template of a large kI). Not initialised.
+template <typename T, size_t N>
+class Scratch {
+  public:
+    explicit Scratch(size_t n) {
+        if (n > N) {
+            heap_.resize(n);
+            data_ = heap_.data();
+        }
+    }
+    Scratch(const Scratch&) = delete;
+    Scratch& operator=(const Scratch&) = delete;
+    T* data() { return data_; }
+
+  private:
+    T local_[N];
+    std::vector<T> heap_;
+    T* data_ = local_;
+};
+
 // For the arenas' chunks (AllocateLarge).
 struct FreeDeleter {
     void operator()(void* p) const { std::free(p); }

@@ -39,13 +39,8 @@ inline auto LightMesh<Word>::FrontTriangles(const CellSummary& c, int64_t base, 
     // First the triangles in front, compacted without a branch on each one's answer (about
     // half of a reach is in front, in no order a predictor learns), then their data.
     const float limit = 0.5f * c.delta;
-    uint32_t pickedBuffer[kMaxReach];
-    std::vector<uint32_t> pickedHeap;
-    uint32_t* picked = pickedBuffer;
-    if (c.reachCount > kMaxReach) {
-        pickedHeap.resize(c.reachCount);
-        picked = pickedHeap.data();
-    }
+    Scratch<uint32_t, kMaxReach> pickedScratch(c.reachCount);
+    uint32_t* picked = pickedScratch.data();
     uint32_t count = 0;
     for (uint32_t i = 0; i < c.reachCount; ++i) {
         const uint32_t t = c.reach[i];

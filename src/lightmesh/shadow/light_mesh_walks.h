@@ -126,13 +126,8 @@ inline bool LightMesh<Word>::TemplateWalk(const ShadingPoint& sp, Word neededMas
     auto node = [&](const FrontBlock& b, int k) { return EntryNode(ci, cj, ck, b, k); };
     // The front test of all of s's entries at once, a bit mask per block of eight.
     const uint32_t fb = frontBegin_[s], fi = frontInner_[s], fe = frontBegin_[s + 1];
-    uint8_t maskBuffer[256];
-    std::vector<uint8_t> maskHeap;
-    uint8_t* masks = maskBuffer;
-    if (fe - fb > sizeof(maskBuffer)) {
-        maskHeap.resize(fe - fb);
-        masks = maskHeap.data();
-    }
+    Scratch<uint8_t, 256> maskScratch(fe - fb);
+    uint8_t* masks = maskScratch.data();
     frontMasks_(frontBlocks_.data() + fb, fe - fb, sp.n, nfrac, frontEps_, masks);
     const FrontRun all{frontBlocks_.data() + fb, masks, fe - fb};
     const FrontRun boundary{frontBlocks_.data() + fb, masks, fi - fb};
@@ -339,13 +334,8 @@ inline void LightMesh<Word>::MinorityFirst(const ShadingPoint& sp, Word neededMa
     // was evaluated by pass 1), so that the passes below visit their own entries only, in
     // the template's order as before, without a branch per entry on its word (about every
     // other one mispredicted where the two are mixed).
-    uint8_t maskBuffer[2 * 128];
-    std::vector<uint8_t> maskHeap;
-    uint8_t* minorityMasks = maskBuffer;
-    if (2 * all.count > sizeof(maskBuffer)) {
-        maskHeap.resize(2 * all.count);
-        minorityMasks = maskHeap.data();
-    }
+    Scratch<uint8_t, 256> maskScratch(2 * size_t(all.count));
+    uint8_t* minorityMasks = maskScratch.data();
     uint8_t* majorityMasks = minorityMasks + all.count;
     for (uint32_t b = 0; b < all.count; ++b) {
         unsigned minority = 0;
