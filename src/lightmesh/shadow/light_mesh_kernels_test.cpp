@@ -154,5 +154,61 @@ TEST(LightMeshKernels, VectorisedPassesEqualTheScalarOnesBitForBit) {
     EXPECT_LT(sees, queries);
 }
 
+// The culling's answer is the one a blocker-by-blocker reading of its rule gives: 1 if some
+// blocker is certainly hit (the ends on both sides of its plane, the line inside its three
+// edges), else -1 if some blocker is not certainly missed, else 0. The SSE and AVX2 widths
+// share one template, so this oracle, written out apart (the same float expressions in the
+// same order), is what checks the early stop at a hit and the lanes' reduction.
+int CullOracle(const Blockers& b, const Vec3& x, const Vec3& o, float m) {
+    const Vec3 d = x - o;
+    bool maybe = false;
+    for (uint32_t i = 0; i < b.count; ++i) {
+        const float side = (b.nx[i] * x.x + b.ny[i] * x.y + b.nz[i] * x.z - b.d[i]) * b.side[i];
+        const bool sameSide = side > m, across = side < -m;
+        const float t0 = b.c0x[i] * d.x + b.c0y[i] * d.y + b.c0z[i] * d.z;
+        const float t1 = b.c1x[i] * d.x + b.c1y[i] * d.y + b.c1z[i] * d.z;
+        const float t2 = b.c2x[i] * d.x + b.c2y[i] * d.y + b.c2z[i] * d.z;
+        const bool pos0 = t0 > b.m0[i], pos1 = t1 > b.m1[i], pos2 = t2 > b.m2[i];
+        const bool neg0 = t0 < -b.m0[i], neg1 = t1 < -b.m1[i], neg2 = t2 < -b.m2[i];
+        const bool outside = (pos0 || pos1 || pos2) && (neg0 || neg1 || neg2);
+        const bool inside = (pos0 && pos1 && pos2) || (neg0 && neg1 && neg2);
+        if (inside && across) return 1;
+        maybe = maybe || !(sameSide || outside);
+    }
+    return maybe ? -1 : 0;
+}
+
+TEST(LightMeshKernels, CullingEqualsTheBlockerByBlockerRule) {
+    std::mt19937 rng(20261203);
+    std::uniform_real_distribution<float> coord(-2.0f, 2.0f), reach(0.2f, 1.5f);
+    const FindBlockersFunction findBlockers = ChooseFindBlockersFunction(1);
+    const CullFunction cull4 = ChooseCullFunction(4), cull8 = ChooseCullFunction(8);
+    uint64_t answers[3] = {0, 0, 0};  // undecided, unblocked, blocked
+    for (uint32_t count : {1u, 7u, 8u, 9u, 40u, 200u}) {
+        const FrontArrays f = RandomFrontList(rng, count);
+        for (int q = 0; q < 300; ++q) {
+            BlockerQuery bq;
+            const Vec3 p(coord(rng), coord(rng), coord(rng));
+            const float r = reach(rng);
+            bq.lo = p - Vec3(r), bq.hi = p + Vec3(r), bq.o = p + Vec3(0, 1e-3f, 0);
+            bq.margin = 1e-5f, bq.far = r + 2e-5f, bq.reach = r, bq.delta8 = 2e-5f;
+            Blockers b;
+            if (!findBlockers(f, bq, &b)) continue;
+            PadBlockers(&b);
+            for (int s = 0; s < 8; ++s) {
+                const Vec3 x = p + Vec3(coord(rng), coord(rng), coord(rng)) * (r / 2);
+                const int want = CullOracle(b, x, bq.o, bq.margin);
+                ASSERT_EQ(cull4(b, x, bq.o, bq.margin), want) << count << " " << q << " " << s;
+                ASSERT_EQ(cull8(b, x, bq.o, bq.margin), want) << count << " " << q << " " << s;
+                ++answers[want + 1];
+            }
+        }
+    }
+    // All three answers occur, so each path of the loop ran.
+    EXPECT_GT(answers[0], 0u);
+    EXPECT_GT(answers[1], 0u);
+    EXPECT_GT(answers[2], 0u);
+}
+
 }  // namespace
 }  // namespace lm::kernels
