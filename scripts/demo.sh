@@ -8,10 +8,16 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 "$root/scripts/build.sh"
 exe="$root/build/apps/lightmesh"
 echo
+# Each process is timed whole too (start-up, loading, set-up, render and the PNG write).
+start=$(date +%s%N)
 "$exe" render builtin:gazebo --shadows lmm -o gazebo-lmm.png --stats "$@" | tee /tmp/lightmesh-lmm.txt
+lmmWhole=$(( $(date +%s%N) - start ))
 echo
+start=$(date +%s%N)
 "$exe" render builtin:gazebo --shadows rt -o gazebo-rt.png --stats "$@" | tee /tmp/lightmesh-rt.txt
+rtWhole=$(( $(date +%s%N) - start ))
 lmm=$(sed -n 's/.*render \([0-9.]*\) s$/\1/p' /tmp/lightmesh-lmm.txt | head -1)
 rt=$(sed -n 's/.*render \([0-9.]*\) s$/\1/p' /tmp/lightmesh-rt.txt | head -1)
 echo
+awk -v l="$lmmWhole" -v r="$rtWhole" 'BEGIN { printf "whole process: LMM %.3f s, RT %.3f s, LMM/RT = %.2f\n", l / 1e9, r / 1e9, l / r }'
 awk -v l="$lmm" -v r="$rt" 'BEGIN { printf "render time: LMM (soft shadows) %.3f s, RT (hard shadows) %.3f s, LMM/RT = %.2f\n", l, r, l / r }'
