@@ -15,6 +15,9 @@ namespace {
 /// the edge planes through o with their rounding margins. The scalar oracle of the AVX2
 /// pass, which performs these very operations in this order.
 inline void BlockerEntry(const FrontArrays& f, uint32_t i, const BlockerQuery& q, float so, Blockers* b, uint32_t n) {
+    b->reaches[n] = (f.hix[i] >= q.o.x - q.margin ? 1 : 0) | (f.lox[i] <= q.o.x + q.margin ? 2 : 0) |
+                    (f.hiy[i] >= q.o.y - q.margin ? 4 : 0) | (f.loy[i] <= q.o.y + q.margin ? 8 : 0) |
+                    (f.hiz[i] >= q.o.z - q.margin ? 16 : 0) | (f.loz[i] <= q.o.z + q.margin ? 32 : 0);
     b->nx[n] = f.nx[i];
     b->ny[n] = f.ny[i];
     b->nz[n] = f.nz[i];
@@ -41,6 +44,23 @@ inline void BlockerEntry(const FrontArrays& f, uint32_t i, const BlockerQuery& q
         mk[k][n] = q.reach * (q.delta8 * (la[k] + la[k1]) + 1e-5f * la[k] * la[k1]) + q.delta8 * l1(ck);
     }
 }
+/// The octants of a segment's direction from which a blocker with direction code c may be
+/// met: octant k's segments need bit 2a (+) or 2a+1 (-) for each axis a, as k's bit a says.
+struct OctantTable {
+    uint8_t octants[64];
+};
+constexpr OctantTable MakeOctantTable() {
+    OctantTable t{};
+    for (int c = 0; c < 64; ++c)
+        for (int k = 0; k < 8; ++k) {
+            bool met = true;
+            for (int a = 0; a < 3; ++a) met = met && ((c >> (2 * a + ((k >> a) & 1))) & 1);
+            if (met) t.octants[c] |= static_cast<uint8_t>(1 << k);
+        }
+    return t;
+}
+constexpr OctantTable kOctants = MakeOctantTable();
+
 /// FindBlockers' pass over the front triangles, one at a time: those whose box meets the
 /// segments' box and whose plane passes within `far` of o become blockers. False if more
 /// than kMaxBlockers do (then the back-end decides every segment).
@@ -107,6 +127,20 @@ __attribute__((target("avx2,popcnt"))) bool FindBlockersAvx2(const FrontArrays& 
 #undef LM_LD
         const __m256i perm = _mm256_load_si256(reinterpret_cast<const __m256i*>(kCompact.index[keep]));
 #define LM_PUT(out, v) _mm256_storeu_ps((out) + n, _mm256_permutevar8x32_ps((v), perm))
+        {
+            const __m256 mo = _mm256_set1_ps(q.margin);
+#define LM_BIT(mask, value) _mm256_and_si256(_mm256_castps_si256(mask), _mm256_set1_epi32(value))
+            const __m256 oxm = _mm256_sub_ps(ox, mo), oxp = _mm256_add_ps(ox, mo), oym = _mm256_sub_ps(oy, mo),
+                         oyp = _mm256_add_ps(oy, mo), ozm = _mm256_sub_ps(oz, mo), ozp = _mm256_add_ps(oz, mo);
+            __m256i code = _mm256_or_si256(LM_BIT(_mm256_cmp_ps(_mm256_load_ps(f.hix + i), oxm, _CMP_GE_OQ), 1),
+                                           LM_BIT(_mm256_cmp_ps(_mm256_load_ps(f.lox + i), oxp, _CMP_LE_OQ), 2));
+            code = _mm256_or_si256(code, _mm256_or_si256(LM_BIT(_mm256_cmp_ps(_mm256_load_ps(f.hiy + i), oym, _CMP_GE_OQ), 4),
+                                                         LM_BIT(_mm256_cmp_ps(_mm256_load_ps(f.loy + i), oyp, _CMP_LE_OQ), 8)));
+            code = _mm256_or_si256(code, _mm256_or_si256(LM_BIT(_mm256_cmp_ps(_mm256_load_ps(f.hiz + i), ozm, _CMP_GE_OQ), 16),
+                                                         LM_BIT(_mm256_cmp_ps(_mm256_load_ps(f.loz + i), ozp, _CMP_LE_OQ), 32)));
+#undef LM_BIT
+            _mm256_storeu_si256(reinterpret_cast<__m256i*>(b->reaches + n), _mm256_permutevar8x32_epi32(code, perm));
+        }
         LM_PUT(b->nx, nx);
         LM_PUT(b->ny, ny);
         LM_PUT(b->nz, nz);
@@ -199,8 +233,14 @@ template <int W>
     const Vec3 dv = x - o;
     const VF dx = zero + dv.x, dy = zero + dv.y, dz = zero + dv.z;
     VI maybe = {};
+    // Only the blockers that reach to the side d points to on every axis can be met.
+    const int32_t needs = DirectionNeeds(dv);
+    const int octant = (dv.x < 0 ? 1 : 0) | (dv.y < 0 ? 2 : 0) | (dv.z < 0 ? 4 : 0);
+    const VI needsV = VI{} + needs;
     for (uint32_t i = 0; i < b.count; i += W) {
+        if (!((b.octants[i / kCullWidth] >> octant) & 1)) continue;  // none of these eight
 #define LM_AT(a) (*reinterpret_cast<const VF*>((a) + i))
+        const VI reached = (*reinterpret_cast<const VI*>(b.reaches + i) & needsV) == needsV;
         // Both ends clearly on one side of the plane (miss), or on both sides (a hit if
         // the line crosses the inside).
         const VF sideX = (LM_AT(b.nx) * xx + LM_AT(b.ny) * xy + LM_AT(b.nz) * xz - LM_AT(b.d)) * LM_AT(b.side);
@@ -214,11 +254,11 @@ template <int W>
         const VI neg0 = t0 < -m0, neg1 = t1 < -m1, neg2 = t2 < -m2;
         const VI outside = (pos0 | pos1 | pos2) & (neg0 | neg1 | neg2);
         const VI inside = (pos0 & pos1 & pos2) | (neg0 & neg1 & neg2);
-        maybe |= ~(sameSide | outside);
+        maybe |= ~(sameSide | outside) & reached;
         // A blocker certainly hit decides the segment, whatever the others say: stop (a
         // blocked minority node, the common case where candidates disagree, often meets
         // its blocker in the first eight).
-        if (AnyLane<W>(inside & across)) return 1;
+        if (AnyLane<W>(inside & across & reached)) return 1;
 #undef LM_AT
     }
     return AnyLane<W>(maybe) ? -1 : 0;
@@ -305,6 +345,15 @@ __attribute__((target("avx2,popcnt"))) bool SumFrontBytesAvx2(const FrontBlock* 
 }
 
 }  // namespace
+
+void OctantsOfBlockers(Blockers* b) {
+    for (uint32_t g = 0; g * kCullWidth < b->count; ++g) {
+        uint8_t octants = 0;
+        for (uint32_t i = g * kCullWidth; i < (g + 1) * kCullWidth; ++i)
+            octants |= kOctants.octants[b->reaches[i] & 63];
+        b->octants[g] = octants;
+    }
+}
 
 // LightMeshOptions::simdWidth: AVX2 for the widest (and 8) where the processor has it;
 // the scalar pass otherwise (the 4-wide tests use it as their oracle).

@@ -35,6 +35,15 @@ struct alignas(32) FrontBlock {
 /// normals c_k = a_k × a_k+1 of the planes through P's origin and each edge (a_k: vertex k
 /// minus the origin) with their rounding margins. Padded to a multiple of kCullWidth with
 /// entries that never block.
+///
+/// Each blocker also has a direction code: bit 2a is set when its box reaches to the +
+/// side of the origin along axis a (hi_a >= o_a - margin), bit 2a+1 when it reaches to the
+/// - side (lo_a <= o_a + margin). A segment from the origin along d can only meet a
+/// triangle that reaches to the side d_a points to on every axis (its points lie between
+/// o_a and o_a + d_a), so the others are certainly missed (about 60 % of a point's
+/// blockers for any one segment on the gazebo and the castle). Per eight blockers, the
+/// octants of d (bit (d.x < 0) | (d.y < 0) << 1 | (d.z < 0) << 2) that any of them may be
+/// met from, so that the culling skips the eights none of which can be.
 constexpr uint32_t kMaxBlockers = 256;
 constexpr uint32_t kCullWidth = 8;
 struct Blockers {
@@ -46,7 +55,15 @@ struct Blockers {
     alignas(32) float nx[N], ny[N], nz[N], d[N], side[N];
     alignas(32) float c0x[N], c0y[N], c0z[N], c1x[N], c1y[N], c1z[N], c2x[N], c2y[N], c2z[N];
     alignas(32) float m0[N], m1[N], m2[N];
+    alignas(32) int32_t reaches[N];              // direction codes
+    uint8_t octants[N / kCullWidth];             // per eight blockers
 };
+/// The direction code a segment along d needs of a blocker (see Blockers).
+inline int32_t DirectionNeeds(const Vec3& d) {
+    return (d.x < 0 ? 2 : 1) | (d.y < 0 ? 8 : 4) | (d.z < 0 ? 32 : 16);
+}
+/// Blockers::octants from the direction codes of count blockers (padding: code 0).
+void OctantsOfBlockers(Blockers* b);
 
 /// The triangles of a cell's reach in front of one triangle's plane (LightMesh::FrontTriangles),
 /// structure of arrays for the vectorised passes over them: plane, grown bounding box,
@@ -126,7 +143,9 @@ inline void PadBlockers(Blockers* b) {
         b->side[n] = 1;
         b->c0x[n] = b->c0y[n] = b->c0z[n] = b->c1x[n] = b->c1y[n] = b->c1z[n] = 0;
         b->c2x[n] = b->c2y[n] = b->c2z[n] = b->m0[n] = b->m1[n] = b->m2[n] = 0;
+        b->reaches[n] = 0;  // met from no direction
     }
+    OctantsOfBlockers(b);
 }
 /// What LightMesh::PatchSees needs to decide whether node x sees every origin of a cell patch.
 struct PatchQuery {

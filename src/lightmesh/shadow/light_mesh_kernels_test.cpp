@@ -132,7 +132,10 @@ TEST(LightMeshKernels, VectorisedPassesEqualTheScalarOnesBitForBit) {
                                       b.c1y, b.c1z, b.c2x, b.c2y, b.c2z, b.m0, b.m1, b.m2};
             for (int k = 0; k < 17; ++k)
                 for (uint32_t i = 0; i < a.count; ++i) ASSERT_TRUE(SameBits(arraysA[k][i], arraysB[k][i])) << k << " " << i;
+            for (uint32_t i = 0; i < a.count; ++i) ASSERT_EQ(a.reaches[i], b.reaches[i]) << i;
             PadBlockers(&a);
+            PadBlockers(&b);
+            for (uint32_t g = 0; g * kCullWidth < a.count; ++g) ASSERT_EQ(a.octants[g], b.octants[g]) << g;
             for (int s = 0; s < 8; ++s) {
                 const Vec3 x = p + Vec3(coord(rng), coord(rng), coord(rng)) * (r / 2);
                 const int c4 = sseCull(a, x, bq.o, bq.margin), c8 = wideCull(a, x, bq.o, bq.margin);
@@ -163,6 +166,10 @@ int CullOracle(const Blockers& b, const Vec3& x, const Vec3& o, float m) {
     const Vec3 d = x - o;
     bool maybe = false;
     for (uint32_t i = 0; i < b.count; ++i) {
+        // A blocker that does not reach to the side d points to, on some axis, is missed.
+        bool reached = true;
+        for (int a = 0; a < 3; ++a) reached = reached && ((b.reaches[i] >> (2 * a + (d[a] < 0 ? 1 : 0))) & 1);
+        if (!reached) continue;
         const float side = (b.nx[i] * x.x + b.ny[i] * x.y + b.nz[i] * x.z - b.d[i]) * b.side[i];
         const bool sameSide = side > m, across = side < -m;
         const float t0 = b.c0x[i] * d.x + b.c0y[i] * d.y + b.c0z[i] * d.z;
@@ -176,6 +183,62 @@ int CullOracle(const Blockers& b, const Vec3& x, const Vec3& o, float m) {
         maybe = maybe || !(sameSide || outside);
     }
     return maybe ? -1 : 0;
+}
+
+// A blocker's direction code says on which sides of the origin its box reaches (within the
+// margin), and the eights' octants are the union of their blockers' octants: checked
+// against the front list's boxes directly, for origins on random front triangles' box
+// faces too (where the margin decides).
+TEST(LightMeshKernels, DirectionCodesFollowTheBlockersBoxes) {
+    std::mt19937 rng(20261204);
+    std::uniform_real_distribution<float> coord(-2.0f, 2.0f), reach(0.2f, 1.5f);
+    uint64_t reachedBoth = 0, reachedOne = 0;
+    for (int width : {1, 8}) {
+        const FindBlockersFunction findBlockers = ChooseFindBlockersFunction(width);
+        for (int q = 0; q < 200; ++q) {
+            const FrontArrays f = RandomFrontList(rng, 40);
+            BlockerQuery bq;
+            Vec3 p(coord(rng), coord(rng), coord(rng));
+            const float r = reach(rng);
+            bq.margin = 1e-5f, bq.far = 10, bq.reach = r, bq.delta8 = 2e-5f;
+            if (q % 4 == 0) {  // on box faces, no margin: the comparisons' ties decide
+                const uint32_t t = static_cast<uint32_t>(q) % 40;
+                p = q % 8 == 0 ? Vec3(f.hix[t], f.hiy[t], f.hiz[t]) : Vec3(f.lox[t], f.loy[t], f.loz[t]);
+                bq.margin = 0;
+            }
+            bq.lo = p - Vec3(r), bq.hi = p + Vec3(r), bq.o = p;
+            Blockers b;
+            if (!findBlockers(f, bq, &b)) continue;
+            PadBlockers(&b);
+            // Blockers keep the front list's order: match them by their planes.
+            uint32_t i = 0;
+            for (uint32_t n = 0; n < b.count; ++n) {
+                while (i < f.count && !(SameBits(f.nx[i], b.nx[n]) && SameBits(f.d[i], b.d[n]))) ++i;
+                ASSERT_LT(i, f.count);
+                const float lo[3] = {f.lox[i], f.loy[i], f.loz[i]}, hi[3] = {f.hix[i], f.hiy[i], f.hiz[i]};
+                for (int a = 0; a < 3; ++a) {
+                    const bool plus = hi[a] >= bq.o[a] - bq.margin, minus = lo[a] <= bq.o[a] + bq.margin;
+                    ASSERT_EQ(((b.reaches[n] >> (2 * a)) & 1) != 0, plus) << width << " " << q << " " << n << " " << a;
+                    ASSERT_EQ(((b.reaches[n] >> (2 * a + 1)) & 1) != 0, minus) << width << " " << q << " " << n << " " << a;
+                    reachedBoth += plus && minus;
+                    reachedOne += plus != minus;
+                }
+                ++i;
+            }
+            for (uint32_t g = 0; g * kCullWidth < b.count; ++g)
+                for (int k = 0; k < 8; ++k) {
+                    bool any = false;
+                    for (uint32_t n = g * kCullWidth; n < std::min(b.count, (g + 1) * kCullWidth); ++n) {
+                        bool met = true;
+                        for (int a = 0; a < 3; ++a) met = met && ((b.reaches[n] >> (2 * a + ((k >> a) & 1))) & 1);
+                        any = any || met;
+                    }
+                    ASSERT_EQ(((b.octants[g] >> k) & 1) != 0, any) << width << " " << q << " " << g << " " << k;
+                }
+        }
+    }
+    EXPECT_GT(reachedBoth, 0u);
+    EXPECT_GT(reachedOne, 0u);
 }
 
 TEST(LightMeshKernels, CullingEqualsTheBlockerByBlockerRule) {
