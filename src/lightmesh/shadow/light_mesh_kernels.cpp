@@ -45,18 +45,15 @@ inline void BlockerEntry(const FrontArrays& f, uint32_t i, const BlockerQuery& q
     }
 }
 /// The octants of a segment's direction from which a blocker with direction code c may be
-/// met: octant k's segments need bit 2a (+) or 2a+1 (-) for each axis a, as k's bit a says.
+/// met: those whose needs (OctantNeeds) c has.
 struct OctantTable {
     uint8_t octants[64];
 };
 constexpr OctantTable MakeOctantTable() {
     OctantTable t{};
     for (int c = 0; c < 64; ++c)
-        for (int k = 0; k < 8; ++k) {
-            bool met = true;
-            for (int a = 0; a < 3; ++a) met = met && ((c >> (2 * a + ((k >> a) & 1))) & 1);
-            if (met) t.octants[c] |= static_cast<uint8_t>(1 << k);
-        }
+        for (int k = 0; k < 8; ++k)
+            if ((c & OctantNeeds(k)) == OctantNeeds(k)) t.octants[c] |= static_cast<uint8_t>(1 << k);
     return t;
 }
 constexpr OctantTable kOctants = MakeOctantTable();
@@ -234,9 +231,8 @@ template <int W>
     const VF dx = zero + dv.x, dy = zero + dv.y, dz = zero + dv.z;
     VI maybe = {};
     // Only the blockers that reach to the side d points to on every axis can be met.
-    const int32_t needs = DirectionNeeds(dv);
-    const int octant = (dv.x < 0 ? 1 : 0) | (dv.y < 0 ? 2 : 0) | (dv.z < 0 ? 4 : 0);
-    const VI needsV = VI{} + needs;
+    const int octant = DirectionOctant(dv);
+    const VI needsV = VI{} + OctantNeeds(octant);
     for (uint32_t i = 0; i < b.count; i += W) {
         if (!((b.octants[i / kCullWidth] >> octant) & 1)) continue;  // none of these eight
 #define LM_AT(a) (*reinterpret_cast<const VF*>((a) + i))

@@ -58,9 +58,12 @@ struct Blockers {
     alignas(32) int32_t reaches[N];              // direction codes
     uint8_t octants[N / kCullWidth];             // per eight blockers
 };
-/// The direction code a segment along d needs of a blocker (see Blockers).
-inline int32_t DirectionNeeds(const Vec3& d) {
-    return (d.x < 0 ? 2 : 1) | (d.y < 0 ? 8 : 4) | (d.z < 0 ? 32 : 16);
+/// The octant of a segment's direction d (see Blockers): bit a set where d_a < 0.
+inline int DirectionOctant(const Vec3& d) { return (d.x < 0 ? 1 : 0) | (d.y < 0 ? 2 : 0) | (d.z < 0 ? 4 : 0); }
+/// The direction code bits a segment of octant k needs of a blocker: bit 2a (+) or 2a+1
+/// (-) for each axis a, as k's bit a says.
+constexpr int32_t OctantNeeds(int k) {
+    return (1 << (0 + (k & 1))) | (1 << (2 + ((k >> 1) & 1))) | (1 << (4 + ((k >> 2) & 1)));
 }
 /// Blockers::octants from the direction codes of count blockers (padding: code 0).
 void OctantsOfBlockers(Blockers* b);
@@ -134,9 +137,11 @@ struct BlockerQuery {
     float reach;        // pointReach_
     float delta8;       // 8·planeDelta_
 };
-/// Padding after the last blocker: a plane x·0 - d with d = -1e30 puts every end at 1e30
-/// on the + side, so no segment can be undecided or blocked by it.
-inline void PadBlockers(Blockers* b) {
+/// Completes a FindBlockers pass's blockers for the culling: padding after the last
+/// blocker (a plane x·0 - d with d = -1e30 puts every end at 1e30 on the + side, so no
+/// segment can be undecided or blocked by it, and no direction reaches it), then each
+/// eight's octants from the direction codes.
+inline void FinishBlockers(Blockers* b) {
     for (uint32_t n = b->count; n % kCullWidth != 0; ++n) {
         b->nx[n] = b->ny[n] = b->nz[n] = 0;
         b->d[n] = -1e30f;

@@ -133,8 +133,8 @@ TEST(LightMeshKernels, VectorisedPassesEqualTheScalarOnesBitForBit) {
             for (int k = 0; k < 17; ++k)
                 for (uint32_t i = 0; i < a.count; ++i) ASSERT_TRUE(SameBits(arraysA[k][i], arraysB[k][i])) << k << " " << i;
             for (uint32_t i = 0; i < a.count; ++i) ASSERT_EQ(a.reaches[i], b.reaches[i]) << i;
-            PadBlockers(&a);
-            PadBlockers(&b);
+            FinishBlockers(&a);
+            FinishBlockers(&b);
             for (uint32_t g = 0; g * kCullWidth < a.count; ++g) ASSERT_EQ(a.octants[g], b.octants[g]) << g;
             for (int s = 0; s < 8; ++s) {
                 const Vec3 x = p + Vec3(coord(rng), coord(rng), coord(rng)) * (r / 2);
@@ -209,7 +209,7 @@ TEST(LightMeshKernels, DirectionCodesFollowTheBlockersBoxes) {
             bq.lo = p - Vec3(r), bq.hi = p + Vec3(r), bq.o = p;
             Blockers b;
             if (!findBlockers(f, bq, &b)) continue;
-            PadBlockers(&b);
+            FinishBlockers(&b);
             // Blockers keep the front list's order: match them by their planes.
             uint32_t i = 0;
             for (uint32_t n = 0; n < b.count; ++n) {
@@ -257,7 +257,7 @@ TEST(LightMeshKernels, CullingEqualsTheBlockerByBlockerRule) {
             bq.margin = 1e-5f, bq.far = r + 2e-5f, bq.reach = r, bq.delta8 = 2e-5f;
             Blockers b;
             if (!findBlockers(f, bq, &b)) continue;
-            PadBlockers(&b);
+            FinishBlockers(&b);
             for (int s = 0; s < 8; ++s) {
                 const Vec3 x = p + Vec3(coord(rng), coord(rng), coord(rng)) * (r / 2);
                 const int want = CullOracle(b, x, bq.o, bq.margin);

@@ -256,7 +256,7 @@ inline void LightMesh<Word>::FindBlockers(const CellSummary& c, int64_t base, co
     q.delta8 = 8 * c.delta;
     b->margin = q.margin;
     if (!findBlockers_(front, q, b)) return;  // too many: the back-end decides
-    PadBlockers(b);
+    FinishBlockers(b);
     b->known = true;
 }
 
