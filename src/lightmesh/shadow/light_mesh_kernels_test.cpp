@@ -97,6 +97,15 @@ TEST(LightMeshKernels, BrickAxisBitsAgreeWithTheBoxTestOfEveryCell) {
     EXPECT_GT(apart, 1000u);
 }
 
+// A point's blocker query as FindBlockers makes it: its segments within r of p, its origin
+// just off p, margins of a few ulps at these coordinates.
+BlockerQuery QueryAround(const Vec3& p, float r) {
+    BlockerQuery bq;
+    bq.lo = p - Vec3(r), bq.hi = p + Vec3(r), bq.o = p + Vec3(0, 1e-3f, 0);
+    bq.margin = 1e-5f, bq.far = r + 2e-5f, bq.reach = r, bq.delta8 = 2e-5f;
+    return bq;
+}
+
 bool SameBits(float a, float b) { return std::bit_cast<uint32_t>(a) == std::bit_cast<uint32_t>(b); }
 
 // The vectorised passes over a front list decide exactly as their scalar oracles: a point's
@@ -115,11 +124,9 @@ TEST(LightMeshKernels, VectorisedPassesEqualTheScalarOnesBitForBit) {
     for (uint32_t count : {1u, 7u, 8u, 9u, 40u, 200u}) {
         const FrontArrays f = RandomFrontList(rng, count);
         for (int q = 0; q < 300; ++q) {
-            BlockerQuery bq;
             const Vec3 p(coord(rng), coord(rng), coord(rng));
             const float r = reach(rng);
-            bq.lo = p - Vec3(r), bq.hi = p + Vec3(r), bq.o = p + Vec3(0, 1e-3f, 0);
-            bq.margin = 1e-5f, bq.far = r + 2e-5f, bq.reach = r, bq.delta8 = 2e-5f;
+            const BlockerQuery bq = QueryAround(p, r);
             Blockers a, b;
             const bool okA = scalarBlockers(f, bq, &a), okB = wideBlockers(f, bq, &b);
             ASSERT_EQ(okA, okB);
@@ -250,11 +257,9 @@ TEST(LightMeshKernels, CullingEqualsTheBlockerByBlockerRule) {
     for (uint32_t count : {1u, 7u, 8u, 9u, 40u, 200u}) {
         const FrontArrays f = RandomFrontList(rng, count);
         for (int q = 0; q < 300; ++q) {
-            BlockerQuery bq;
             const Vec3 p(coord(rng), coord(rng), coord(rng));
             const float r = reach(rng);
-            bq.lo = p - Vec3(r), bq.hi = p + Vec3(r), bq.o = p + Vec3(0, 1e-3f, 0);
-            bq.margin = 1e-5f, bq.far = r + 2e-5f, bq.reach = r, bq.delta8 = 2e-5f;
+            const BlockerQuery bq = QueryAround(p, r);
             Blockers b;
             if (!findBlockers(f, bq, &b)) continue;
             FinishBlockers(&b);
