@@ -2,10 +2,11 @@
 // transparent huge pages (as util/huge_pages asks for large buffers) against 4 KiB pages.
 // The light mesh's lazy structures and the image are touched first during the render, so
 // this cost lands in the render phase of every process (README, "Where the time goes").
-// Usage: bench_first_touch [pages (2 MiB each), default 16] [rounds, default 5]
+// Usage: bench_first_touch [pages (2 MiB each), 1-1024, default 16] [rounds, 1-1000, default 5]
 #include <sys/mman.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
@@ -34,11 +35,30 @@ double FirstTouch(int pages, bool huge, size_t stride) {
     return std::chrono::duration<double, std::micro>(t1 - t0).count() / static_cast<double>(length / stride);
 }
 
+// argv[i] as a whole number in [1, max], or `fallback` if absent; anything else is a usage
+// error (a count past max would map, and touch, more memory than a measurement needs).
+int Count(int argc, char** argv, int i, int fallback, int max, const char* what) {
+    if (argc <= i) return fallback;
+    char* end = nullptr;
+    errno = 0;
+    const long v = std::strtol(argv[i], &end, 10);
+    if (errno != 0 || end == argv[i] || *end != '\0' || v < 1 || v > max) {
+        std::fprintf(stderr, "bench_first_touch: %s must be a whole number from 1 to %d, got \"%s\"\n", what, max,
+                     argv[i]);
+        std::exit(1);
+    }
+    return static_cast<int>(v);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-    const int pages = argc > 1 ? std::max(1, std::atoi(argv[1])) : 16;
-    const int rounds = argc > 2 ? std::max(1, std::atoi(argv[2])) : 5;
+    if (argc > 3) {
+        std::fprintf(stderr, "usage: bench_first_touch [pages (2 MiB each), 1-1024] [rounds, 1-1000]\n");
+        return 1;
+    }
+    const int pages = Count(argc, argv, 1, 16, 1024, "pages");
+    const int rounds = Count(argc, argv, 2, 5, 1000, "rounds");
     std::printf("first touch of fresh memory, %d x 2 MiB per round\n", pages);
     std::vector<double> huge, small;
     for (int r = 0; r < rounds; ++r) {
