@@ -168,7 +168,7 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
       cull_(ChooseCullFunction(options.simdWidth)),
       findBlockers_(ChooseFindBlockersFunction(options.simdWidth)),
       patchSees_(ChoosePatchSeesFunction(options.simdWidth)),
-      sumFront_(ChooseSumFrontFunction(options.simdWidth)),
+      sumFront_(ChooseSumFrontFunction(options.simdWidth, static_cast<int>(sizeof(Word)))),
       nodes_(ZeroedArray<Word>(lattice.NodeCount() + kNodePadding)),
       lightRadius_(options.lightRadius) {
     if (lightRadius_ > 0)
@@ -307,7 +307,7 @@ inline uint64_t LightMesh<Word>::Interpolate(const ShadingPoint& sp, const bool*
         }
         return ~uint64_t(0);  // every light from P's own ray
     }
-    if constexpr (sizeof(Word) == 1) acc.Flush();
+    acc.Flush();
     ++Count(counters, LightMeshCount::kInterpolations);
     Count(counters, LightMeshCount::kNodesUsed) += acc.m;
     // A true division, so that m visible nodes out of m give exactly 1 (as RT does).

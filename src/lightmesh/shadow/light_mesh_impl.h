@@ -331,13 +331,16 @@ class LightMesh final : public LightMeshShadows {
 
     uint64_t SummaryBytes() const;
 
-    // The sums of formula (2): m and, per light, the visible nodes. With one-byte node
-    // words the eight bits are counted at once, one byte lane each (kSpread), and the lanes
-    // are moved to `visible` before they can overflow, and at the end (Flush).
+    // The sums of formula (2): m and, per light, the visible nodes. The bits of a node
+    // word are counted eight at a time, one byte lane per light (kSpread of each byte of
+    // the word that holds lights), and the lanes are moved to `visible` before they can
+    // overflow, and at the end (Flush). With more than 6 lights (2-, 4- or 8-byte words)
+    // that is one table lookup per eight lights instead of a shift, mask and add per light.
     struct Accumulator {
         uint32_t m = 0;
         uint32_t pending = 0;
-        uint64_t lanes = 0;
+        int bytes;  // the word's bytes that hold light bits
+        uint64_t lanes[sizeof(Word)] = {};
         uint32_t visible[64];
         // Contact-hardening penumbrae: the visibilities themselves, for every light needed,
         // and the lights whose value already came from P's own rays (to the light's centre
@@ -345,13 +348,24 @@ class LightMesh final : public LightMeshShadows {
         bool weighted = false;
         float vis[64];
         uint64_t ownRays = 0;
-        explicit Accumulator(size_t lights) {
-            // Flush adds all eight byte lanes, so the first eight are always zeroed.
-            for (size_t l = 0; l < std::max<size_t>(lights, 8); ++l) visible[l] = 0;
+        explicit Accumulator(size_t lights) : bytes(static_cast<int>(std::max<size_t>((lights + 7) / 8, 1))) {
+            // Flush adds all eight lanes of each byte, so those are always zeroed.
+            for (int l = 0; l < 8 * bytes; ++l) visible[l] = 0;
+        }
+        int Bytes() const {
+            if constexpr (sizeof(Word) == 1) return 1;
+            return bytes;
+        }
+        void Add(Word w) {
+            ++m;
+            for (int b = 0; b < Bytes(); ++b) lanes[b] += kSpread[(w >> (8 * b)) & 0xFF];
+            if (++pending == 255) Flush();
         }
         void Flush() {
-            for (int b = 0; b < 8; ++b) visible[b] += static_cast<uint32_t>((lanes >> (8 * b)) & 0xFF);
-            lanes = 0;
+            for (int b = 0; b < Bytes(); ++b) {
+                for (int k = 0; k < 8; ++k) visible[8 * b + k] += static_cast<uint32_t>((lanes[b] >> (8 * k)) & 0xFF);
+                lanes[b] = 0;
+            }
             pending = 0;
         }
     };
@@ -374,13 +388,7 @@ class LightMesh final : public LightMeshShadows {
 
     // Adds node x to the interpolation set.
     void Use(Accumulator& acc, Word w) const {
-        ++acc.m;
-        if constexpr (sizeof(Word) == 1) {
-            acc.lanes += kSpread[w];
-            if (++acc.pending == 255) acc.Flush();
-        } else {
-            for (size_t l = 0; l < scene_.lights.size(); ++l) acc.visible[l] += (w >> l) & 1;
-        }
+        acc.Add(w);
     }
 
     // The local-visibility segment from a node to P (paper §1.4): it must be unblocked.
@@ -456,11 +464,10 @@ class LightMesh final : public LightMeshShadows {
     // compiler knows.
     void UseAll(const FrontRun& run, int64_t base, Accumulator& acc) const {
         auto word = [&](int32_t linear) { return Evaluate(static_cast<uint64_t>(base + linear)); };
+        if (sumFront_ && sumFront_(run.blocks, run.masks, run.count, static_cast<const void*>(nodes_.get() + base),
+                                   static_cast<int>(scene_.lights.size()), acc.visible, &acc.m))
+            return;
         if constexpr (sizeof(Word) == 1) {
-            if (sumFront_ &&
-                sumFront_(run.blocks, run.masks, run.count, reinterpret_cast<const uint8_t*>(nodes_.get() + base),
-                          static_cast<int>(scene_.lights.size()), acc.visible, &acc.m))
-                return;
             uint64_t lanes = 0;
             uint32_t m = 0, pending = 0;
             auto flush = [&] {
@@ -623,8 +630,8 @@ class LightMesh final : public LightMeshShadows {
     // (the nodes any of its points may use) has at most kCubeWords·64 nodes.
     bool patches_ = false, patchesFit_ = false;
     uint32_t cubeWords_ = 0;
-    SumFrontFunction sumFront_ = nullptr;  // for one-byte words
-    static constexpr uint64_t kNodePadding = 8;  // words after the last node, for SumFrontBytesAvx2's loads
+    SumFrontFunction sumFront_ = nullptr;  // for words of 1, 2 or 4 bytes
+    static constexpr uint64_t kNodePadding = 8;  // words after the last node, for SumFrontWordsAvx2's loads
     const uint64_t serial_ = NextSerial();  // tells this mesh's thread-local caches from others'
     static uint64_t NextSerial() {
         static std::atomic<uint64_t> next{1};

@@ -305,31 +305,34 @@ void FrontMasksScalar(const FrontBlock* blocks, uint32_t count, const Vec3& n, f
     }
 }
 
-/// Нет's sum (LightMesh::UseAll) for one-byte node words with AVX2: the words of a block's
-/// eight entries gathered at once (32-bit loads at byte addresses: the node array has
-/// padding after its end), then per light the entries in front whose bit is set, by
-/// popcount of a movemask. False, having added nothing, if an entry in front is not yet
-/// evaluated (the scalar path evaluates it). The loads are relaxed: a node's word is all
-/// it publishes, and a byte cannot tear.
-// The words of block b's lanes in `mask` (one byte each, in the low byte of a lane; the
-// other lanes 0); false if one of them is not yet evaluated (bit 7, "initialised", clear).
-__attribute__((target("avx2"), always_inline)) inline bool GatherFrontBytes(const FrontBlock& block, int mask,
-                                                                            const uint8_t* nodes, __m256i* words) {
+/// Нет's sum (LightMesh::UseAll) with AVX2 for node words of 1, 2 or 4 bytes: the words
+/// of a block's eight entries gathered at once (32-bit loads at the words' addresses: the
+/// node array has padding after its end, and the bytes above a narrower word are shifted
+/// out), then per light the entries in front whose bit is set, by popcount of a movemask.
+/// False, having added nothing, if an entry in front is not yet evaluated (the scalar path
+/// evaluates it). The loads are relaxed: a node's word is all it publishes, and an aligned
+/// word cannot tear.
+// The words of block b's lanes in `mask` (in the low bytes of a lane; the other lanes 0);
+// false if one of them is not yet evaluated (its top bit, "initialised", clear).
+template <int Bytes>
+__attribute__((target("avx2"), always_inline)) inline bool GatherFrontWords(const FrontBlock& block, int mask,
+                                                                            const void* nodes, __m256i* words) {
     const __m256i laneBits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
     const __m256i on = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(mask), laneBits), laneBits);
     const __m256i index = _mm256_load_si256(reinterpret_cast<const __m256i*>(block.linear));
-    *words = _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), reinterpret_cast<const int*>(nodes), index, on, 1);
-    return (_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(*words, 24))) & mask) == mask;
+    *words = _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), static_cast<const int*>(nodes), index, on, Bytes);
+    return (_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(*words, 32 - 8 * Bytes))) & mask) == mask;
 }
-__attribute__((target("avx2,popcnt"))) bool SumFrontBytesAvx2(const FrontBlock* blocks, const uint8_t* masks,
-                                                              uint32_t count, const uint8_t* nodes, int lights,
+template <int Bytes>
+__attribute__((target("avx2,popcnt"))) bool SumFrontWordsAvx2(const FrontBlock* blocks, const uint8_t* masks,
+                                                              uint32_t count, const void* nodes, int lights,
                                                               uint32_t* visible, uint32_t* m) {
-    uint32_t sums[8] = {}, used = 0;
+    uint32_t sums[8 * Bytes - 2] = {}, used = 0;
     for (uint32_t b = 0; b < count; ++b) {
         const int mask = masks[b];
         if (!mask) continue;
         __m256i w;
-        if (!GatherFrontBytes(blocks[b], mask, nodes, &w)) return false;
+        if (!GatherFrontWords<Bytes>(blocks[b], mask, nodes, &w)) return false;
         for (int l = 0; l < lights; ++l)
             sums[l] += static_cast<uint32_t>(
                 __builtin_popcount(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(w, 31 - l))) & mask));
@@ -371,12 +374,19 @@ FrontFunction ChooseFrontFunction(int width) {
     return width != 4 && __builtin_cpu_supports("avx2") ? FrontMasksAvx2 : FrontMasksSse;
 }
 
-SumFrontFunction ChooseSumFrontFunction(int width) {
+SumFrontFunction ChooseSumFrontFunction(int width, int wordBytes) {
 #ifdef LIGHTMESH_TSAN
     (void)width;
+    (void)wordBytes;
     return nullptr;
 #else
-    return (width == 0 || width == 8) && __builtin_cpu_supports("avx2") ? SumFrontBytesAvx2 : nullptr;
+    if (!((width == 0 || width == 8) && __builtin_cpu_supports("avx2"))) return nullptr;
+    switch (wordBytes) {
+        case 1: return SumFrontWordsAvx2<1>;
+        case 2: return SumFrontWordsAvx2<2>;
+        case 4: return SumFrontWordsAvx2<4>;
+        default: return nullptr;  // 8-byte words (31-62 lights): the scalar sums
+    }
 #endif
 }
 

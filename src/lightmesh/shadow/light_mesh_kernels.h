@@ -167,14 +167,14 @@ struct PatchQuery {
 using FrontFunction = void (*)(const FrontBlock* blocks, uint32_t count, const Vec3& n, float nfrac, float eps,
                                uint8_t* masks);
 FrontFunction ChooseFrontFunction(int width);
-/// Нет's sum over the entries in front for one-byte node words: per light the entries whose
-/// bit is set (added to visible[]) and their number (added to *m); false, having added
-/// nothing, if an entry in front is not yet evaluated. Null where the gathers are not used:
-/// without AVX2, for a narrower test width, and under ThreadSanitizer (which does not see
-/// their loads as atomic).
-using SumFrontFunction = bool (*)(const FrontBlock* blocks, const uint8_t* masks, uint32_t count, const uint8_t* nodes,
+/// Нет's sum over the entries in front for node words of `wordBytes` bytes (1, 2 or 4): per
+/// light the entries whose bit is set (added to visible[]) and their number (added to
+/// *m); false, having added nothing, if an entry in front is not yet evaluated. Null where
+/// the gathers are not used: without AVX2, for a narrower test width, for 8-byte words,
+/// and under ThreadSanitizer (which does not see their loads as atomic).
+using SumFrontFunction = bool (*)(const FrontBlock* blocks, const uint8_t* masks, uint32_t count, const void* nodes,
                                   int lights, uint32_t* visible, uint32_t* m);
-SumFrontFunction ChooseSumFrontFunction(int width);
+SumFrontFunction ChooseSumFrontFunction(int width, int wordBytes);
 /// A point's blockers from its cell's front triangles; false if more than kMaxBlockers.
 using FindBlockersFunction = bool (*)(const FrontArrays& f, const BlockerQuery& q, Blockers* b);
 FindBlockersFunction ChooseFindBlockersFunction(int width);

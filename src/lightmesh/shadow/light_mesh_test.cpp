@@ -59,6 +59,50 @@ TEST(LightMesh, OneBytePerNodeUpToSixLights) {
     EXPECT_EQ(LightMeshBytesPerNode(62), 8);
 }
 
+// Formula (2) averages each light's bits over a node set that does not depend on the
+// lights (the nodes in front, and for ОТ and consensus those that see P), so a light's
+// visibility in a scene of many lights is its visibility alone, to the bit. Lights repeated
+// to 9, 20 and 40 make node words of 2, 4 and 8 bytes, whose bits are summed byte by byte
+// (and, with AVX2, from gathered words): a light's count in the wrong lane, or a flag bit
+// counted, changes some point's value.
+TEST(LightMesh, EveryWordSizeGivesEachLightItsOwnAverage) {
+    Scene base = FloorScene();
+    AddBox(&base, {-1, 0, -1}, {0.6f, 0.5f, 0.3f});
+    AddBox(&base, {0.9f, 0.7f, -0.4f}, {1.6f, 0.8f, 0.9f});
+    const Vec3 positions[3] = {{0.5f, 4.0f, 0.25f}, {-2.5f, 3.0f, 1.5f}, {3.0f, 2.5f, -2.0f}};
+    for (const char* variant : {"none", "consensus", "object"}) {
+        std::vector<Scene> scenes(3, base);  // a light mesh keeps a reference to its scene
+        std::vector<std::unique_ptr<Lmm>> alone;
+        for (int l = 0; l < 3; ++l) {
+            scenes[l].lights = {{positions[l], Color(1.0f), Falloff::None}};
+            alone.push_back(std::make_unique<Lmm>(scenes[l], 60, 2.0f, variant));
+        }
+        for (int lights : {9, 20, 40}) {
+            Scene s = base;
+            s.lights.clear();
+            for (int l = 0; l < lights; ++l) s.lights.push_back({positions[l % 3], Color(1.0f), Falloff::None});
+            Lmm many(s, 60, 2.0f, variant);
+            ASSERT_EQ(many.lmm->BytesPerNode(), lights < 15 ? 2 : lights < 31 ? 4 : 8);
+            int partial = 0;
+            for (float x = -2.2f; x <= 2.6f; x += 0.0731f)
+                for (float z = -2.1f; z <= 2.2f; z += 0.0917f) {
+                    const ShadingPoint sp = testing::RenderedFloorPoint(x, z);
+                    bool needed[kMaxLights];
+                    float vis[kMaxLights] = {};
+                    std::fill(needed, needed + kMaxLights, true);
+                    RenderCounters c;
+                    many.lmm->Visibility(sp, needed, vis, c);
+                    for (int l = 0; l < lights; ++l) {
+                        const float own = alone[l % 3]->Vis(sp);
+                        ASSERT_EQ(vis[l], own) << variant << ", " << lights << " lights, light " << l << " at " << x << ", " << z;
+                        partial += own > 0 && own < 1;
+                    }
+                }
+            EXPECT_GT(partial, 100) << variant << ", " << lights << " lights";  // penumbrae were summed
+        }
+    }
+}
+
 TEST(LightMesh, RefusesAMeshThatWouldNotFitBeforeAllocating) {
     Scene s = FloorScene();
     AddBox(&s, {-10, 0, -10}, {10, 20, 10});  // a cube-shaped scene: CC³ nodes

@@ -250,7 +250,7 @@ inline void LightMesh<Word>::ConsensusWalk(const ShadingPoint& sp, Word neededMa
     // (Only the lights the renderer needs matter: the others light P from behind.)
     Accumulator counts(scene_.lights.size());
     UseAll(all, base, counts);
-    if constexpr (sizeof(Word) == 1) counts.Flush();
+    counts.Flush();
     const uint32_t n = counts.m;
     Word majority = 0;  // per light, the bit most candidates carry (MinorityFirst)
     bool agree = true;
