@@ -631,6 +631,7 @@ class LightMesh final : public LightMeshShadows {
     bool patches_ = false, patchesFit_ = false;
     uint32_t cubeWords_ = 0;
     SumFrontFunction sumFront_ = nullptr;  // for words of 1, 2 or 4 bytes
+    static constexpr size_t kPacketLights = 16;  // a node's rays as one packet from this many lights (EvaluateVisibility)
     static constexpr uint64_t kNodePadding = 8;  // words after the last node, for SumFrontWordsAvx2's loads
     const uint64_t serial_ = NextSerial();  // tells this mesh's thread-local caches from others'
     static uint64_t NextSerial() {
