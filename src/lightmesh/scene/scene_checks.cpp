@@ -119,10 +119,16 @@ bool InsideASolid(const TriangleMesh& mesh, const Bounds3& box, const Vec3& p) {
     return true;
 }
 
-/// Fails on the first light inside a closed solid: it would light nothing, and the light
-/// mesh method (paper §4) assumes every light is outside the objects.
+/// Fails on the first light inside a closed solid that the camera is outside of: it would
+/// light nothing the camera sees, and the light mesh method (paper §4) assumes every light
+/// is outside the objects. A camera inside a closed surface itself is in a room (walls,
+/// floor and ceiling of single faces, closed): its lights are inside it too, and light
+/// what the camera sees; for them the parity rule cannot tell a room from a solid, so
+/// they are not refused. (The inside flags of СТ then count a node inside the room as
+/// outside, as they should: no surface lies between it and the room's lights.)
 void CheckLightsOutsideSolids(const Reader& r, const Scene& scene) {
     const Bounds3 box = scene.mesh.Bounds();
+    if (InsideASolid(scene.mesh, box, scene.camera.position)) return;
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         if (!box.Contains(scene.lights[i].position)) continue;
         if (InsideASolid(scene.mesh, box, scene.lights[i].position))
