@@ -35,13 +35,13 @@ TEST(LightMesh, LatticeDimensionsFollowCcAndKi) {
     // A box shaped like the paper's Gazebo: 86 x 64 x 100 cells at CC 100.
     const Bounds3 box(Vec3(0, 0, 0), Vec3(8.6f, 6.4f, 10.0f));
     const LightMeshLattice l = LightMeshLattice::Make(box, 100, 2.0f);
-    EXPECT_EQ(l.nx, 91);
-    EXPECT_EQ(l.ny, 69);
-    EXPECT_EQ(l.nz, 105);  // CC + 2·ceil(kI) + 1
+    EXPECT_EQ(l.nx, 92);
+    EXPECT_EQ(l.ny, 70);
+    EXPECT_EQ(l.nz, 106);  // CC + 2·ceil(kI) + 2: one node more at the far end
     EXPECT_FLOAT_EQ(l.h, 0.1f);
     EXPECT_FLOAT_EQ(l.r, 0.2f);
-    EXPECT_EQ(LightMeshLattice::Make(box, 400, 3.0f).nz, 407);
-    EXPECT_EQ(LightMeshLattice::Make(box, 100, 1.1f).nz, 105);  // ceil(1.1) = 2 cells of padding
+    EXPECT_EQ(LightMeshLattice::Make(box, 400, 3.0f).nz, 408);
+    EXPECT_EQ(LightMeshLattice::Make(box, 100, 1.1f).nz, 106);  // ceil(1.1) = 2 cells of padding
     // The lattice covers the box with ceil(kI) cells to spare on every side.
     EXPECT_LE(l.origin.x, box.lo.x - 2 * l.h + 1e-5f);
     EXPECT_GE(l.Node(l.nx - 1, l.ny - 1, l.nz - 1).z, box.hi.z + 2 * l.h - 1e-4f);
@@ -101,6 +101,44 @@ TEST(LightMesh, EveryWordSizeGivesEachLightItsOwnAverage) {
             EXPECT_GT(partial, 100) << variant << ", " << lights << " lights";  // penumbrae were summed
         }
     }
+}
+
+// The faces of the scene's box lie on lattice planes where its side is a whole number of
+// steps (always on the longest axis): a closed room's far walls. Their points must get
+// the templates (and the cell summaries) like every other point, not the paper's cube
+// loop, which traces a segment per candidate: the lattice's extra far node gives their
+// templates room.
+TEST(LightMesh, PointsOnTheBoxsFarFacesUseTheTemplates) {
+    Scene s = FloorScene();  // 20 × 20: x and z both span CC steps
+    const uint32_t v = static_cast<uint32_t>(s.mesh.positions.size());
+    s.mesh.positions.insert(s.mesh.positions.end(), {{-10, 0, 10}, {10, 0, 10}, {10, 4, 10}, {-10, 4, 10},
+                                                      {10, 0, -10}, {10, 4, -10}});
+    s.mesh.triangles.insert(s.mesh.triangles.end(), {{v, v + 1, v + 2}, {v, v + 2, v + 3},               // z = 10
+                                                     {v + 1, v + 4, v + 5}, {v + 1, v + 5, v + 2}});  // x = 10
+    s.mesh.materialIds.insert(s.mesh.materialIds.end(), {0, 0, 0, 0});
+    s.lights = {{{0.0f, 3.0f, 0.0f}, Color(1.0f), Falloff::None}};
+    Lmm lmm(s, 100, 2.0f, "consensus");
+    const float step = lmm.lmm->Lattice().h;
+    RenderCounters c;
+    int points = 0;
+    for (float a = -8.0f; a <= 8.0f; a += 0.37f)
+        for (float y = 0.5f; y <= 3.5f; y += 0.29f) {
+            for (int wall = 0; wall < 2; ++wall) {
+                ShadingPoint sp;
+                sp.p = wall == 0 ? Vec3(a, y, 10.0f) : Vec3(10.0f, y, a);
+                sp.n = wall == 0 ? Vec3(0, 0, -1) : Vec3(-1, 0, 0);
+                sp.origin = sp.p + sp.n * (1e-3f * step);
+                sp.prim = wall == 0 ? 2 : 4;
+                EXPECT_EQ(lmm.Vis(sp, 0, &c), 1.0f) << a << ", " << y << ", wall " << wall;  // nothing between
+                ++points;
+            }
+        }
+    // Every point on the open walls is answered by its cell's summary: the templates'
+    // path. The cube loop has no summaries and traces a segment per candidate (several
+    // per point); here only points near the corner and the floor, not on a plane of
+    // their own cell, look for one candidate that sees them.
+    EXPECT_EQ(Count(c, Lmc::kUniformCellPoints), static_cast<uint64_t>(points));
+    EXPECT_LT(Count(c, Lmc::kLocalSegments), static_cast<uint64_t>(points / 4));
 }
 
 TEST(LightMesh, RefusesAMeshThatWouldNotFitBeforeAllocating) {
