@@ -560,15 +560,15 @@ std::vector<Case> Corpus() {
          .expected = "of node storage, more than half of this machine's"},
         {.name = "light_mesh_too_big_for_the_limit",
          .args = "render $D/scene.json --shadows lmm --cc 1000 -o $OUT",
-         .expected = "lightmesh: error: light mesh 1005x349x1005 (CC 1000, kI 2) needs 336.2 "
+         .expected = "lightmesh: error: light mesh 1006x350x1006 (CC 1000, kI 2) needs 337.8 "
                      "MiB of node storage, more than half of this machine's 64.0 MiB: lower "
                      "--cc\n",
          .files = {{"scene.json", good}},
          .env = "LIGHTMESH_MEMORY_LIMIT=64M"},
         {.name = "light_mesh_with_blocker_distances_too_big_for_the_limit",
-         // 1 + 2 bytes per node with one light: three times the plain mesh's 336.2 MiB.
+         // 1 + 2 bytes per node with one light: three times the plain mesh's 337.8 MiB.
          .args = "render $D/scene.json --shadows lmm --cc 1000 --light-radius 0.1 -o $OUT",
-         .expected = "lightmesh: error: light mesh 1005x349x1005 (CC 1000, kI 2) needs 1008.5 "
+         .expected = "lightmesh: error: light mesh 1006x350x1006 (CC 1000, kI 2) needs 1013.4 "
                      "MiB of node storage (3 bytes per node with the blocker distances of the light "
                      "radius), more than half of this machine's 64.0 MiB: lower --cc\n",
          .files = {{"scene.json", good}},

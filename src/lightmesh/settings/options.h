@@ -28,6 +28,11 @@ struct LightMeshOptions {
     /// (consensus) only, so the paper's variants run the paper's algorithms; "on" also for
     /// none (Нет) and inside (СТ); "off" nowhere.
     std::string cellSummaries = "auto";
+    /// The angle between neighbouring camera rays (radians: 2·tan(fov/2) / (height·aa)),
+    /// filled in from the render's camera and size; 0 if unknown. With "auto" a cell's
+    /// summary is used only where the image is fine enough for it to pay: where the cell
+    /// spans about kMinRaysPerCell camera rays or more (see LightMesh::SummaryPays).
+    float rayAngle = 0.0f;
     /// Lanes of the vectorised loops (the templates' front test, the segment culling), for
     /// tests: 1 the scalar front test (the oracle of the others), 4 SSE, 8 AVX2 where the
     /// processor has it; 0 the widest available.

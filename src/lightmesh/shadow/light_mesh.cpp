@@ -203,6 +203,11 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
                       ? cellSummaries != "off"
                       : cellSummaries == "on" && (variant_.local == LocalVisibility::None ||
                                                   variant_.local == LocalVisibility::Inside));
+    camera_ = scene.camera.position;
+    if (summaries_ && cellSummaries == "auto" && options.rayAngle > 0) {
+        const float reach = lattice_.h / (options.rayAngle * std::sqrt(kMinRaysPerCell));
+        summaryReach2_ = reach * reach;
+    }
     if (summaries_) {
         bricksX_ = static_cast<uint64_t>(lattice.nx + kBrick - 1) / kBrick;
         bricksY_ = static_cast<uint64_t>(lattice.ny + kBrick - 1) / kBrick;

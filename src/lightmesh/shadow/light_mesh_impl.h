@@ -350,7 +350,7 @@ class LightMesh final : public LightMeshShadows {
         uint64_t ownRays = 0;
         explicit Accumulator(size_t lights) : bytes(static_cast<int>(std::max<size_t>((lights + 7) / 8, 1))) {
             // Flush adds all eight lanes of each byte, so those are always zeroed.
-            for (int l = 0; l < 8 * bytes; ++l) visible[l] = 0;
+            for (int l = 0; l < 8 * Bytes(); ++l) visible[l] = 0;
         }
         int Bytes() const {
             if constexpr (sizeof(Word) == 1) return 1;
@@ -640,6 +640,21 @@ class LightMesh final : public LightMeshShadows {
     }
     bool summaries_ = false;
     bool summariesOff_ = false;  // asked for, but the binning was over its budget
+    // "auto": a cell's summary is used only within this distance of the camera (squared;
+    // infinite with "on" or an unknown ray angle), see SummaryPays.
+    Vec3 camera_;
+    float summaryReach2_ = Infinity;
+  public:
+    // Summaries pay where a cell holds enough points to amortise them (a summary and its
+    // side summary cost about ten walks; measured break-even near 10 points per cell).
+    // Camera rays are about rayAngle·d apart at distance d, so a cell there meets about
+    // (h / (rayAngle·d))² of them per unit of its projected area: the summaries are used
+    // for points nearer the camera than h / (rayAngle·√kMinRaysPerCell). The decision
+    // depends on the point and the camera only, so images (exact either way), counts and
+    // nodes evaluated stay the same for any thread count.
+    static constexpr float kMinRaysPerCell = 8.0f;
+  private:
+    bool SummaryPays(const ShadingPoint& sp) const { return LengthSquared(sp.p - camera_) <= summaryReach2_; }
     uint64_t binPairs_ = 0;      // (triangle, brick) pairs the binning counted
     std::vector<int64_t> cellNodes_;  // linear offsets of the union of the templates
     std::vector<std::array<int8_t, 3>> cellOffsets_;  // the same nodes' offsets per axis

@@ -137,7 +137,7 @@ inline bool LightMesh<Word>::TemplateWalk(const ShadingPoint& sp, Word neededMas
     Blockers blockers;
     CellSummary scratch;
     const CellSummary* summary = nullptr;
-    if (summaries_) {
+    if (summaries_ && SummaryPays(sp)) {
         SummaryBrick* brick = nullptr;
         int slot = 0;
         const CellSummary& c = Summary(ci, cj, ck, &scratch, &brick, &slot);

@@ -1,5 +1,8 @@
 #include "lightmesh/shadow/shadow.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include "lightmesh/settings/render_settings.h"
 #include "lightmesh/shadow/area_light.h"
 #include "lightmesh/shadow/light_mesh.h"
@@ -74,6 +77,13 @@ class HardShadows final : public ShadowMethod {
     const Accelerator& accel_;
 };
 
+// The angle between neighbouring camera rays of the image (vertically; the pixels are square).
+float CameraRayAngle(const Camera& camera, const RenderOptions& options) {
+    const int rows = options.height * std::max(options.aa, 1);
+    if (rows <= 0 || !(camera.fovY > 0 && camera.fovY < 180)) return 0.0f;
+    return 2.0f * std::tan(camera.fovY * 0.5f * Pi / 180.0f) / static_cast<float>(rows);
+}
+
 }  // namespace
 
 std::vector<std::string> ShadowMethodNames() { return {"none", "rt", "lmm", "area"}; }
@@ -87,6 +97,7 @@ std::unique_ptr<ShadowMethod> CreateShadowMethod(std::string_view name, const Sc
         // One light size for the reference and the light mesh's penumbrae.
         LightMeshOptions lmm = options.lightMesh;
         lmm.lightRadius = options.areaLight.radius;
+        lmm.rayAngle = CameraRayAngle(scene.camera, options);
         return CreateLightMeshShadows(scene, accel, lmm);
     }
     if (name == "area") return CreateAreaLightShadows(scene, accel, options.areaLight);
