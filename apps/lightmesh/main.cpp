@@ -98,7 +98,8 @@ int main(int argc, char** argv) {
                          "LMM variants, comma-separated; default grid,templates,reduced,none,inside,object,consensus")
         ->delimiter(',');
     benchCmd->add_option("--cell-summaries", bench.matrix.cellSummaries,
-                         "Light mesh cell summaries for every LMM cell: auto (consensus only), on or off")
+                         "Light mesh cell summaries for every LMM cell: auto (consensus only, where the image is fine enough), "
+                         "on or off")
         ->check(CLI::IsMember({"auto", "on", "off"}));
     benchCmd->add_option("--thin-check", bench.matrix.thinCheck,
                          "With --quality, the penumbra mode's thin-occluder check: all (default, as render), lit or off")

@@ -25,8 +25,9 @@ struct LightMeshOptions {
     /// Cell summaries (ours, not in the paper; exact: same images, less work): per mesh
     /// cell, lazily, which lights every node a point of the cell can use agrees on, and
     /// whether the cell's geometry is one plane. "auto" uses them for the default variant
-    /// (consensus) only, so the paper's variants run the paper's algorithms; "on" also for
-    /// none (Нет) and inside (СТ); "off" nowhere.
+    /// (consensus) only, so the paper's variants run the paper's algorithms, and only where
+    /// a cell meets enough camera rays for them to pay (rayAngle below); "on" in every cell,
+    /// also for none (Нет) and inside (СТ); "off" nowhere.
     std::string cellSummaries = "auto";
     /// The angle between neighbouring camera rays (radians: 2·tan(fov/2) / (height·aa)),
     /// filled in from the render's camera and size; 0 if unknown. With "auto" a cell's

@@ -41,7 +41,8 @@ const std::vector<RenderSetting>& RenderSettings() {
         {"template_dir", "--template-dir", K::String, 0, 0, {},
          "Folder caching the sphere templates (default: $XDG_CACHE_HOME/lightmesh/templates)", "shadows", {"lmm"}},
         {"cell_summaries", "--cell-summaries", K::Choice, 0, 0, {"auto", "on", "off"},
-         "Light mesh: per-cell summaries (exact; ours): auto (for consensus only), on (also none, inside) or off",
+         "Light mesh: per-cell summaries (exact; ours): auto (for consensus only, where a cell meets about 8 camera "
+         "rays or more), on (every cell; also none, inside) or off",
          "shadows", {"lmm"}},
         {"light_radius", "--light-radius", K::Float, 0, kNoLimit, {},
          "Radius of the sphere each point light stands for: area shadows sample it, lmm sizes its "
