@@ -141,6 +141,44 @@ TEST(LightMesh, PointsOnTheBoxsFarFacesUseTheTemplates) {
     EXPECT_LT(Count(c, Lmc::kLocalSegments), static_cast<uint64_t>(points / 4));
 }
 
+// The converse on the near faces: a floor at the box's lowest point lies on lattice plane
+// ceil(kI), but its points' coordinate may round a hair below it, into a cell whose
+// template would reach below the lattice. The floor's height is chosen here so that it
+// does (checked with the light mesh's own arithmetic); its points must still get the
+// templates and summaries, and the same values as a floor a little higher up.
+TEST(LightMesh, PointsOnTheBoxsNearFacesUseTheTemplates) {
+    const int cc = 100, pad = 2;
+    const float half = 10.0f, h = 2 * half / static_cast<float>(cc);
+    float floorY = 0;
+    for (int k = 1; k < 10000 && floorY == 0; ++k) {  // a height whose lattice coordinate rounds down
+        const float y = 0.1f + 1.37e-4f * static_cast<float>(k);
+        const float origin = y - static_cast<float>(pad) * h;
+        if (FloorToInt((y - origin) * (1.0f / h)) < pad) floorY = y;
+    }
+    ASSERT_NE(floorY, 0.0f) << "no height rounds down: the test needs another search";
+    Scene s = FloorScene(half);
+    for (Vec3& p : s.mesh.positions) p.y = floorY;
+    AddBox(&s, {-1, floorY + 2, -1}, {1, floorY + 2.1f, 1});  // a shadow on the floor
+    s.lights = {{{0.3f, floorY + 5, 0.2f}, Color(1.0f), Falloff::None}};
+    Lmm lmm(s, cc, 2.0f, "consensus");
+    ASSERT_EQ(lmm.lmm->Lattice().origin.y, floorY - static_cast<float>(pad) * lmm.lmm->Lattice().h);
+    RenderCounters c;
+    int points = 0, shadowed = 0;
+    for (float x = -3.0f; x <= 3.0f; x += 0.173f)
+        for (float z = -3.0f; z <= 3.0f; z += 0.191f) {
+            ShadingPoint sp = testing::RenderedFloorPoint(x, z, half);
+            sp.p.y = floorY;
+            sp.origin.y += floorY;
+            const float v = lmm.Vis(sp, 0, &c);
+            shadowed += v < 1;
+            ++points;
+        }
+    EXPECT_GT(shadowed, 20);
+    // Every point is on its cell's plane: the templates with their summaries, no segment.
+    EXPECT_EQ(Count(c, Lmc::kPlanarCellPoints), static_cast<uint64_t>(points));
+    EXPECT_EQ(Count(c, Lmc::kLocalSegments), 0u);
+}
+
 TEST(LightMesh, RefusesAMeshThatWouldNotFitBeforeAllocating) {
     Scene s = FloorScene();
     AddBox(&s, {-10, 0, -10}, {10, 20, 10});  // a cube-shaped scene: CC³ nodes

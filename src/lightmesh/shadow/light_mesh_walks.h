@@ -110,15 +110,28 @@ inline bool LightMesh<Word>::TemplateWalk(const ShadingPoint& sp, Word neededMas
     const LightMeshLattice& L = lattice_;
     const Vec3 q = (sp.p - L.origin) * invH_;
     // P lies in the scene's box, so q within the lattice's range (as for the cast before).
-    const int ci = FloorToInt(q.x), cj = FloorToInt(q.y), ck = FloorToInt(q.z);
-    if (ci + minOffset_ < 0 || cj + minOffset_ < 0 || ck + minOffset_ < 0 || ci + maxOffset_ >= L.nx ||
-        cj + maxOffset_ >= L.ny || ck + maxOffset_ >= L.nz)
-        return false;
-    const Vec3 frac = q - Vec3(static_cast<float>(ci), static_cast<float>(cj), static_cast<float>(ck));
+    int ci = FloorToInt(q.x), cj = FloorToInt(q.y), ck = FloorToInt(q.z);
+    Vec3 frac = q - Vec3(static_cast<float>(ci), static_cast<float>(cj), static_cast<float>(ck));
     const int ns = templates_.templates.ns;
     // Nearest sub-step, halves up (f >= 0 here, so the truncation is a floor).
     auto snap = [ns](float f) { return std::clamp(static_cast<int>(f * static_cast<float>(ns) + 0.5f), 0, ns); };
-    const int s = templates_.templates.SubPosition(snap(frac.x), snap(frac.y), snap(frac.z));
+    int sx = snap(frac.x), sy = snap(frac.y), sz = snap(frac.z);
+    // A point on a near face of the scene's box lies on lattice plane ceil(kI), but its
+    // coordinate may round a hair below it, into the cell under it, whose template would
+    // reach one node below the lattice. Its sub-step there is the last one, the very spot
+    // of the first sub-step of the cell above (the same nodes): take that cell. (Without
+    // this, a floor at the box's lowest point took the cube loop wherever its coordinate
+    // rounded down: a third of a scaled room's points.)
+    auto lift = [&](int& c, int& sub, float& f) {
+        if (c + minOffset_ < 0 && sub == ns) ++c, sub = 0, f -= 1.0f;
+    };
+    lift(ci, sx, frac.x);
+    lift(cj, sy, frac.y);
+    lift(ck, sz, frac.z);
+    if (ci + minOffset_ < 0 || cj + minOffset_ < 0 || ck + minOffset_ < 0 || ci + maxOffset_ >= L.nx ||
+        cj + maxOffset_ >= L.ny || ck + maxOffset_ >= L.nz)
+        return false;
+    const int s = templates_.templates.SubPosition(sx, sy, sz);
     const int64_t base = static_cast<int64_t>(L.Index(ci, cj, ck));
     // (n(P), x - P) with x - P = (offset - frac)·h, over the tolerance of frontEps_.
     // (offset - frac)·n = offset·n - frac·n: the second term once per point.
