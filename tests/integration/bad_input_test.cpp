@@ -411,14 +411,13 @@ std::vector<Case> Corpus() {
                    {"shade.obj", std::string(kBox).substr(0, std::string(kBox).find("f 1 4 3 2")) +
                                      "f 5 6 7 8\nf 4 8 7 3\nf 1 5 8 4\nf 2 3 7 6\nf 1 2 6 5\n"}},
          .exitCode = 0},
-        // Not refused: a closed room (the box, 4 units wide) with the camera and the light
+        // Not refused: a closed room (the box, 2 units wide) with the camera and the light
         // inside it, as in an interior scene whose walls, floor and ceiling are single faces.
         {.name = "light_inside_closed_room_with_the_camera_is_fine",
          .args = kRender,
          .expected = "out.png: 16x12",
-         .files = {{"scene.json", Replace(Replace(SceneJson(SceneParts{}), R"("position": [0, 2, 8], "look_at": [0, 0, 0])",
-                                                  R"("position": [0, 0.3, 0.8], "look_at": [0, -0.5, -1])"),
-                                          R"("position": [3, 6, 4])", R"("position": [0.2, 0.7, 0.1])")}},
+         .files = {{"scene.json", SceneJson({.camera = R"({"position": [0, 0.3, 0.8], "look_at": [0, -0.5, -1]})",
+                                             .lights = R"([{"position": [0.2, 0.7, 0.1], "intensity": 40}])"})}},
          .exitCode = 0},
         {.name = "light_nan",
          .args = kRender,

@@ -125,7 +125,9 @@ bool InsideASolid(const TriangleMesh& mesh, const Bounds3& box, const Vec3& p) {
 /// floor and ceiling of single faces, closed): its lights are inside it too, and light
 /// what the camera sees; for them the parity rule cannot tell a room from a solid, so
 /// they are not refused. (The inside flags of СТ then count a node inside the room as
-/// outside, as they should: no surface lies between it and the room's lights.)
+/// outside with two lights or more: no surface lies between it and the room's lights.
+/// With one light, its vote is outvoted by the two exits through the room's walls, every
+/// node of the room is flagged inside, and СТ falls back to P's shadow rays.)
 void CheckLightsOutsideSolids(const Reader& r, const Scene& scene) {
     const Bounds3 box = scene.mesh.Bounds();
     if (InsideASolid(scene.mesh, box, scene.camera.position)) return;

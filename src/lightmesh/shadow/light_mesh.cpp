@@ -47,17 +47,21 @@ LightMeshLattice LightMeshLattice::Make(const Bounds3& bounds, int cc, float ki)
     l.h = extent / static_cast<float>(cc);
     l.r = ki * l.h;
     const int pad = static_cast<int>(std::ceil(ki));
+    // A template reaches floor(kI) + 1 nodes beyond its cell: one more than the padding
+    // when kI is a whole number (see count below).
+    const int farPad = std::max(pad, static_cast<int>(std::floor(ki)) + 1);
     l.origin = bounds.lo - Vec3(static_cast<float>(pad) * l.h);
     const Vec3 d = bounds.Diagonal();
     auto count = [&](float side) {
         // Cells across this side; the longest side has exactly CC (guard against rounding).
-        // One node more at the far end: a point on a far face that lies on a lattice plane
-        // (always on the longest axis, whose side is CC steps; on the others when the side
-        // is a whole number of steps) is in cell pad + cells, whose templates reach
-        // floor(kI) + 1 nodes beyond it; without that node its points took the cube loop
-        // (a closed room's far wall: a quarter of its points, 1.7× RT's time at 1024×768).
+        // At the far end, room for the templates of points on the box's far face: one
+        // that lies on a lattice plane (always on the longest axis, whose side is CC
+        // steps; on the others when the side is a whole number of steps) is in cell pad +
+        // cells, whose templates reach floor(kI) + 1 nodes beyond it. Without that node
+        // (whole-number kI) its points took the cube loop (a closed room's far wall: a
+        // quarter of its points, 1.7× RT's time at 1024×768).
         const int cells = side >= extent ? cc : static_cast<int>(std::ceil(side / l.h - 1e-4f));
-        return std::max(cells, 0) + 2 * pad + 2;
+        return std::max(cells, 0) + pad + farPad + 1;
     };
     l.nx = count(d.x);
     l.ny = count(d.y);
@@ -476,8 +480,9 @@ inline Word LightMesh<Word>::EvaluateVisibility(const Vec3& x, uint64_t index) c
 // the shading point that first needs the node; that makes the flag depend on which
 // point (and so which thread) came first wherever meshes are not closed. We vote
 // instead over three segments that depend on the node alone: to the first three
-// lights (outside every object: the loader checks), completed, with fewer lights, by
-// the shortest axis-aligned segments out of the scene's box. The light segments also
+// lights (outside every object: the loader checks, except in a closed room with the
+// camera, see CheckLightsOutsideSolids), completed, with fewer lights, by the shortest
+// axis-aligned segments out of the scene's box. The light segments also
 // give the visibility bits (no crossing = visible), so with three or more lights the
 // flag costs no extra segment; on closed meshes all three votes agree.
 template <typename Word>

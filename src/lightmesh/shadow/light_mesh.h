@@ -15,9 +15,10 @@ namespace lm {
 
 /// The lattice of light-mesh nodes (paper §2; method note §2). Step h = longest side of
 /// the scene's box / CC; the lattice covers the box grown by ceil(kI) cells on each side
-/// (and one node more at the far end, for the templates of points on the far faces), so
-/// every interpolation sphere of radius r = kI·h around a surface point has its nodes.
-/// On the longest axis there are CC + 2·ceil(kI) + 2 nodes.
+/// (and, for a whole-number kI, one node more at the far end, for the templates of points
+/// on the far faces), so every interpolation sphere of radius r = kI·h around a surface
+/// point has its nodes. On the longest axis there are CC + ceil(kI) + max(ceil(kI),
+/// floor(kI) + 1) + 1 nodes: CC + 2·kI + 2 for a whole-number kI.
 struct LightMeshLattice {
     Vec3 origin;      ///< position of node (0, 0, 0)
     float h = 0;      ///< step between nodes

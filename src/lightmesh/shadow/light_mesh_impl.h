@@ -644,16 +644,16 @@ class LightMesh final : public LightMeshShadows {
     // infinite with "on" or an unknown ray angle), see SummaryPays.
     Vec3 camera_;
     float summaryReach2_ = Infinity;
-  public:
     // Summaries pay where a cell holds enough points to amortise them (a summary and its
     // side summary cost about ten walks; measured break-even near 10 points per cell).
     // Camera rays are about rayAngle·d apart at distance d, so a cell there meets about
     // (h / (rayAngle·d))² of them per unit of its projected area: the summaries are used
     // for points nearer the camera than h / (rayAngle·√kMinRaysPerCell). The decision
     // depends on the point and the camera only, so images (exact either way), counts and
-    // nodes evaluated stay the same for any thread count.
+    // nodes evaluated stay the same for any thread count. Points reached by mirror rays
+    // are further along their path than from the camera, so they may keep summaries that
+    // do not pay: a matter of time only.
     static constexpr float kMinRaysPerCell = 8.0f;
-  private:
     bool SummaryPays(const ShadingPoint& sp) const { return LengthSquared(sp.p - camera_) <= summaryReach2_; }
     uint64_t binPairs_ = 0;      // (triangle, brick) pairs the binning counted
     std::vector<int64_t> cellNodes_;  // linear offsets of the union of the templates

@@ -41,7 +41,7 @@ TEST(LightMesh, LatticeDimensionsFollowCcAndKi) {
     EXPECT_FLOAT_EQ(l.h, 0.1f);
     EXPECT_FLOAT_EQ(l.r, 0.2f);
     EXPECT_EQ(LightMeshLattice::Make(box, 400, 3.0f).nz, 408);
-    EXPECT_EQ(LightMeshLattice::Make(box, 100, 1.1f).nz, 106);  // ceil(1.1) = 2 cells of padding
+    EXPECT_EQ(LightMeshLattice::Make(box, 100, 1.1f).nz, 105);  // ceil(1.1) = 2 cells of padding, enough
     // The lattice covers the box with ceil(kI) cells to spare on every side.
     EXPECT_LE(l.origin.x, box.lo.x - 2 * l.h + 1e-5f);
     EXPECT_GE(l.Node(l.nx - 1, l.ny - 1, l.nz - 1).z, box.hi.z + 2 * l.h - 1e-4f);
@@ -81,24 +81,28 @@ TEST(LightMesh, EveryWordSizeGivesEachLightItsOwnAverage) {
             Scene s = base;
             s.lights.clear();
             for (int l = 0; l < lights; ++l) s.lights.push_back({positions[l % 3], Color(1.0f), Falloff::None});
-            Lmm many(s, 60, 2.0f, variant);
-            ASSERT_EQ(many.lmm->BytesPerNode(), lights < 15 ? 2 : lights < 31 ? 4 : 8);
-            int partial = 0;
-            for (float x = -2.2f; x <= 2.6f; x += 0.0731f)
-                for (float z = -2.1f; z <= 2.2f; z += 0.0917f) {
-                    const ShadingPoint sp = testing::RenderedFloorPoint(x, z);
-                    bool needed[kMaxLights];
-                    float vis[kMaxLights] = {};
-                    std::fill(needed, needed + kMaxLights, true);
-                    RenderCounters c;
-                    many.lmm->Visibility(sp, needed, vis, c);
-                    for (int l = 0; l < lights; ++l) {
-                        const float own = alone[l % 3]->Vis(sp);
-                        ASSERT_EQ(vis[l], own) << variant << ", " << lights << " lights, light " << l << " at " << x << ", " << z;
-                        partial += own > 0 && own < 1;
+            for (int width : {1, 0}) {  // the scalar byte lanes; the widest (AVX2's gathered sums)
+                LightMeshOptions options = testing::LightMeshSettings(60, 2.0f, variant);
+                options.simdWidth = width;
+                testing::LightMeshProbe many(s, options);
+                ASSERT_EQ(many.lmm->BytesPerNode(), lights < 15 ? 2 : lights < 31 ? 4 : 8);
+                int partial = 0;
+                for (float x = -2.2f; x <= 2.6f; x += 0.0731f)
+                    for (float z = -2.1f; z <= 2.2f; z += 0.0917f) {
+                        const ShadingPoint sp = testing::RenderedFloorPoint(x, z);
+                        bool needed[kMaxLights];
+                        float vis[kMaxLights] = {};
+                        std::fill(needed, needed + kMaxLights, true);
+                        RenderCounters c;
+                        many.lmm->Visibility(sp, needed, vis, c);
+                        for (int l = 0; l < lights; ++l) {
+                            const float own = alone[l % 3]->Vis(sp);
+                            ASSERT_EQ(vis[l], own) << variant << ", " << lights << " lights, light " << l << " at " << x << ", " << z;
+                            partial += own > 0 && own < 1;
+                        }
                     }
-                }
-            EXPECT_GT(partial, 100) << variant << ", " << lights << " lights";  // penumbrae were summed
+                EXPECT_GT(partial, 100) << variant << ", " << lights << " lights";  // penumbrae were summed
+            }
         }
     }
 }
@@ -486,12 +490,6 @@ TEST(LightMesh, CellSummariesKeepEveryImageExactly) {
     EXPECT_GT(patchSegments, 0u);   // and so did nodes that see a whole cell patch
 }
 
-// The summaries' tolerances follow the coordinates a cell computes with, not the scene's
-// largest: small objects near the coordinates' origin of a scene that reaches 20 units
-// away (a floor of small tiles) keep their blockers and cell patches, whose conditions
-// (the origin clearly off the surface) a tolerance at the scene's scale refuses: the
-// renderer's offset of a unit box's faces is 4e-6, four scene-wide tolerances 1.6e-5.
-// The image stays ОТ's.
 // "auto" uses a cell's summary only where the image is fine enough for it to pay: for
 // points nearer the camera than h / (rayAngle·√kMinRaysPerCell). A floor at CC 400 seen
 // at 320×240 has points on both sides of that distance (about 4.5 here, the camera 3.6 to
@@ -521,6 +519,12 @@ TEST(LightMesh, AutoSummariesOnlyWhereTheImageIsFineEnough) {
     EXPECT_GT(Count(render(48, 36, "on").counters, Lmc::kUniformCellPoints), 0u);
 }
 
+// The summaries' tolerances follow the coordinates a cell computes with, not the scene's
+// largest: small objects near the coordinates' origin of a scene that reaches 20 units
+// away (a floor of small tiles) keep their blockers and cell patches, whose conditions
+// (the origin clearly off the surface) a tolerance at the scene's scale refuses: the
+// renderer's offset of a unit box's faces is 4e-6, four scene-wide tolerances 1.6e-5.
+// The image stays ОТ's.
 TEST(LightMesh, CellTolerancesFollowTheLocalCoordinates) {
     Scene s = FloorScene(1.0f);
     s.mesh = TriangleMesh{};

@@ -70,9 +70,10 @@ inline void LightMesh<Word>::CubeWalk(const ShadingPoint& sp, Word neededMask, A
     if (lightRadius_ > 0) CubePenumbra(sp, neededMask, cubeNodes, acc, counters);
 }
 
-// The cube loop's candidates in penumbra mode (points whose template would reach out of
-// the lattice: on the scene box's far faces, such as the walls of a room that bound
-// it): consensus's rule as in ConsensusWalk — where the candidates agree on the needed
+// The cube loop's candidates in penumbra mode (points whose template would still reach
+// out of the lattice: only points outside the scene's box, since the lattice's extra far
+// node and the near faces' lift give every point on the box a template): consensus's
+// rule as in ConsensusWalk — where the candidates agree on the needed
 // lights, the first that sees P gives its bits; else the penumbra mode's answer.
 template <typename Word>
 inline void LightMesh<Word>::CubePenumbra(const ShadingPoint& sp, Word neededMask, std::vector<PenumbraNode>& nodes,
@@ -99,8 +100,9 @@ inline void LightMesh<Word>::CubePenumbra(const ShadingPoint& sp, Word neededMas
 
 // Templates (§3.1): snap P to the nearest sub-position of its cell and walk that
 // sub-position's list; no distance tests. Returns false (and does nothing) when the
-// template would reach outside the lattice, which only happens for points on or
-// outside the far faces of the scene's box; the cube loop takes those.
+// template would reach outside the lattice, which only happens for points outside the
+// scene's box (points on its faces have room: see LightMeshLattice and the lift below);
+// the cube loop takes those.
 //
 // With cell summaries (ours), a point whose cell's nodes all agree is answered without
 // the walk: *uniform gets those bits with kInit set (the caller averages nothing).

@@ -17,7 +17,8 @@ bool LightVisible(const Accelerator& accel, const Vec3& origin, const Vec3& ligh
 uint64_t LightsVisible(const Accelerator& accel, const Vec3& origin, const std::vector<PointLight>& lights,
                        uint64_t mask) {
     // 16 rays at a time, Embree's widest packet: a Ray is initialised where it is
-    // declared, and this runs once per shading point, so the buffer stays small.
+    // declared, and this runs once per shading point (and per light-mesh node with 16
+    // lights or more), so the buffer stays small.
     constexpr size_t kChunk = 16;
     Ray rays[kChunk];
     int which[kChunk];
