@@ -177,6 +177,8 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
       cull_(ChooseCullFunction(options.simdWidth)),
       findBlockers_(ChooseFindBlockersFunction(options.simdWidth)),
       patchSees_(ChoosePatchSeesFunction(options.simdWidth)),
+      filterNear_(ChooseFilterNearFunction(options.simdWidth)),
+      nearCodes_(ChooseNearCodesFunction(options.simdWidth)),
       sumFront_(ChooseSumFrontFunction(options.simdWidth, static_cast<int>(sizeof(Word)))),
       nodes_(ZeroedArray<Word>(lattice.NodeCount() + kNodePadding)),
       lightRadius_(options.lightRadius) {

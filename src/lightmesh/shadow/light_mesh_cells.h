@@ -117,7 +117,7 @@ inline auto LightMesh<Word>::Summary(int ci, int cj, int ck, CellSummary* scratc
 
 // Copies a reach list into the arena (chunks never move, so the pointer stays valid).
 template <typename Word>
-inline const uint32_t* LightMesh<Word>::StoreReach(const std::vector<uint32_t>& ids) const {
+inline const uint32_t* LightMesh<Word>::StoreReach(std::span<const uint32_t> ids) const {
     if (ids.empty()) return nullptr;
     std::lock_guard<std::mutex> lock(brickMutex_);
     uint32_t* out = ReachSlots(ids.size());
@@ -162,10 +162,10 @@ inline void LightMesh<Word>::NearCodes(uint64_t brick, const uint32_t* near, uin
             cell.lo[a][p] = cellBox.lo[a], cell.hi[a][p] = cellBox.hi[a];
         }
     }
-    for (uint32_t i = 0; i < count; ++i) {
-        const TrianglePlane& pl = planes_[near[i]];
-        codes[i] = BrickAxisBits(reach, pl.lo, pl.hi) | BrickAxisBits(cell, pl.lo, pl.hi) << 12;
-    }
+    static_assert(offsetof(TrianglePlane, hi) == offsetof(TrianglePlane, lo) + sizeof(Vec3) &&
+                      sizeof(TrianglePlane) % sizeof(float) == 0,
+                  "NearCodesFunction reads a plane's box as six floats");
+    nearCodes_(reach, cell, &planes_[0].lo.x, sizeof(TrianglePlane) / sizeof(float), near, count, codes);
 }
 
 template <typename Word>
@@ -209,10 +209,6 @@ inline auto LightMesh<Word>::ComputeSummary(int ci, int cj, int ck, const Summar
     CellSummary c;
     c.delta = planeDelta_;
     const TriangleMesh& mesh = scene_.mesh;
-    thread_local std::vector<uint32_t> tris;
-    thread_local std::vector<uint32_t> reach;
-    reach.clear();
-    tris.clear();
     const Bounds3 reachBox = ReachBox(ci, cj, ck);
     // Too crowded a brick (dense foliage): no summary; such points walk and trace.
     if (brick.nearCount == kTooMany) {
@@ -227,20 +223,20 @@ inline auto LightMesh<Word>::ComputeSummary(int ci, int cj, int ck, const Summar
     // The cell's tolerance: every coordinate its tests compute with lies in the reach box
     // (nodes, points, origins) or is a vertex of a reach triangle (planes, patches).
     float magnitude = std::max(MaxComponent(Abs(reachBox.lo)), MaxComponent(Abs(reachBox.hi)));
-    // Without branches (a third of the list passes, at random): each id is written and
-    // kept if it passes (tris: only those in reach, as they were picked from it).
-    reach.resize(brick.nearCount);
-    tris.resize(brick.nearCount);
-    size_t inReachCount = 0, inCellCount = 0;
-    for (uint32_t i = 0; i < brick.nearCount; ++i) {
-        const uint32_t code = brick.nearCodes[i], t = brick.near[i];
-        reach[inReachCount] = t;
-        inReachCount += (code & inReach) == inReach;
-        tris[inCellCount] = t;
-        inCellCount += (code & (inReach | inCell)) == (inReach | inCell);
+    // (tris: only those in reach, as they were picked from it.) Into buffers kept per
+    // thread and never cleared: zero-filling vectors of a foliage brick's list length (up
+    // to kMaxBrickNear) cost as much as the filter itself.
+    thread_local std::unique_ptr<uint32_t[]> reachBuffer, trisBuffer;
+    thread_local uint32_t bufferRoom = 0;
+    if (bufferRoom < brick.nearCount + kFilterSlack) {
+        bufferRoom = std::max(brick.nearCount + kFilterSlack, 2 * bufferRoom);
+        reachBuffer.reset(new uint32_t[bufferRoom]);
+        trisBuffer.reset(new uint32_t[bufferRoom]);
     }
-    reach.resize(inReachCount);
-    tris.resize(inCellCount);
+    const uint64_t counts =
+        filterNear_(brick.near, brick.nearCodes, brick.nearCount, inReach, inCell, reachBuffer.get(), trisBuffer.get());
+    const std::span<const uint32_t> reach(reachBuffer.get(), counts & 0xffffffffu);
+    const std::span<const uint32_t> tris(trisBuffer.get(), counts >> 32);
     for (const uint32_t t : reach) magnitude = std::max(magnitude, planes_[t].magnitude);
     c.delta = std::min(planeDelta_, PlaneDelta(magnitude));
     if (variant_.local == LocalVisibility::Consensus) {

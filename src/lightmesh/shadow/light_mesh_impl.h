@@ -13,10 +13,13 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cstddef>
 #include <cstdlib>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <new>
+#include <span>
 #include <tuple>
 #include <cmath>
 #include <type_traits>
@@ -304,7 +307,7 @@ class LightMesh final : public LightMeshShadows {
     const CellSummary& Summary(int ci, int cj, int ck, CellSummary* scratch, SummaryBrick** brickOut,
                                int* slotOut) const;
 
-    const uint32_t* StoreReach(const std::vector<uint32_t>& ids) const;
+    const uint32_t* StoreReach(std::span<const uint32_t> ids) const;
 
     // Cell (ci, cj, ck)'s box grown by reachMargin_ (the triangles that may choose its Π).
     Bounds3 CellBox(int ci, int cj, int ck) const {
@@ -626,6 +629,8 @@ class LightMesh final : public LightMeshShadows {
     CullFunction cull_ = nullptr;
     FindBlockersFunction findBlockers_ = nullptr;
     PatchSeesFunction patchSees_ = nullptr;
+    FilterNearFunction filterNear_ = nullptr;
+    NearCodesFunction nearCodes_ = nullptr;
     // Cell patches: on for consensus with summaries when the neighbourhood cube of a cell
     // (the nodes any of its points may use) has at most kCubeWords·64 nodes.
     bool patches_ = false, patchesFit_ = false;

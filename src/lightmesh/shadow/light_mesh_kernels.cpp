@@ -343,7 +343,107 @@ __attribute__((target("avx2,popcnt"))) bool SumFrontWordsAvx2(const FrontBlock* 
     return true;
 }
 
+/// The near-list filter one id at a time, without branches (a third of a list passes, at
+/// random): each id is written and kept if it passes. The AVX2 pass's oracle.
+uint64_t FilterNearScalar(const uint32_t* ids, const uint32_t* codes, uint32_t count, uint32_t reachBits,
+                          uint32_t cellBits, uint32_t* reach, uint32_t* cell) {
+    const uint32_t both = reachBits | cellBits;
+    uint32_t nr = 0, nc = 0;
+    for (uint32_t i = 0; i < count; ++i) {
+        const uint32_t code = codes[i], t = ids[i];
+        reach[nr] = t;
+        nr += (code & reachBits) == reachBits;
+        cell[nc] = t;
+        nc += (code & both) == both;
+    }
+    return nr | static_cast<uint64_t>(nc) << 32;
+}
+/// Left-packing permutations: entry m lists, in order, the lanes of the bits set in m
+/// (the rest 0), one byte each.
+struct PackTable {
+    uint64_t lanes[256];
+};
+constexpr PackTable MakePackTable() {
+    PackTable t{};
+    for (int m = 0; m < 256; ++m) {
+        int n = 0;
+        for (int k = 0; k < 8; ++k)
+            if (m & (1 << k)) t.lanes[m] |= static_cast<uint64_t>(k) << (8 * n++);
+    }
+    return t;
+}
+constexpr PackTable kPack = MakePackTable();
+// v's lanes of the bits set in mask, moved to the front in order.
+__attribute__((target("avx2"), always_inline)) inline __m256i PackLanes(__m256i v, unsigned mask) {
+    const __m256i lanes = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(static_cast<long long>(kPack.lanes[mask])));
+    return _mm256_permutevar8x32_epi32(v, lanes);
+}
+/// Eight ids at a time: the codes' tests as lane masks, the ids kept moved to the front
+/// of the group by a permutation (kPack) and the whole group stored where the list ends;
+/// the list then grows by the number kept. Same lists as the scalar pass (tests).
+__attribute__((target("avx2,popcnt"))) uint64_t FilterNearAvx2(const uint32_t* ids, const uint32_t* codes,
+                                                                uint32_t count, uint32_t reachBits, uint32_t cellBits,
+                                                                uint32_t* reach, uint32_t* cell) {
+    const __m256i rb = _mm256_set1_epi32(static_cast<int>(reachBits));
+    const __m256i bb = _mm256_set1_epi32(static_cast<int>(reachBits | cellBits));
+    uint32_t nr = 0, nc = 0, i = 0;
+    for (; i + 8 <= count; i += 8) {
+        const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(codes + i));
+        const __m256i t = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(ids + i));
+        const unsigned mr = static_cast<unsigned>(
+            _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(c, rb), rb))));
+        const unsigned mc = static_cast<unsigned>(
+            _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(c, bb), bb))));
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(reach + nr), PackLanes(t, mr));
+        nr += static_cast<uint32_t>(__builtin_popcount(mr));
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(cell + nc), PackLanes(t, mc));
+        nc += static_cast<uint32_t>(__builtin_popcount(mc));
+    }
+    const uint64_t tail = FilterNearScalar(ids + i, codes + i, count - i, reachBits, cellBits, reach + nr, cell + nc);
+    return (nr + (tail & 0xffffffffu)) | static_cast<uint64_t>(nc + (tail >> 32)) << 32;
+}
+
+/// The near codes with BrickAxisBits itself: the oracle of the AVX pass.
+void NearCodesScalar(const BrickAxes& reach, const BrickAxes& cell, const float* boxes, size_t stride,
+                     const uint32_t* ids, uint32_t count, uint32_t* codes) {
+    for (uint32_t i = 0; i < count; ++i) {
+        const float* box = boxes + ids[i] * stride;
+        const Vec3 lo(box[0], box[1], box[2]), hi(box[3], box[4], box[5]);
+        codes[i] = BrickAxisBits(reach, lo, hi) | BrickAxisBits(cell, lo, hi) << 12;
+    }
+}
+/// Per axis, one compare of eight lanes (the reach's four positions, then the cell's four)
+/// for each bound: the same comparisons as BrickAxisBits (ordered, so false with a NaN).
+__attribute__((target("avx2"))) void NearCodesAvx2(const BrickAxes& reach, const BrickAxes& cell, const float* boxes,
+                                                   size_t stride, const uint32_t* ids, uint32_t count,
+                                                   uint32_t* codes) {
+    __m256 lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+        lo[a] = _mm256_setr_m128(_mm_loadu_ps(reach.lo[a]), _mm_loadu_ps(cell.lo[a]));
+        hi[a] = _mm256_setr_m128(_mm_loadu_ps(reach.hi[a]), _mm_loadu_ps(cell.hi[a]));
+    }
+    for (uint32_t i = 0; i < count; ++i) {
+        const float* box = boxes + ids[i] * stride;
+        uint32_t code = 0;
+        for (int a = 0; a < 3; ++a) {
+            const __m256 meets = _mm256_and_ps(_mm256_cmp_ps(_mm256_broadcast_ss(box + 3 + a), lo[a], _CMP_GE_OQ),
+                                               _mm256_cmp_ps(_mm256_broadcast_ss(box + a), hi[a], _CMP_LE_OQ));
+            const uint32_t m = static_cast<uint32_t>(_mm256_movemask_ps(meets));
+            code |= (m & 15u) << (4 * a) | (m >> 4) << (12 + 4 * a);
+        }
+        codes[i] = code;
+    }
+}
+
 }  // namespace
+
+NearCodesFunction ChooseNearCodesFunction(int width) {
+    return (width == 0 || width == 8) && __builtin_cpu_supports("avx2") ? NearCodesAvx2 : NearCodesScalar;
+}
+
+FilterNearFunction ChooseFilterNearFunction(int width) {
+    return (width == 0 || width == 8) && __builtin_cpu_supports("avx2") ? FilterNearAvx2 : FilterNearScalar;
+}
 
 void OctantsOfBlockers(Blockers* b) {
     for (uint32_t g = 0; g * kCullWidth < b->count; ++g) {

@@ -2,6 +2,9 @@
 
 #include <bit>
 #include <cstring>
+#include <limits>
+#include <tuple>
+#include <vector>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -95,6 +98,77 @@ TEST(LightMeshKernels, BrickAxisBitsAgreeWithTheBoxTestOfEveryCell) {
     }
     EXPECT_GT(meets, 1000u);
     EXPECT_GT(apart, 1000u);
+}
+
+// The cell summaries' brick lists (LightMesh::NearCodes, LightMesh::ComputeSummary): the
+// AVX2 near codes equal BrickAxisBits' for boxes touching the cells' bounds, around them,
+// and with a NaN bound; the filtered lists equal those of the definition, in the list's
+// order, for every length up to three groups of eight and every cell of the brick.
+TEST(LightMeshKernels, BrickListsOfTheVectorPassesEqualTheScalarOnes) {
+    std::mt19937 rng(20261204);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    const NearCodesFunction scalarCodes = ChooseNearCodesFunction(1), wideCodes = ChooseNearCodesFunction(8);
+    const FilterNearFunction scalarFilter = ChooseFilterNearFunction(1), wideFilter = ChooseFilterNearFunction(8);
+    // Boxes laid out as the light mesh's triangle planes: n, d, lo, hi, magnitude.
+    constexpr size_t kStride = 11, kLo = 4;
+    uint64_t touched = 0;
+    for (int brick = 0; brick < 40; ++brick) {
+        BrickAxes reach, cell;
+        const float h = 0.05f + unit(rng), grow = 2 * h * unit(rng);
+        for (int a = 0; a < 3; ++a)
+            for (int p = 0; p < 4; ++p) {
+                cell.lo[a][p] = static_cast<float>(p) * h, cell.hi[a][p] = static_cast<float>(p + 1) * h;
+                reach.lo[a][p] = cell.lo[a][p] - grow, reach.hi[a][p] = cell.hi[a][p] + grow;
+            }
+        const uint32_t count = static_cast<uint32_t>(unit(rng) * 300);
+        std::vector<float> boxes((count + 5) * kStride, 0.0f);
+        std::vector<uint32_t> ids(count);
+        for (uint32_t i = 0; i < count; ++i) {
+            const uint32_t t = (i * 7 + 3) % (count + 5);  // ids out of order, some skipped
+            ids[i] = t;
+            float* box = boxes.data() + t * kStride + kLo;
+            for (int a = 0; a < 3; ++a) {
+                const BrickAxes& axes = unit(rng) < 0.5f ? reach : cell;
+                const int p = static_cast<int>(4 * unit(rng));
+                const float bound = unit(rng) < 0.5f ? axes.lo[a][p] : axes.hi[a][p];  // an exact touch
+                const float x = unit(rng) < 0.4f ? bound : (6 * unit(rng) - 1) * h;
+                const float y = unit(rng) < 0.4f ? bound : (6 * unit(rng) - 1) * h;
+                box[a] = std::min(x, y), box[3 + a] = std::max(x, y);
+                touched += x == bound || y == bound;
+            }
+            if (i % 37 == 5) box[static_cast<int>(6 * unit(rng))] = std::numeric_limits<float>::quiet_NaN();
+        }
+        std::vector<uint32_t> codes(count), wide(count);
+        scalarCodes(reach, cell, boxes.data() + kLo, kStride, ids.data(), count, codes.data());
+        wideCodes(reach, cell, boxes.data() + kLo, kStride, ids.data(), count, wide.data());
+        for (uint32_t i = 0; i < count; ++i) {
+            const float* box = boxes.data() + ids[i] * kStride + kLo;
+            const Vec3 lo(box[0], box[1], box[2]), hi(box[3], box[4], box[5]);
+            ASSERT_EQ(codes[i], BrickAxisBits(reach, lo, hi) | BrickAxisBits(cell, lo, hi) << 12) << "brick " << brick;
+            ASSERT_EQ(wide[i], codes[i]) << "brick " << brick << " triangle " << i;
+        }
+        // Every cell of the brick, over every prefix length up to 24 and the whole list.
+        std::vector<uint32_t> reachA(count + kFilterSlack), cellA(count + kFilterSlack);
+        std::vector<uint32_t> reachB(count + kFilterSlack), cellB(count + kFilterSlack);
+        for (int slot = 0; slot < 64; ++slot) {
+            const uint32_t reachBits = CellBits(slot & 3, (slot >> 2) & 3, slot >> 4), cellBits = reachBits << 12;
+            for (uint32_t n = 0; n <= count; n = n < 24 ? n + 1 : (n == count ? n + 1 : count)) {
+                std::vector<uint32_t> wantReach, wantCell;
+                for (uint32_t i = 0; i < n; ++i) {
+                    if ((codes[i] & reachBits) == reachBits) wantReach.push_back(ids[i]);
+                    if ((codes[i] & (reachBits | cellBits)) == (reachBits | cellBits)) wantCell.push_back(ids[i]);
+                }
+                for (const auto& [filter, r, c] : {std::tuple{scalarFilter, &reachA, &cellA}, std::tuple{wideFilter, &reachB, &cellB}}) {
+                    const uint64_t got = filter(ids.data(), codes.data(), n, reachBits, cellBits, r->data(), c->data());
+                    ASSERT_EQ(got & 0xffffffffu, wantReach.size()) << "brick " << brick << " cell " << slot << " n " << n;
+                    ASSERT_EQ(got >> 32, wantCell.size()) << "brick " << brick << " cell " << slot << " n " << n;
+                    ASSERT_TRUE(std::equal(wantReach.begin(), wantReach.end(), r->begin()));
+                    ASSERT_TRUE(std::equal(wantCell.begin(), wantCell.end(), c->begin()));
+                }
+            }
+        }
+    }
+    EXPECT_GT(touched, 1000u);
 }
 
 // A point's blocker query as FindBlockers makes it: its segments within r of p, its origin
