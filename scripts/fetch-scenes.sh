@@ -24,15 +24,17 @@ fetch() {  # fetch PACKAGE: download and unpack it once
 }
 
 # Sweet Home 3D's Scopia furniture library (sweethome3d-furniture): the garden gazebo
-# ("barnum", like the paper's Gazebo) and the playground climbing frame ("parque").
+# ("barnum", like the paper's Gazebo), the playground climbing frame ("parque") and a
+# Japanese maple (foliage: 198k triangles of leaves and branches).
 fetch sweethome3d-furniture
-if [ ! -f "$models/scopia/barnum/barnum.obj" ] || [ ! -f "$models/scopia/parque/parque.obj" ]; then
+if [ ! -f "$models/scopia/barnum/barnum.obj" ] || [ ! -f "$models/scopia/parque/parque.obj" ] ||
+   [ ! -f "$models/scopia/japaneseMaple/japaneseMaple.obj" ]; then
   python3 - "$pkg/sweethome3d-furniture/usr/share/sweethome3d/furniture/Scopia.sh3f" "$models" <<'PY'
 import sys, zipfile
 archive, out = sys.argv[1], sys.argv[2]
 with zipfile.ZipFile(archive) as z:
     for name in z.namelist():
-        if name.startswith(("scopia/barnum/", "scopia/parque/")) and not name.endswith("/"):
+        if name.startswith(("scopia/barnum/", "scopia/parque/", "scopia/japaneseMaple/")) and not name.endswith("/"):
             z.extract(name, out)
 PY
 fi
@@ -61,6 +63,6 @@ if [ ! -f "$models/land-1/buildings_2.blend" ]; then
 fi
 
 echo "fetch-scenes: models in $models:" >&2
-for f in scopia/barnum/barnum.obj scopia/parque/parque.obj castle/castle.gltf land-1/buildings_2.blend; do
+for f in scopia/barnum/barnum.obj scopia/parque/parque.obj scopia/japaneseMaple/japaneseMaple.obj castle/castle.gltf land-1/buildings_2.blend; do
   if [ -f "$models/$f" ]; then echo "  $f"; else echo "  $f MISSING" >&2; exit 1; fi
 done

@@ -51,8 +51,12 @@ struct RealScene {
     size_t duplicates;     ///< exact duplicate triangles dropped at load
     size_t excluded;       ///< meshes left out by exclude_materials / exclude_names
     /// Lower bound of PSNR(default LMM, RT) at 192×144, CC 100, kI 2: soft shadows stay
-    /// close to hard ones (measured: barnum 37.9, parque 33.8, castle 31.9, garden 31.4 dB).
+    /// close to hard ones (measured: barnum 37.9, parque 33.8, castle 31.9, garden 31.4, maple 32.4 dB).
     double minPsnrVsRt;
+    /// Lower bound of SSIM(default LMM, RT) there: 0.9, but the maple's dappled shadow
+    /// (leaves a few centimetres wide under a sphere of radius 0.47 m) is blurred, as
+    /// the method blurs every edge over 2r (measured 0.896).
+    double minSsimVsRt = 0.9;
 };
 
 void PrintTo(const RealScene& s, std::ostream* os) { *os << s.file; }
@@ -63,6 +67,7 @@ const std::vector<RealScene>& Scenes() {
         {"parque.json", 16008, 4, 0, 0, 30.0},
         {"castle.json", 24614, 4, 0, 0, 29.0},
         {"garden.json", 451102, 6, 6510, 29, 28.0},
+        {"maple.json", 192914, 4, 5494, 0, 30.0, 0.85},
     };
     return scenes;
 }
@@ -195,7 +200,7 @@ TEST_P(RealSceneTest, DefaultLmmIsLeakFreeAndCloseToHardShadows) {
     const ImageMetrics m = CompareImages(lmm, rt);
     std::printf("  %s: PSNR(LMM, RT) %.1f dB, SSIM %.3f\n", GetParam().file.c_str(), m.psnr, m.ssim);
     EXPECT_GE(m.psnr, GetParam().minPsnrVsRt);
-    EXPECT_GE(m.ssim, 0.9);
+    EXPECT_GE(m.ssim, GetParam().minSsimVsRt);
     // Soft shadows move light around shadow edges; they neither add nor remove much of it.
     double sumL = 0, sumR = 0;
     for (size_t i = 0; i < rt.pixels.size(); ++i) {
