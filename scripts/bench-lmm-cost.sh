@@ -6,7 +6,7 @@
 #   2. Нет and СТ with cell summaries (--cell-summaries on), kI 2, on Embree;
 #   3. the garden at 3072x1536, kI 2, on Embree.
 # Needs the real scenes (scripts/fetch-scenes.sh) and a Release build (scripts/build.sh).
-# Writes Markdown and CSV into FOLDER (default docs/bench). About 4 minutes on 2 cores (REPEAT timed runs per cell, default 5).
+# Writes Markdown and CSV into FOLDER (default docs/bench). About 7 minutes on 2 cores (REPEAT timed runs per cell, default 5).
 # Usage: [REPEAT=N] scripts/bench-lmm-cost.sh [FOLDER] [extra bench options, e.g. --threads 2]
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -16,7 +16,7 @@ out="${1:-docs/bench}"
 shift || true
 mkdir -p "$out"
 scenes=(--scene builtin:gazebo --scene scenes/real/castle.json --scene scenes/real/parque.json
-        --scene scenes/real/garden.json)
+        --scene scenes/real/garden.json --scene scenes/real/maple.json)
 for accel in embree grid; do
   "$exe" bench "${scenes[@]}" --size 1024x768 --cc 100,200 --ki 1.2,2,3 --variants none,consensus \
     --accels "$accel" --repeat "${REPEAT:-5}" --markdown "$out/lmm-cost-1024x768-$accel.md" \
