@@ -395,6 +395,7 @@ inline void LightMesh<Word>::ConvertTemplates() {
         ThrowError("light mesh %dx%dx%d: too many nodes for the templates' 32-bit offsets: lower --cc", lattice_.nx,
                    lattice_.ny, lattice_.nz);
     const int cubeSide = maxOffset_ - minOffset_ + 1;
+    cubeSide_ = cubeSide;
     const uint64_t cubeNodes = static_cast<uint64_t>(cubeSide) * cubeSide * cubeSide;
     cubeWords_ = static_cast<uint32_t>(std::min<uint64_t>((cubeNodes + 63) / 64, kCubeWords));
     const bool cubeFits = cubeNodes <= 64 * kCubeWords;
@@ -402,19 +403,17 @@ inline void LightMesh<Word>::ConvertTemplates() {
     auto cubeIndex = [&](const std::array<int8_t, 3>& o) {
         return static_cast<uint64_t>((o[0] - minOffset_) + cubeSide * ((o[1] - minOffset_) + cubeSide * (o[2] - minOffset_)));
     };
-    auto cubeBit = [&](const std::array<int8_t, 3>& o) { return cubeFits ? static_cast<uint16_t>(cubeIndex(o)) : uint16_t(0); };
     auto pack = [&](uint32_t from, uint32_t to) {
         for (uint32_t first = from; first < to; first += 8) {
-            FrontBlock b;
+            FrontBlock b{};
             for (uint32_t k = 0; k < 8; ++k) {
-                const float nan = std::numeric_limits<float>::quiet_NaN();
                 const bool real = first + k < to;
                 const std::array<int8_t, 3> o = real ? t.offsets[first + k] : std::array<int8_t, 3>{};
-                b.ox[k] = real ? o[0] : nan;
-                b.oy[k] = real ? o[1] : nan;
-                b.oz[k] = real ? o[2] : nan;
+                b.ox[k] = o[0];
+                b.oy[k] = o[1];
+                b.oz[k] = o[2];
                 b.linear[k] = static_cast<int32_t>(linear(o[0], o[1], o[2]));
-                b.cube[k] = cubeBit(o);
+                b.lanes |= static_cast<uint8_t>(real ? 1u << k : 0u);
             }
             frontBlocks_.push_back(b);
         }

@@ -623,7 +623,7 @@ class LightMesh final : public LightMeshShadows {
     // The templates again, as FrontBlocks: sub-position s's boundary entries are blocks
     // frontBegin_[s] … frontInner_[s] - 1, its inner entries frontInner_[s] … frontBegin_[s + 1] - 1,
     // each run in the template's order.
-    std::vector<FrontBlock, HugePageAllocator<FrontBlock>> frontBlocks_;  // ~0.5 MiB at kI 2
+    std::vector<FrontBlock, HugePageAllocator<FrontBlock>> frontBlocks_;  // ~0.24 MiB at kI 2
     std::vector<uint32_t> frontBegin_, frontInner_;
     FrontFunction frontMasks_ = nullptr;
     CullFunction cull_ = nullptr;
@@ -635,6 +635,11 @@ class LightMesh final : public LightMeshShadows {
     // (the nodes any of its points may use) has at most kCubeWords·64 nodes.
     bool patches_ = false, patchesFit_ = false;
     uint32_t cubeWords_ = 0;
+    int cubeSide_ = 0;  // nodes along a side of the neighbourhood cube (maxOffset_ - minOffset_ + 1)
+    // Entry k's node's bit in the neighbourhood cube, x fastest (the cell patches' node states).
+    uint32_t CubeBit(const FrontBlock& b, int k) const {
+        return static_cast<uint32_t>((b.ox[k] - minOffset_) + cubeSide_ * ((b.oy[k] - minOffset_) + cubeSide_ * (b.oz[k] - minOffset_)));
+    }
     SumFrontFunction sumFront_ = nullptr;  // for words of 1, 2 or 4 bytes
     static constexpr size_t kPacketLights = 16;  // a node's rays as one packet from this many lights (EvaluateVisibility)
     static constexpr uint64_t kNodePadding = 8;  // words after the last node, for SumFrontWordsAvx2's loads

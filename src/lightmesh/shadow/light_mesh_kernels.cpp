@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include <immintrin.h>
 
@@ -271,6 +272,16 @@ __attribute__((target("avx2"))) int CullSegmentAvx2(const Blockers& b, const Vec
 /// order, then the subtraction (the library is built with -ffp-contract=off), so SSE, AVX2
 /// and a scalar Dot agree bit for bit; what it saves is a scalar loop's unpredictable
 /// branch per entry.
+// Four int8 offsets (from p) as floats, with SSE2 only: each byte spread over a 32-bit
+// lane and shifted back down with its sign.
+inline __m128 FourOffsets(const int8_t* p) {
+    int32_t bytes;
+    std::memcpy(&bytes, p, sizeof(bytes));
+    __m128i v = _mm_cvtsi32_si128(bytes);
+    v = _mm_unpacklo_epi8(v, v);
+    v = _mm_unpacklo_epi16(v, v);
+    return _mm_cvtepi32_ps(_mm_srai_epi32(v, 24));
+}
 void FrontMasksSse(const FrontBlock* blocks, uint32_t count, const Vec3& n, float nfrac, float eps, uint8_t* masks) {
     const __m128 nx = _mm_set1_ps(n.x), ny = _mm_set1_ps(n.y), nz = _mm_set1_ps(n.z);
     const __m128 nf = _mm_set1_ps(nfrac), e = _mm_set1_ps(eps);
@@ -278,29 +289,38 @@ void FrontMasksSse(const FrontBlock* blocks, uint32_t count, const Vec3& n, floa
         int mask = 0;
         for (int half = 0; half < 2; ++half) {
             const int o = 4 * half;
-            __m128 d = _mm_add_ps(_mm_mul_ps(nx, _mm_load_ps(blocks[b].ox + o)), _mm_mul_ps(ny, _mm_load_ps(blocks[b].oy + o)));
-            d = _mm_sub_ps(_mm_add_ps(d, _mm_mul_ps(nz, _mm_load_ps(blocks[b].oz + o))), nf);
+            __m128 d = _mm_add_ps(_mm_mul_ps(nx, FourOffsets(blocks[b].ox + o)), _mm_mul_ps(ny, FourOffsets(blocks[b].oy + o)));
+            d = _mm_sub_ps(_mm_add_ps(d, _mm_mul_ps(nz, FourOffsets(blocks[b].oz + o))), nf);
             mask |= _mm_movemask_ps(_mm_cmpgt_ps(d, e)) << o;
         }
-        masks[b] = static_cast<uint8_t>(mask);
+        masks[b] = static_cast<uint8_t>(mask & blocks[b].lanes);
     }
+}
+// Eight int8 offsets (from p) as floats.
+__attribute__((target("avx2"), always_inline)) inline __m256 EightOffsets(const int8_t* p) {
+    int64_t bytes;
+    std::memcpy(&bytes, p, sizeof(bytes));
+    return _mm256_cvtepi32_ps(_mm256_cvtepi8_epi32(_mm_cvtsi64_si128(bytes)));
 }
 __attribute__((target("avx2"))) void FrontMasksAvx2(const FrontBlock* blocks, uint32_t count, const Vec3& n, float nfrac,
                                                     float eps, uint8_t* masks) {
     const __m256 nx = _mm256_set1_ps(n.x), ny = _mm256_set1_ps(n.y), nz = _mm256_set1_ps(n.z);
     const __m256 nf = _mm256_set1_ps(nfrac), e = _mm256_set1_ps(eps);
     for (uint32_t b = 0; b < count; ++b) {
-        __m256 d = _mm256_add_ps(_mm256_mul_ps(nx, _mm256_load_ps(blocks[b].ox)), _mm256_mul_ps(ny, _mm256_load_ps(blocks[b].oy)));
-        d = _mm256_sub_ps(_mm256_add_ps(d, _mm256_mul_ps(nz, _mm256_load_ps(blocks[b].oz))), nf);
-        masks[b] = static_cast<uint8_t>(_mm256_movemask_ps(_mm256_cmp_ps(d, e, _CMP_GT_OQ)));
+        __m256 d = _mm256_add_ps(_mm256_mul_ps(nx, EightOffsets(blocks[b].ox)), _mm256_mul_ps(ny, EightOffsets(blocks[b].oy)));
+        d = _mm256_sub_ps(_mm256_add_ps(d, _mm256_mul_ps(nz, EightOffsets(blocks[b].oz))), nf);
+        masks[b] = static_cast<uint8_t>(_mm256_movemask_ps(_mm256_cmp_ps(d, e, _CMP_GT_OQ)) & blocks[b].lanes);
     }
 }
 // One lane at a time with Dot() itself: the oracle of the other two (tests).
 void FrontMasksScalar(const FrontBlock* blocks, uint32_t count, const Vec3& n, float nfrac, float eps, uint8_t* masks) {
     for (uint32_t b = 0; b < count; ++b) {
         int mask = 0;
-        for (int k = 0; k < 8; ++k)
-            if (Dot(n, Vec3(blocks[b].ox[k], blocks[b].oy[k], blocks[b].oz[k])) - nfrac > eps) mask |= 1 << k;
+        for (int k = 0; k < 8; ++k) {
+            const Vec3 offset(static_cast<float>(blocks[b].ox[k]), static_cast<float>(blocks[b].oy[k]),
+                              static_cast<float>(blocks[b].oz[k]));
+            if (((blocks[b].lanes >> k) & 1) && Dot(n, offset) - nfrac > eps) mask |= 1 << k;
+        }
         masks[b] = static_cast<uint8_t>(mask);
     }
 }

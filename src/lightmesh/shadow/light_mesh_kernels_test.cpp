@@ -100,6 +100,48 @@ TEST(LightMeshKernels, BrickAxisBitsAgreeWithTheBoxTestOfEveryCell) {
     EXPECT_GT(apart, 1000u);
 }
 
+// The templates' front test from int8 offsets (one cache line per block): the scalar, SSE
+// and AVX2 passes agree bit for bit with the test on float offsets, for offsets over the
+// whole range kI ≤ 16 gives, normals in every direction, and ties at eps; a padding lane
+// (its bit clear in `lanes`, offsets 0) is never in front, even where (0, 0, 0) would be.
+TEST(LightMeshKernels, FrontTestsOfEveryWidthAgreeAndSkipPadding) {
+    std::mt19937 rng(20261205);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    std::uniform_int_distribution<int> offset(-18, 18), lanes(0, 255);
+    const FrontFunction widths[3] = {ChooseFrontFunction(1), ChooseFrontFunction(4), ChooseFrontFunction(8)};
+    std::vector<FrontBlock> blocks(64);
+    uint64_t inFront = 0, padded = 0;
+    for (int round = 0; round < 200; ++round) {
+        for (FrontBlock& b : blocks) {
+            b = FrontBlock{};
+            b.lanes = static_cast<uint8_t>(lanes(rng));
+            for (int k = 0; k < 8; ++k) {
+                b.ox[k] = static_cast<int8_t>(offset(rng)), b.oy[k] = static_cast<int8_t>(offset(rng));
+                b.oz[k] = static_cast<int8_t>(offset(rng));
+                if (!((b.lanes >> k) & 1)) b.ox[k] = b.oy[k] = b.oz[k] = 0;
+            }
+        }
+        Vec3 n(unit(rng), unit(rng), unit(rng));
+        if (round % 4 == 0) n = Vec3(0, 1, 0);  // axis-aligned: exact ties
+        n = Normalize(n);
+        const float nfrac = round % 3 == 0 ? -1.0f : unit(rng), eps = round % 4 == 0 ? 0.0f : 1e-4f;
+        uint8_t masks[3][64];
+        for (int w = 0; w < 3; ++w) widths[w](blocks.data(), 64, n, nfrac, eps, masks[w]);
+        for (size_t b = 0; b < blocks.size(); ++b) {
+            uint8_t want = 0;
+            for (int k = 0; k < 8; ++k) {
+                const Vec3 o(blocks[b].ox[k], blocks[b].oy[k], blocks[b].oz[k]);
+                if (((blocks[b].lanes >> k) & 1) && Dot(n, o) - nfrac > eps) want |= static_cast<uint8_t>(1 << k);
+                if (!((blocks[b].lanes >> k) & 1) && Dot(n, o) - nfrac > eps) ++padded;  // (0,0,0) in front
+            }
+            for (int w = 0; w < 3; ++w) ASSERT_EQ(masks[w][b], want) << "width " << w << " round " << round;
+            inFront += static_cast<uint64_t>(std::popcount(want));
+        }
+    }
+    EXPECT_GT(inFront, 10000u);
+    EXPECT_GT(padded, 100u);  // the padding's exclusion was tested where it matters
+}
+
 // The cell summaries' brick lists (LightMesh::NearCodes, LightMesh::ComputeSummary): the
 // AVX2 near codes equal BrickAxisBits' for boxes touching the cells' bounds, around them,
 // and with a NaN bound; the filtered lists equal those of the definition, in the list's

@@ -200,7 +200,7 @@ inline void LightMesh<Word>::BuildPatch(FrontList& list, int ci, int cj, int ck,
 // when not certain (the caller tests the segment).
 template <typename Word>
 inline bool LightMesh<Word>::PatchSees(FrontList& list, const FrontBlock& b, int k, const Vec3& x) const {
-    const uint32_t bit = b.cube[k], word = bit >> 6;
+    const uint32_t bit = CubeBit(b, k), word = bit >> 6;
     const uint64_t mask = uint64_t(1) << (bit & 63);
     if (list.known[word] & mask) return (list.sees[word] & mask) != 0;
     PatchQuery q;
