@@ -423,12 +423,14 @@ inline void LightMesh<Word>::ConvertTemplates() {
         blocks += (t.boundaryCount[sp] + 7) / 8 + (t.begin[sp + 1] - t.begin[sp] - t.boundaryCount[sp] + 7) / 8;
     frontBlocks_.reserve(blocks);
     for (size_t sp = 0; sp + 1 < t.begin.size(); ++sp) {
-        frontBegin_.push_back(static_cast<uint32_t>(frontBlocks_.size()));
+        FrontRuns runs;
+        runs.begin = static_cast<uint32_t>(frontBlocks_.size());
         pack(t.begin[sp], t.begin[sp] + t.boundaryCount[sp]);
-        frontInner_.push_back(static_cast<uint32_t>(frontBlocks_.size()));
+        runs.inner = static_cast<uint32_t>(frontBlocks_.size());
         pack(t.begin[sp] + t.boundaryCount[sp], t.begin[sp + 1]);
+        runs.end = static_cast<uint32_t>(frontBlocks_.size());
+        frontRuns_.push_back(runs);
     }
-    frontBegin_.push_back(static_cast<uint32_t>(frontBlocks_.size()));
     // The union of all sub-positions' sets: every node a point of a cell may use, in
     // memory order (the cell summaries read them all): marked in the offsets' cube,
     // then read back z, y, x.

@@ -140,7 +140,8 @@ inline bool LightMesh<Word>::TemplateWalk(const ShadingPoint& sp, Word neededMas
     const float nfrac = Dot(sp.n, frac);
     auto node = [&](const FrontBlock& b, int k) { return EntryNode(ci, cj, ck, b, k); };
     // The front test of all of s's entries at once, a bit mask per block of eight.
-    const uint32_t fb = frontBegin_[s], fi = frontInner_[s], fe = frontBegin_[s + 1];
+    const FrontRuns& runs = frontRuns_[s];
+    const uint32_t fb = runs.begin, fi = runs.inner, fe = runs.end;
     Scratch<uint8_t, 256> maskScratch(fe - fb);
     uint8_t* masks = maskScratch.data();
     frontMasks_(frontBlocks_.data() + fb, fe - fb, sp.n, nfrac, frontEps_, masks);
