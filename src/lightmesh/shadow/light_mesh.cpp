@@ -222,6 +222,7 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
         {
             const TriangleMesh& mesh = scene.mesh;
             planes_.resize(mesh.triangles.size());
+            magnitudes_.resize(mesh.triangles.size());
             ParallelFor(size_t(0), planes_.size(), [&](size_t t) {
                 const uint32_t id = static_cast<uint32_t>(t);
                 const Vec3 &a = mesh.Vertex(id, 0), &b = mesh.Vertex(id, 1), &c = mesh.Vertex(id, 2);
@@ -232,7 +233,7 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
                 pl.d = Dot(pl.n, a);
                 pl.lo = Min(a, Min(b, c)) - Vec3(cullMargin_);
                 pl.hi = Max(a, Max(b, c)) + Vec3(cullMargin_);
-                pl.magnitude = std::max({MaxComponent(Abs(a)), MaxComponent(Abs(b)), MaxComponent(Abs(c))});
+                magnitudes_[t] = std::max({MaxComponent(Abs(a)), MaxComponent(Abs(b)), MaxComponent(Abs(c))});
             });
         }
         if (!BinTrianglesByBrick(bricksZ)) {
@@ -240,6 +241,7 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
             summaries_ = false;
             summariesOff_ = true;
             planes_ = {};
+            magnitudes_ = {};
             LogWarning(StringPrintf("%s: light mesh: cell summaries off: the triangles' boxes reach %llu "
                                     "(triangle, brick) pairs, more than the budget of %llu",
                                     scene.name.c_str(), static_cast<unsigned long long>(binPairs_),

@@ -237,7 +237,7 @@ inline auto LightMesh<Word>::ComputeSummary(int ci, int cj, int ck, const Summar
         filterNear_(brick.near, brick.nearCodes, brick.nearCount, inReach, inCell, reachBuffer.get(), trisBuffer.get());
     const std::span<const uint32_t> reach(reachBuffer.get(), counts & 0xffffffffu);
     const std::span<const uint32_t> tris(trisBuffer.get(), counts >> 32);
-    for (const uint32_t t : reach) magnitude = std::max(magnitude, planes_[t].magnitude);
+    for (const uint32_t t : reach) magnitude = std::max(magnitude, magnitudes_[t]);
     c.delta = std::min(planeDelta_, PlaneDelta(magnitude));
     if (variant_.local == LocalVisibility::Consensus) {
         if (reach.size() > kMaxReach) {
@@ -359,6 +359,7 @@ template <typename Word>
 inline uint64_t LightMesh<Word>::SummaryBytes() const {
     std::lock_guard<std::mutex> lock(brickMutex_);
     return bricksUsed_.load() * sizeof(SummaryBrick) + reachBytes_ + planes_.size() * sizeof(TrianglePlane) +
+           magnitudes_.size() * sizeof(float) +
            brickTris_.size() * sizeof(uint32_t) + brickStart_.size() * sizeof(uint64_t) +
            bricksX_ * bricksY_ * sizeof(void*) * ((lattice_.nz + kBrick - 1) / kBrick);
 }
