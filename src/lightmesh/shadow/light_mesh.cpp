@@ -401,10 +401,6 @@ inline void LightMesh<Word>::ConvertTemplates() {
     const uint64_t cubeNodes = static_cast<uint64_t>(cubeSide) * cubeSide * cubeSide;
     cubeWords_ = static_cast<uint32_t>(std::min<uint64_t>((cubeNodes + 63) / 64, kCubeWords));
     const bool cubeFits = cubeNodes <= 64 * kCubeWords;
-    // An offset's place in the cube of all offsets, x fastest.
-    auto cubeIndex = [&](const std::array<int8_t, 3>& o) {
-        return static_cast<uint64_t>((o[0] - minOffset_) + cubeSide * ((o[1] - minOffset_) + cubeSide * (o[2] - minOffset_)));
-    };
     auto pack = [&](uint32_t from, uint32_t to) {
         for (uint32_t first = from; first < to; first += 8) {
             FrontBlock b{};
@@ -438,7 +434,7 @@ inline void LightMesh<Word>::ConvertTemplates() {
     // then read back z, y, x.
     std::vector<std::array<int8_t, 3>> all;
     std::vector<bool> present(cubeNodes);
-    for (const auto& o : t.offsets) present[cubeIndex(o)] = true;
+    for (const auto& o : t.offsets) present[CubeIndex(o[0], o[1], o[2])] = true;
     for (int z = 0, e = 0; z < cubeSide; ++z)
         for (int y = 0; y < cubeSide; ++y)
             for (int x = 0; x < cubeSide; ++x, ++e)

@@ -223,9 +223,10 @@ inline auto LightMesh<Word>::ComputeSummary(int ci, int cj, int ck, const Summar
     // The cell's tolerance: every coordinate its tests compute with lies in the reach box
     // (nodes, points, origins) or is a vertex of a reach triangle (planes, patches).
     float magnitude = std::max(MaxComponent(Abs(reachBox.lo)), MaxComponent(Abs(reachBox.hi)));
-    // (tris: only those in reach, as they were picked from it.) Into buffers kept per
-    // thread and never cleared: zero-filling vectors of a foliage brick's list length (up
-    // to kMaxBrickNear) cost as much as the filter itself.
+    // The reach and the cell's own triangles (those in reach that meet the cell) from the
+    // near codes (kernels::FilterNear), into buffers kept per thread and never cleared:
+    // zero-filling vectors of a foliage brick's list length (up to kMaxBrickNear) cost as
+    // much as the filter itself.
     thread_local std::unique_ptr<uint32_t[]> reachBuffer, trisBuffer;
     thread_local uint32_t bufferRoom = 0;
     if (bufferRoom < brick.nearCount + kFilterSlack) {

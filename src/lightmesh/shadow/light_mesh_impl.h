@@ -640,10 +640,12 @@ class LightMesh final : public LightMeshShadows {
     bool patches_ = false, patchesFit_ = false;
     uint32_t cubeWords_ = 0;
     int cubeSide_ = 0;  // nodes along a side of the neighbourhood cube (maxOffset_ - minOffset_ + 1)
-    // Entry k's node's bit in the neighbourhood cube, x fastest (the cell patches' node states).
-    uint32_t CubeBit(const FrontBlock& b, int k) const {
-        return static_cast<uint32_t>((b.ox[k] - minOffset_) + cubeSide_ * ((b.oy[k] - minOffset_) + cubeSide_ * (b.oz[k] - minOffset_)));
+    // An offset's place in the neighbourhood cube of all offsets, x fastest.
+    uint32_t CubeIndex(int dx, int dy, int dz) const {
+        return static_cast<uint32_t>((dx - minOffset_) + cubeSide_ * ((dy - minOffset_) + cubeSide_ * (dz - minOffset_)));
     }
+    // Entry k's node's bit in the cube (the cell patches' node states).
+    uint32_t CubeBit(const FrontBlock& b, int k) const { return CubeIndex(b.ox[k], b.oy[k], b.oz[k]); }
     SumFrontFunction sumFront_ = nullptr;  // for words of 1, 2 or 4 bytes
     static constexpr size_t kPacketLights = 16;  // a node's rays as one packet from this many lights (EvaluateVisibility)
     static constexpr uint64_t kNodePadding = 8;  // words after the last node, for SumFrontWordsAvx2's loads

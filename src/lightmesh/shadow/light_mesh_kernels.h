@@ -189,18 +189,18 @@ PatchSeesFunction ChoosePatchSeesFunction(int width);
 /// certainly unblocked, -1 undecided (m: the plane margin).
 using CullFunction = int (*)(const Blockers& b, const Vec3& x, const Vec3& o, float m);
 CullFunction ChooseCullFunction(int width);
-/// A cell's lists from its brick's near list (LightMesh::ComputeSummary): of the `count`
-/// ids, in their order, those whose near code has every bit of `reachBits` go to `reach`,
-/// and those with every bit of `reachBits | cellBits` to `cell`. Returns the two counts
-/// packed as reach | cell << 32. Each output needs room for count + kFilterSlack ids (the
-/// vector pass stores whole groups of eight and advances by the ones kept).
-constexpr uint32_t kFilterSlack = 8;
 /// A brick's near codes (LightMesh::NearCodes): for each of the `count` triangles `ids`,
 /// BrickAxisBits(reach, lo, hi) | BrickAxisBits(cell, lo, hi) << 12 of its box, whose lo
 /// corner is the Vec3 at boxes + id·stride floats and hi the next one.
 using NearCodesFunction = void (*)(const BrickAxes& reach, const BrickAxes& cell, const float* boxes, size_t stride,
                                    const uint32_t* ids, uint32_t count, uint32_t* codes);
 NearCodesFunction ChooseNearCodesFunction(int width);
+/// A cell's lists from its brick's near list (LightMesh::ComputeSummary): of the `count`
+/// ids, in their order, those whose near code has every bit of `reachBits` go to `reach`,
+/// and those with every bit of `reachBits | cellBits` to `cell`. Returns the two counts
+/// packed as reach | cell << 32. Each output needs room for count + kFilterSlack ids (the
+/// vector pass stores whole groups of eight and advances by the ones kept).
+constexpr uint32_t kFilterSlack = 8;
 using FilterNearFunction = uint64_t (*)(const uint32_t* ids, const uint32_t* codes, uint32_t count, uint32_t reachBits,
                                         uint32_t cellBits, uint32_t* reach, uint32_t* cell);
 FilterNearFunction ChooseFilterNearFunction(int width);

@@ -151,8 +151,8 @@ TEST(LightMeshKernels, BrickListsOfTheVectorPassesEqualTheScalarOnes) {
     std::uniform_real_distribution<float> unit(0.0f, 1.0f);
     const NearCodesFunction scalarCodes = ChooseNearCodesFunction(1), wideCodes = ChooseNearCodesFunction(8);
     const FilterNearFunction scalarFilter = ChooseFilterNearFunction(1), wideFilter = ChooseFilterNearFunction(8);
-    // Boxes laid out as the light mesh's triangle planes: n, d, lo, hi, magnitude.
-    constexpr size_t kStride = 11, kLo = 4;
+    // Boxes laid out as the light mesh's triangle planes: n, d, lo, hi.
+    constexpr size_t kStride = 10, kLo = 4;
     uint64_t touched = 0;
     for (int brick = 0; brick < 40; ++brick) {
         BrickAxes reach, cell;
