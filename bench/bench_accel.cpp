@@ -54,7 +54,15 @@ struct BenchScene {
     Vec3 light;
     // Seeded ray sets, the same for every back-end.
     std::vector<Ray> cameraRays, shadowRays, shortRays;
+    // The same camera and shadow rays tile by tile (kPacketTile² pixels), for the packet
+    // workloads: packet k is rays [offsets[k], offsets[k + 1]).
+    std::vector<Ray> cameraTileRays, shadowTileRays;
+    std::vector<size_t> cameraTiles, shadowTiles;
 };
+
+// The packet workloads' tiles: 8 × 8 pixels, one 64-ray packet (what a renderer hands
+// IntersectMany for a tile's camera rays, and OccludedMany for their shadow rays).
+constexpr int kPacketTile = 8;
 
 bool FileExists(const std::string& path) {
     struct stat st;
@@ -91,6 +99,23 @@ void MakeRays(BenchScene* s) {
         if (accel->Intersect(r, &hit)) points.push_back(r.At(hit.t));
     }
     for (const Vec3& p : points) s->shadowRays.push_back(Ray{p, s->light - p, 1e-4f, 1.0f});
+    s->cameraTiles.push_back(0);
+    s->shadowTiles.push_back(0);
+    for (int ty = 0; ty < kHeight; ty += kPacketTile)
+        for (int tx = 0; tx < kWidth; tx += kPacketTile) {
+            for (int y = ty; y < std::min(ty + kPacketTile, kHeight); ++y)
+                for (int x = tx; x < std::min(tx + kPacketTile, kWidth); ++x) {
+                    const Ray& r = s->cameraRays[size_t(y) * kWidth + size_t(x)];
+                    s->cameraTileRays.push_back(r);
+                    Hit hit;
+                    if (accel->Intersect(r, &hit)) {
+                        const Vec3 p = r.At(hit.t);
+                        s->shadowTileRays.push_back(Ray{p, s->light - p, 1e-4f, 1.0f});
+                    }
+                }
+            s->cameraTiles.push_back(s->cameraTileRays.size());
+            s->shadowTiles.push_back(s->shadowTileRays.size());
+        }
     for (const Vec3& p : points) {
         const Vec3 node = p + rng.Direction() * (3.0f * h * rng.Uniform(0.05f, 1.0f));
         s->shortRays.push_back(Ray{node, p - node, 0.0f, 0.999f});
@@ -186,9 +211,17 @@ std::vector<std::string> TreePaths(const std::string& flag) {
 // ---------------------------------------------------------------------------------------
 // The benchmarks
 
-enum class Workload { Camera, Shadow, Short };
+// The packet workloads hand a tile's rays to IntersectMany / OccludedMany at once.
+enum class Workload { Camera, Shadow, Short, CameraPackets, ShadowPackets };
 const char* WorkloadName(Workload w) {
-    return w == Workload::Camera ? "camera" : w == Workload::Shadow ? "shadow" : "short";
+    switch (w) {
+        case Workload::Camera: return "camera";
+        case Workload::Shadow: return "shadow";
+        case Workload::Short: return "short";
+        case Workload::CameraPackets: return "camera-packets";
+        case Workload::ShadowPackets: return "shadow-packets";
+    }
+    return "?";
 }
 
 // "grid16" (--grid16) is the grid with gridMaxTrianglesPerCell = 16 instead of the paper's 63:
@@ -210,9 +243,54 @@ const Accelerator& GetAccel(const BenchScene& s, const std::string& name) {
     return *slot;
 }
 
+void RunPackets(benchmark::State& state, const Accelerator& accel, const std::vector<Ray>& rays,
+                const std::vector<size_t>& tiles, bool closest, bool allThreads) {
+    const size_t packets = tiles.size() - 1;
+    auto one = [&](size_t k) -> size_t {
+        const size_t first = tiles[k], n = tiles[k + 1] - first;
+        size_t c = 0;
+        if (closest) {
+            Hit hits[64];
+            accel.IntersectMany(rays.data() + first, n, hits);
+            for (size_t i = 0; i < n; ++i) c += hits[i].prim != UINT32_MAX;
+        } else {
+            bool occluded[64];
+            accel.OccludedMany(rays.data() + first, n, occluded);
+            for (size_t i = 0; i < n; ++i) c += occluded[i];
+        }
+        return c;
+    };
+    size_t hits = 0;
+    for (auto _ : state) {
+        if (allThreads) {
+            std::atomic<size_t> count{0};
+            tbb::parallel_for(tbb::blocked_range<size_t>(0, packets, 4), [&](const tbb::blocked_range<size_t>& r) {
+                size_t c = 0;
+                for (size_t k = r.begin(); k != r.end(); ++k) c += one(k);
+                count += c;
+            });
+            hits = count;
+        } else {
+            size_t c = 0;
+            for (size_t k = 0; k < packets; ++k) c += one(k);
+            hits = c;
+        }
+        benchmark::DoNotOptimize(hits);
+    }
+    state.counters["rays/s"] =
+        benchmark::Counter(double(rays.size()) * double(state.iterations()), benchmark::Counter::kIsRate);
+    state.counters["hit%"] = 100.0 * double(hits) / double(std::max<size_t>(rays.size(), 1));
+}
+
 void RunQueries(benchmark::State& state, const BenchScene& s, const std::string& accelName,
                 Workload w, bool allThreads) {
     const Accelerator& accel = GetAccel(s, accelName);
+    if (w == Workload::CameraPackets || w == Workload::ShadowPackets) {
+        RunPackets(state, accel, w == Workload::CameraPackets ? s.cameraTileRays : s.shadowTileRays,
+                   w == Workload::CameraPackets ? s.cameraTiles : s.shadowTiles, w == Workload::CameraPackets,
+                   allThreads);
+        return;
+    }
     const std::vector<Ray>& all = w == Workload::Camera   ? s.cameraRays
                                   : w == Workload::Shadow ? s.shadowRays
                                                           : s.shortRays;
@@ -267,10 +345,13 @@ void Register(const BenchScene& s, const std::vector<std::string>& accels) {
             ->Unit(benchmark::kMillisecond)
             ->UseRealTime();
     }
-    for (Workload w : {Workload::Camera, Workload::Shadow, Workload::Short})
+    for (Workload w : {Workload::Camera, Workload::Shadow, Workload::Short, Workload::CameraPackets,
+                       Workload::ShadowPackets})
         for (const std::string& a : accels)
             for (bool mt : {false, true}) {
                 if (a == "brute" && (mt || s.mesh.TriangleCount() > 20000)) continue;
+                // Brute force has no packets: its rows would only repeat the single-ray ones.
+                if (a == "brute" && (w == Workload::CameraPackets || w == Workload::ShadowPackets)) continue;
                 const std::string name =
                     s.name + "/" + WorkloadName(w) + "/" + a + (mt ? "/all" : "/1t");
                 auto* b = benchmark::RegisterBenchmark(

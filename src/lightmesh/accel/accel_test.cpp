@@ -532,7 +532,9 @@ TEST(AccelBatch, OccludedManyMatchesOccludedRayByRay) {
                     const bool one = accel->Occluded(batch[k]);
                     differ += one != many[k];
                     blocked += one;
-                    if (batch[k].tMin > batch[k].tMax) EXPECT_FALSE(many[k]) << name;
+                    if (batch[k].tMin > batch[k].tMax) {
+                        EXPECT_FALSE(many[k]) << name;
+                    }
                 }
             }
             EXPECT_GT(blocked, rays / 10) << sceneName << " " << name;
@@ -602,6 +604,80 @@ TEST(AccelBatch, SegmentsInPacketsGetTheAnswersTheyGetAlone) {
             EXPECT_GT(blocked, segments / 20) << sceneName << " " << name;
             EXPECT_LT(blocked, segments - segments / 20) << sceneName << " " << name;
             EXPECT_EQ(differ, 0) << sceneName << " " << name << ": " << differ << " of " << segments;
+        }
+    }
+}
+
+// IntersectMany and OccludedMany on coherent packets (a tile's camera rays, a tile's rays to
+// one point), which the grid traverses together (coherent grid traversal), against
+// Intersect and Occluded ray by ray on the same back-end (and so, by the differential tests
+// above, brute force): hit triangle, t and barycentrics bit for bit. Packets of 1 to 100
+// rays (more than one 64-ray chunk), from outside the box and from inside it, fanned from
+// a point or parallel, some through a triangle's vertices and edges exactly, some with an
+// empty or a short range, spread from a hair to the whole scene (the grid's divergent
+// packets go on ray by ray).
+TEST(AccelBatch, CoherentPacketsGetTheAnswersTheyGetAlone) {
+    for (const char* sceneName : {"sphere", "soup", "heightfield", "box", "onecell", "longthin"}) {
+        const TriangleMesh& mesh = GetScene(sceneName).mesh;
+        const Bounds3 box = mesh.Bounds();
+        const float diag = Length(box.Diagonal());
+        for (const char* name : {"brute", "grid", "grid-sse", "embree"}) {
+            if (std::string(name) == "embree" && !HasEmbree()) continue;
+            const auto accel = MakeAccel(name, mesh);
+            std::mt19937 rng(41);
+            std::uniform_real_distribution<float> u(-0.1f, 1.1f), unit(0.0f, 1.0f), sym(-1.0f, 1.0f);
+            std::uniform_int_distribution<uint32_t> pick(0, static_cast<uint32_t>(mesh.triangles.size() - 1));
+            auto inBox = [&] {
+                const Vec3 d = box.Diagonal();
+                return box.lo + Vec3(u(rng) * d.x, u(rng) * d.y, u(rng) * d.z);
+            };
+            int rays = 0, hitCount = 0, differ = 0, blocked = 0, differOcc = 0;
+            for (int packet = 0; packet < 300; ++packet) {
+                const size_t n = packet % 10 == 9 ? 100 : 1 + static_cast<size_t>((packet * 7) % 64);
+                const uint32_t t = pick(rng);
+                const Vec3 &a = mesh.Vertex(t, 0), &b = mesh.Vertex(t, 1), &c = mesh.Vertex(t, 2);
+                const Vec3 toward = a;
+                // From outside the box (a camera), or from a point inside it.
+                const Vec3 from = packet % 3 == 0 ? inBox()
+                                                  : toward + Normalize(Vec3(sym(rng), sym(rng), sym(rng))) * (diag * (1.0f + unit(rng)));
+                const float spread = diag * std::pow(10.0f, -4.0f + 4.0f * unit(rng));
+                const bool parallel = packet % 5 == 4;
+                const Vec3 dir = toward - from;
+                std::vector<Ray> batch(n);
+                for (size_t k = 0; k < n; ++k) {
+                    Vec3 target = toward + Vec3(sym(rng), sym(rng), sym(rng)) * spread;
+                    if (k % 6 == 1) target = k % 12 == 1 ? b : c;                 // a vertex
+                    if (k % 6 == 2) target = a + (b - a) * unit(rng);              // an edge
+                    if (k % 6 == 3) target = a + (b - a) * 0.5f + (c - a) * 0.25f;  // a face
+                    Ray& r = batch[k];
+                    if (parallel)
+                        r = Ray{target - dir, dir, 0.0f, Infinity};
+                    else
+                        r = Ray{from, target - from, 0.0f, Infinity};
+                    if (packet % 4 == 1) r.tMax = 1.0f - 1e-5f;                      // ends before the target
+                    if (packet % 4 == 2) r.tMax = 1.0f + 1e-5f;                      // just beyond it
+                    if (packet % 7 == 3 && k == n / 2) r.tMin = 2.0f, r.tMax = 1.0f;  // an empty range
+                }
+                std::vector<Hit> many(n);
+                accel->IntersectMany(batch.data(), n, many.data());
+                std::unique_ptr<bool[]> occ(new bool[n]);
+                accel->OccludedMany(batch.data(), n, occ.get());
+                for (size_t k = 0; k < n; ++k, ++rays) {
+                    Hit one;
+                    const bool found = accel->Intersect(batch[k], &one);
+                    hitCount += found;
+                    differ += found != (many[k].prim != UINT32_MAX) ||
+                              (found && (one.prim != many[k].prim || one.t != many[k].t || one.b1 != many[k].b1 ||
+                                         one.b2 != many[k].b2));
+                    const bool alone = accel->Occluded(batch[k]);
+                    blocked += alone;
+                    differOcc += alone != occ[k];
+                }
+            }
+            EXPECT_GT(hitCount, rays / 10) << sceneName << " " << name;
+            EXPECT_LT(hitCount, rays - rays / 20) << sceneName << " " << name;
+            EXPECT_EQ(differ, 0) << sceneName << " " << name << ": " << differ << " of " << rays;
+            EXPECT_EQ(differOcc, 0) << sceneName << " " << name << ": " << differOcc << " of " << rays;
         }
     }
 }

@@ -11,6 +11,13 @@
 
 namespace lm {
 
+void Accelerator::IntersectMany(const Ray* rays, size_t count, Hit* hits) const {
+    for (size_t i = 0; i < count; ++i) {
+        hits[i] = Hit{};
+        Intersect(rays[i], &hits[i]);
+    }
+}
+
 void Accelerator::OccludedMany(const Ray* rays, size_t count, bool* occluded) const {
     for (size_t i = 0; i < count; ++i) occluded[i] = Occluded(rays[i]);
 }

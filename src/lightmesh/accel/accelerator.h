@@ -40,12 +40,19 @@ class Accelerator {
     /// True if any triangle is hit (shadow rays and local-visibility segments).
     virtual bool Occluded(const Ray& ray) const = 0;
 
+    /// Intersect for each of `count` rays, into hits[0 … count-1]; a ray without a hit gets
+    /// Hit{} (t = ∞, prim = UINT32_MAX). For coherent rays (a tile's camera rays), which a
+    /// back-end may trace as a packet: each ray must get the hit Intersect gives it, whatever
+    /// its companions (AccelBatch tests). The default, which brute force keeps, is Intersect
+    /// ray by ray.
+    virtual void IntersectMany(const Ray* rays, size_t count, Hit* hits) const;
+
     /// Occluded for each of `count` rays, into occluded[0 … count-1]: for a few rays at
     /// once that share an end or a target (a point's rays to a light's disc, the light
     /// mesh's segments from nodes to a point), which a back-end may trace as a packet. Each
     /// ray must get the answer Occluded gives it, whatever its companions
-    /// (AccelBatch tests hold every back-end to it). The default, which brute force and
-    /// the grid keep, is Occluded ray by ray.
+    /// (AccelBatch tests hold every back-end to it). The default, which brute force keeps,
+    /// is Occluded ray by ray.
     virtual void OccludedMany(const Ray* rays, size_t count, bool* occluded) const;
 
     /// The number of surface crossings along the ray: each triangle hit counts once, and

@@ -287,7 +287,49 @@ void OccludedPacket(RTCScene scene, const Ray* rays, size_t count, bool* occlude
     for (size_t k = 0; k < count; ++k) occluded[k] = packet.tfar[k] < 0;  // -inf where hit
 }
 
+
+// Closest hits of up to N rays as one packet (RTCRayHit4/8/16), into hits[0 … count-1].
+template <int N, typename PacketHit, typename Trace>
+void IntersectPacket(RTCScene scene, const Ray* rays, size_t count, Hit* hits, Trace trace) {
+    alignas(64) int valid[N];
+    alignas(64) PacketHit packet;
+    float shift[N];
+    for (int k = 0; k < N; ++k) {
+        valid[k] = k < static_cast<int>(count) && SetLane(&packet.ray, k, rays[k]) ? -1 : 0;
+        shift[k] = k < static_cast<int>(count) && rays[k].tMin < 0 ? rays[k].tMin : 0.0f;
+        packet.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+        packet.hit.primID[k] = RTC_INVALID_GEOMETRY_ID;
+    }
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    trace(valid, scene, &context, &packet);
+    for (size_t k = 0; k < count; ++k)
+        hits[k] = valid[k] && packet.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID
+                      ? Hit{packet.ray.tfar[k] + shift[k], packet.hit.primID[k], packet.hit.u[k], packet.hit.v[k]}
+                      : Hit{};
+}
 }  // namespace
+
+void EmbreeAccel::IntersectMany(const Ray* rays, size_t count, Hit* hits) const {
+    if (!impl_->packets) {
+        Accelerator::IntersectMany(rays, count, hits);
+        return;
+    }
+    for (size_t first = 0; first < count;) {
+        const size_t n = std::min<size_t>(count - first, impl_->packets16 ? 16 : 8);
+        if (n > 8) {
+            IntersectPacket<16, RTCRayHit16>(impl_->scene, rays + first, n, hits + first, rtcIntersect16);
+        } else if (n == 1) {
+            hits[first] = Hit{};
+            Intersect(rays[first], &hits[first]);
+        } else if (n <= 4) {
+            IntersectPacket<4, RTCRayHit4>(impl_->scene, rays + first, n, hits + first, rtcIntersect4);
+        } else {
+            IntersectPacket<8, RTCRayHit8>(impl_->scene, rays + first, n, hits + first, rtcIntersect8);
+        }
+        first += n;
+    }
+}
 
 void EmbreeAccel::OccludedMany(const Ray* rays, size_t count, bool* occluded) const {
     if (!impl_->packets) {

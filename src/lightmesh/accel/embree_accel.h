@@ -40,6 +40,7 @@ class EmbreeAccel final : public Accelerator {
     /// (the Plücker test's expressions, instantiated for the packet's width), and
     /// AccelBatch.SegmentsInPacketsGetTheAnswersTheyGetAlone finds them equal on rays that
     /// end on vertices, edges and faces.
+    void IntersectMany(const Ray* rays, size_t count, Hit* hits) const override;
     void OccludedMany(const Ray* rays, size_t count, bool* occluded) const override;
     int CountCrossings(const Ray& ray) const override;
     AccelFigures Figures() const override;

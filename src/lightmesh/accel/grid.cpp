@@ -4,6 +4,9 @@
 #include "lightmesh/accel/grid_internal.h"
 
 #include <algorithm>
+#include <climits>
+#include <cmath>
+#include <new>
 #include <utility>
 #include <vector>
 
@@ -29,6 +32,37 @@ namespace {
 // included, are brute force's bit for bit, and a triangle tested in several cells gets the
 // same answer each time (no mailbox is needed: a repeat costs one SIMD lane).
 
+// One bit per lane of a W-lane mask.
+template <int W>
+[[gnu::always_inline]] inline uint32_t LaneBits(typename SimdVectors<W>::I m);
+template <>
+[[gnu::always_inline]] inline uint32_t LaneBits<4>(SimdVectors<4>::I m) {
+#if defined(__x86_64__) || defined(__i386__)
+    return static_cast<uint32_t>(_mm_movemask_ps(reinterpret_cast<__m128>(m)));
+#else
+    return uint32_t(m[0] != 0) | uint32_t(m[1] != 0) << 1 | uint32_t(m[2] != 0) << 2 | uint32_t(m[3] != 0) << 3;
+#endif
+}
+#if defined(__x86_64__) || defined(__i386__)
+template <>
+[[gnu::always_inline]] __attribute__((target("avx2"))) inline uint32_t LaneBits<8>(SimdVectors<8>::I m) {
+    return static_cast<uint32_t>(_mm256_movemask_ps(reinterpret_cast<__m256>(m)));
+}
+#endif
+
+// Whether any lane of a W-lane mask is set, in generic vector code (so that it inlines into
+// the AVX2 filter without a target attribute of its own).
+[[gnu::always_inline]] inline bool AnyLane(SimdVectors<4>::I m) {
+    typedef long long Halves __attribute__((vector_size(16)));
+    const Halves x = reinterpret_cast<Halves>(m);
+    return (x[0] | x[1]) != 0;
+}
+[[gnu::always_inline]] inline bool AnyLane(SimdVectors<8>::I m) {
+    typedef long long Quarters __attribute__((vector_size(32)));
+    const Quarters x = reinterpret_cast<Quarters>(m);
+    return (x[0] | x[1] | x[2] | x[3]) != 0;
+}
+
 // The ray's constants of the filter, broadcast to W lanes.
 template <int W>
 struct FilterRay {
@@ -48,13 +82,16 @@ struct FilterRay {
     }
 };
 
-// Lanes h … h+W-1 of a block: all ones where IntersectPrepared may report a hit. A lane
-// without an exactly zero edge function is decided here with the scalar test's own
-// operations (edge signs, det, t and its range), so it is set exactly when that test hits;
-// a lane with a zero edge function (the tie-breaks, in double) is always set.
+// Lanes h … h+W-1 of a block against the ray. A lane without an exactly zero edge function
+// is decided here with the scalar test's own operations (edge signs, det, t and its
+// range): all ones in *hits exactly where IntersectPrepared hits, with its t in *t. A lane
+// with a zero edge function (the tie-breaks, in double) is all ones in *ties, left to the
+// scalar test. Returns false, without computing det and t, when no lane can hit (most
+// blocks a ray meets).
 template <int W>
-[[gnu::always_inline]] inline void FilterLanes(const NestedGridAccel::TriBlock& block, int h, const FilterRay<W>& r,
-                                               typename SimdVectors<W>::I* lanes) {
+[[gnu::always_inline]] inline bool FilterLanes(const NestedGridAccel::TriBlock& block, int h, const FilterRay<W>& r,
+                                               typename SimdVectors<W>::I* hits, typename SimdVectors<W>::I* ties,
+                                               typename SimdVectors<W>::F* t) {
     using VF = typename SimdVectors<W>::F;
     using VI = typename SimdVectors<W>::I;
     const VF zero = {};
@@ -68,6 +105,13 @@ template <int W>
     const VI neg = (cu < zero) | (cv < zero) | (cw < zero);
     const VI pos = (cu > zero) | (cv > zero) | (cw > zero);
     const VI zeroEdge = (cu == zero) | (cv == zero) | (cw == zero);
+    const VI inside = ~(neg & pos) & ~zeroEdge;
+    *ties = zeroEdge;
+    if (!AnyLane(inside)) {
+        *hits = VI{};
+        *t = zero;
+        return AnyLane(zeroEdge);
+    }
     // As IntersectPrepared without a zero edge: d0 = u + v + w, sign = d0 > 0 ? 1 : -1,
     // (u, v, w) ·= sign, det = u + v + w > 0, t = (u·az + v·bz + w·cz) / det in range.
     const VF d0 = cu + cv + cw;
@@ -77,50 +121,56 @@ template <int W>
     const VF u = cu * sign, v = cv * sign, w = cw * sign;
     const VF det = u + v + w;
     const VF az = r.sz * aZ, bz = r.sz * bZ, cz = r.sz * cZ;
-    const VF t = (u * az + v * bz + w * cz) / det;
-    const VI hit = ~(neg & pos) & (d0 != zero) & (det > zero) & (t > r.tMin) & (t < r.tMax);
-    *lanes = zeroEdge | hit;
+    *t = (u * az + v * bz + w * cz) / det;
+    *hits = inside & (d0 != zero) & (det > zero) & (*t > r.tMin) & (*t < r.tMax);
+    return true;
 }
 
 }  // namespace
 
 namespace grid_detail {
 
-uint64_t FilterBlocks4(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray) {
+uint64_t FilterBlocks4(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
+                       float* t, uint64_t* ties) {
+    *ties = 0;
     if (!ray.valid) return 0;
     const FilterRay<4> r(ray);
-    uint64_t mask = 0;
+    uint64_t hitBits = 0, tieBits = 0;
     for (uint32_t b = 0; b < count; ++b)
         for (int h = 0; h < 8; h += 4) {
-            SimdVectors<4>::I lanes;
-            FilterLanes<4>(blocks[b], h, r, &lanes);
-#if defined(__x86_64__) || defined(__i386__)
-            const uint64_t bits = static_cast<uint32_t>(_mm_movemask_ps(reinterpret_cast<__m128>(lanes)));
-#else
-            uint64_t bits = 0;
-            for (int k = 0; k < 4; ++k) bits |= uint64_t(lanes[k] != 0) << k;
-#endif
-            mask |= bits << (8 * b + h);
+            SimdVectors<4>::I hits, tie;
+            SimdVectors<4>::F tv;
+            if (!FilterLanes<4>(blocks[b], h, r, &hits, &tie, &tv)) continue;
+            *reinterpret_cast<SimdVectors<4>::F*>(t + 8 * b + h) = tv;
+            hitBits |= uint64_t(LaneBits<4>(hits)) << (8 * b + h);
+            tieBits |= uint64_t(LaneBits<4>(tie)) << (8 * b + h);
         }
-    return mask;
+    *ties = tieBits;
+    return hitBits;
 }
 #if defined(__x86_64__) || defined(__i386__)
 __attribute__((target("avx2"))) uint64_t FilterBlocks8(const NestedGridAccel::TriBlock* blocks, uint32_t count,
-                                                       const detail::PreparedRay& ray) {
+                                                       const detail::PreparedRay& ray, float* t, uint64_t* ties) {
+    *ties = 0;
     if (!ray.valid) return 0;
     const FilterRay<8> r(ray);
-    uint64_t mask = 0;
+    uint64_t hitBits = 0, tieBits = 0;
     for (uint32_t b = 0; b < count; ++b) {
-        SimdVectors<8>::I lanes;
-        FilterLanes<8>(blocks[b], 0, r, &lanes);
-        mask |= uint64_t(static_cast<uint32_t>(_mm256_movemask_ps(reinterpret_cast<__m256>(lanes)))) << (8 * b);
+        SimdVectors<8>::I hits, tie;
+        SimdVectors<8>::F tv;
+        if (!FilterLanes<8>(blocks[b], 0, r, &hits, &tie, &tv)) continue;
+        *reinterpret_cast<SimdVectors<8>::F*>(t + 8 * b) = tv;
+        hitBits |= uint64_t(LaneBits<8>(hits)) << (8 * b);
+        tieBits |= uint64_t(LaneBits<8>(tie)) << (8 * b);
     }
-    return mask;
+    *ties = tieBits;
+    return hitBits;
 }
 bool HasAvx2() { return __builtin_cpu_supports("avx2"); }
 #else
-uint64_t FilterBlocks8(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray) {
-    return FilterBlocks4(blocks, count, ray);
+uint64_t FilterBlocks8(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
+                       float* t, uint64_t* ties) {
+    return FilterBlocks4(blocks, count, ray, t, ties);
 }
 bool HasAvx2() { return false; }
 #endif
@@ -138,10 +188,13 @@ struct CellSpan {
     float tCellExit;
 };
 
-// Calls test(id, hit) for each triangle of the cell the ray hits (IntersectPrepared's
-// answer on the block's copy of its vertices), in the cell's order, until test returns
-// true (then returns true).
-template <typename Test>
+// Calls test(id, hit) for triangles of the cell the ray hits (IntersectPrepared's answer on
+// the block's copy of its vertices), in the cell's order, until test returns true (then
+// returns true). With kNearestOnly, of the hits the filter decides alone (no tie-break)
+// in one call only the nearest (the lowest id at equal t) is handed on: a closest-hit
+// query keeps no other. Hits the filter decided carry only t (b1, b2 are not computed)
+// unless kNearestOnly, which runs the scalar test on its one hit for them.
+template <bool kNearestOnly, typename Test>
 [[gnu::always_inline]] inline bool ForEachHit(const CellSpan& c, const detail::PreparedRay& ray, Test&& test) {
     // The blocks that hold the cell's lanes, up to 8 (64 lanes) per filter call; lanes of
     // the neighbouring cells that share the first and last block are masked off.
@@ -149,18 +202,40 @@ template <typename Test>
     for (uint64_t b0 = begin / 8; b0 * 8 < end; b0 += 8) {
         const uint64_t base = b0 * 8, stop = std::min(end, base + 64);
         const NestedGridAccel::TriBlock* blocks = c.blocks + b0;
-        uint64_t mask = c.filter(blocks, static_cast<uint32_t>((stop - base + 7) / 8), ray);
+        alignas(32) float t[64];
+        uint64_t ties;
+        uint64_t hits = c.filter(blocks, static_cast<uint32_t>((stop - base + 7) / 8), ray, t, &ties);
         const uint64_t lo = begin > base ? begin - base : 0, hi = stop - base;
-        mask &= (hi == 64 ? ~uint64_t(0) : (uint64_t(1) << hi) - 1) & ~((uint64_t(1) << lo) - 1);
-        while (mask) {
-            const uint32_t k = static_cast<uint32_t>(__builtin_ctzll(mask));
-            mask &= mask - 1;
+        const uint64_t own = (hi == 64 ? ~uint64_t(0) : (uint64_t(1) << hi) - 1) & ~((uint64_t(1) << lo) - 1);
+        hits &= own;
+        ties &= own;
+        auto scalar = [&](uint32_t k) {
             const NestedGridAccel::TriBlock& block = blocks[k / 8];
             float v[9];
             for (int row = 0; row < 9; ++row) v[row] = block.v[row][k % 8];
             TriangleHit th;
-            if (detail::IntersectPrepared(ray, v, &th) && test(block.id[k % 8], th)) return true;
+            return detail::IntersectPrepared(ray, v, &th) && test(block.id[k % 8], th);
+        };
+        if constexpr (kNearestOnly) {
+            if (hits) {
+                // Lanes are in id order, so the first of equal t has the lowest id.
+                uint32_t nearest = static_cast<uint32_t>(__builtin_ctzll(hits));
+                for (uint64_t m = hits & (hits - 1); m; m &= m - 1) {
+                    const uint32_t k = static_cast<uint32_t>(__builtin_ctzll(m));
+                    if (t[k] < t[nearest]) nearest = k;
+                }
+                if (scalar(nearest)) return true;
+            }
+        } else {
+            for (; hits; hits &= hits - 1) {
+                const uint32_t k = static_cast<uint32_t>(__builtin_ctzll(hits));
+                TriangleHit th;
+                th.t = t[k];
+                if (test(blocks[k / 8].id[k % 8], th)) return true;
+            }
         }
+        for (; ties; ties &= ties - 1)
+            if (scalar(static_cast<uint32_t>(__builtin_ctzll(ties)))) return true;
     }
     return false;
 }
@@ -173,20 +248,32 @@ struct ClosestQuery {
     Hit best;
     bool found = false;
 
+    static constexpr bool kClosest = true;
+
+    // A hit of triangle `id` (IntersectPrepared's answer for this ray).
+    void Offer(uint32_t id, float t, float b1, float b2) {
+        // ray.tMax is just above the best t, so equal-t hits arrive here too: brute force
+        // keeps the lowest primitive id among them, and so do we.
+        if (found && t == best.t && id > best.prim) return;
+        best = Hit{t, id, b1, b2};
+        found = true;
+        ray.tMax = NextFloatUp(t);
+    }
     bool Cell(const CellSpan& c) {
-        ForEachHit(c, ray, [&](uint32_t id, const TriangleHit& th) {
-            // ray.tMax is just above the best t, so equal-t hits arrive here too: brute
-            // force keeps the lowest primitive id among them, and so do we.
-            if (found && th.t == best.t && id > best.prim) return false;
-            best = Hit{th.t, id, th.b1, th.b2};
-            found = true;
-            ray.tMax = NextFloatUp(th.t);
+        ForEachHit<true>(c, ray, [&](uint32_t id, const TriangleHit& th) {
+            Offer(id, th.t, th.b1, th.b2);
             return false;
         });
         // Every triangle that could be hit before the ray leaves this cell overlaps this
         // cell (or an earlier one), so a hit within the cell is final.
         return found && best.t <= c.tCellExit;
     }
+    // For packets: the farthest t a hit could still improve on, and whether the ray is done
+    // whatever it meets later.
+    float Cap() const { return found ? best.t : Infinity; }
+    bool Finished() const { return false; }
+    // The id a hit at t == Cap() must be below to win.
+    int CapId() const { return found ? int(best.prim) : INT32_MAX; }
 };
 
 struct AnyQuery {
@@ -195,9 +282,14 @@ struct AnyQuery {
     bool found = false;
 
     bool Cell(const CellSpan& c) {
-        found = ForEachHit(c, ray, [](uint32_t, const TriangleHit&) { return true; });
+        found = ForEachHit<false>(c, ray, [](uint32_t, const TriangleHit&) { return true; });
         return found;
     }
+    static constexpr bool kClosest = false;
+
+    float Cap() const { return found ? -Infinity : Infinity; }
+    bool Finished() const { return found; }
+    int CapId() const { return INT32_MAX; }
 };
 
 struct CountQuery {
@@ -218,7 +310,7 @@ struct CountQuery {
         return std::find(overflow.begin(), overflow.end(), id) != overflow.end();
     }
     bool Cell(const CellSpan& c) {
-        ForEachHit(c, ray, [&](uint32_t id, const TriangleHit&) {
+        ForEachHit<false>(c, ray, [&](uint32_t id, const TriangleHit&) {
             if (Counted(id)) return false;
             if (count < kLocal)
                 local[count] = id;
@@ -329,30 +421,229 @@ bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD,
     }
 }
 
-template <typename Query>
-void NestedGridAccel::Traverse(const Ray& ray, Query& query) const {
-    // Clip [tMin, tMax] to the box; a zero direction component cannot cross that axis'
-    // slabs, so it only has to start between them (and 0 · ∞ never happens).
-    float t0 = ray.tMin, t1 = ray.tMax;
-    Vec3 invD;
+namespace {
+
+// Clips the ray's (tMin, tMax) to the box into [*t0, *t1], with 1/d per axis in *invD (∞
+// where d is 0: such an axis cannot be crossed, so the ray only has to start between its
+// slabs, and 0 · ∞ never happens). False if the ray misses the box or does not move.
+bool ClipToBox(const Ray& ray, const Bounds3& box, Vec3* invD, float* t0, float* t1) {
+    float lo = ray.tMin, hi = ray.tMax;
     bool moves = false;
     for (int a = 0; a < 3; ++a) {
         const float d = ray.d[a];
         if (d == 0) {
-            if (!(ray.o[a] >= box_.lo[a] && ray.o[a] <= box_.hi[a])) return;
-            invD[a] = Infinity;
+            if (!(ray.o[a] >= box.lo[a] && ray.o[a] <= box.hi[a])) return false;
+            (*invD)[a] = Infinity;
             continue;
         }
         moves = true;
-        invD[a] = 1.0f / d;
-        float tn = (box_.lo[a] - ray.o[a]) * invD[a];
-        float tf = (box_.hi[a] - ray.o[a]) * invD[a];
+        (*invD)[a] = 1.0f / d;
+        float tn = (box.lo[a] - ray.o[a]) * (*invD)[a];
+        float tf = (box.hi[a] - ray.o[a]) * (*invD)[a];
         if (tn > tf) std::swap(tn, tf);
-        t0 = std::max(t0, tn);
-        t1 = std::min(t1, tf);
+        lo = std::max(lo, tn);
+        hi = std::min(hi, tf);
     }
-    if (!moves || !(t0 <= t1)) return;
-    Walk(0, ray, invD, t0, t1, query);
+    *t0 = lo;
+    *t1 = hi;
+    return moves && lo <= hi;
+}
+
+}  // namespace
+
+template <typename Query>
+void NestedGridAccel::Traverse(const Ray& ray, Query& query) const {
+    Vec3 invD;
+    float t0, t1;
+    if (ClipToBox(ray, box_, &invD, &t0, &t1)) Walk(0, ray, invD, t0, t1, query);
+}
+
+// ---------------------------------------------------------------------------------------
+// Packets: coherent grid traversal (Wald, Ize, Kensler, Knoll & Parker, "Ray Tracing
+// Animated Scenes using Coherent Grid Traversal", SIGGRAPH 2006) on the nested grid.
+//
+// The rays of a packet share the sign of their direction along one axis K. A level is
+// walked slice by slice along K (a slice: the cells with one K index). In a slice each
+// ray's stretch [a, b] covers a rectangle of cells, padded by how far rounding may put a
+// computed point; the packet visits the union of the rectangles once, and hands each
+// occupied cell to the rays whose rectangle holds it (a sub-grid is walked the same way
+// for those rays). So a ray tests every cell its own walk would, and perhaps a few more,
+// with the same exact triangle test and tie rule. A ray is finished when its best hit lies
+// before the next slice's entry plane moved back by the padding: every triangle through a
+// point before that plane overlaps a cell of a slice already visited, one in the ray's
+// rectangle there. Each ray therefore ends with the answer its own walk gives.
+
+struct NestedGridAccel::PacketLanes {
+    static constexpr int kMax = kPacketSize;
+    int width = 0;           // lanes the vector loops run over (a multiple of 8)
+    int K = 0, U = 1, V = 2;  // the slicing axis and the other two
+    int s = 1;               // the rays' direction along K
+    float pad = 0;           // world units: how far rounding may put a computed point
+    uint64_t live = 0;       // lanes still walking the top level
+    alignas(32) float oK[kMax], oU[kMax], oV[kMax], dK[kMax], dU[kMax], dV[kMax], invK[kMax];
+    alignas(32) float t0[kMax], t1[kMax];  // each ray's range clipped to the box
+    alignas(32) float cap[kMax];           // Query::Cap(): hits beyond it cannot win
+    const Ray* ray[kMax];
+    Vec3 invD[kMax];
+    // The watertight test's frame (PreparedRay's axes) most lanes share, the lanes that
+    // share it, and their rays in it: a leaf cell tests one triangle against W of them at
+    // once (PacketLeaf in grid_packet_walk.inc).
+    int fkx = 0, fky = 1, fkz = 2;
+    uint64_t frameLanes = 0;
+    alignas(32) float fox[kMax], foy[kMax], foz[kMax], fsx[kMax], fsy[kMax], fsz[kMax], ftMin[kMax], ftMax[kMax];
+    alignas(32) int capId[kMax];  // Query::CapId()
+};
+
+namespace {
+
+// One slice of one level as the packet's rays cross it: each ray's stretch [a, b] and the
+// cells (u0 … u1) × (v0 … v1) it may touch; an empty range for rays not in the slice.
+struct SliceLanes {
+    alignas(32) float a[NestedGridAccel::kPacketSize], b[NestedGridAccel::kPacketSize];
+    alignas(32) int u0[NestedGridAccel::kPacketSize], u1[NestedGridAccel::kPacketSize];
+    alignas(32) int v0[NestedGridAccel::kPacketSize], v1[NestedGridAccel::kPacketSize];
+};
+
+// Whether the rays' directions lie within a narrow cone (cosine to their mean direction at
+// least kCoherentCos): only then does a packet's footprint stay a few cells wide. The light
+// mesh's segments to a point from around it, and a point's rays to several lights, are
+// not; a tile's camera rays, or its shadow rays to one light, mostly are.
+constexpr float kCoherentCos = 0.9f;
+bool Coherent(const Ray* rays, size_t count, Vec3* mean) {
+    Vec3 sum(0, 0, 0);
+    for (size_t i = 0; i < count; ++i) {
+        const float len2 = LengthSquared(rays[i].d);
+        if (!(len2 > 0 && len2 < Infinity)) return false;
+        sum += rays[i].d / std::sqrt(len2);
+    }
+    const float len = Length(sum);
+    if (!(len > 0)) return false;
+    *mean = sum / len;
+    for (size_t i = 0; i < count; ++i)
+        if (!(Dot(rays[i].d, *mean) >= kCoherentCos * Length(rays[i].d))) return false;
+    return true;
+}
+
+}  // namespace
+
+template <typename Query>
+void NestedGridAccel::PacketWalk(uint32_t nodeIndex, PacketLanes& p, uint64_t lanes, const float* tLo,
+                                 const float* tHi, Query* q) const {
+#if defined(__x86_64__) || defined(__i386__)
+    if (simdWidth_ == 8) {
+        PacketWalkLanes8(nodeIndex, p, lanes, tLo, tHi, q);
+        return;
+    }
+#endif
+    PacketWalkLanes4(nodeIndex, p, lanes, tLo, tHi, q);
+}
+
+// The packet's walk of one level, 4 lanes at a time (SSE, the x86-64 baseline) and 8 (AVX2,
+// compiled for it here and chosen at run time): one body, grid_packet_walk.inc.
+#define LM_PACKET_LANES 4
+#define LM_PACKET_WALK_LANES PacketWalkLanes4
+#define LM_PACKET_LEAF PacketLeaf4
+#include "lightmesh/accel/grid_packet_walk.inc"
+#undef LM_PACKET_LANES
+#undef LM_PACKET_WALK_LANES
+#undef LM_PACKET_LEAF
+#if defined(__x86_64__) || defined(__i386__)
+#pragma GCC push_options
+#pragma GCC target("avx2")
+#define LM_PACKET_LANES 8
+#define LM_PACKET_WALK_LANES PacketWalkLanes8
+#define LM_PACKET_LEAF PacketLeaf8
+#include "lightmesh/accel/grid_packet_walk.inc"
+#undef LM_PACKET_LANES
+#undef LM_PACKET_WALK_LANES
+#undef LM_PACKET_LEAF
+#pragma GCC pop_options
+#endif
+
+template <typename Query>
+void NestedGridAccel::TraceMany(const Ray* rays, size_t count, Query* q) const {
+    Vec3 mean;
+    if (count < 4 || !Coherent(rays, count, &mean)) {
+        for (size_t i = 0; i < count; ++i) Traverse(rays[i], q[i]);
+        return;
+    }
+    // The slicing axis: the mean direction's largest; Coherent's cone keeps every ray's
+    // component along it of the mean's sign and away from zero.
+    const int K = MaxDimension(Abs(mean));
+    float boxAbs = 0;
+    for (int a = 0; a < 3; ++a) boxAbs = std::max({boxAbs, std::abs(box_.lo[a]), std::abs(box_.hi[a])});
+    for (size_t first = 0; first < count; first += kPacketSize) {
+        const int n = int(std::min<size_t>(count - first, kPacketSize));
+        const Ray* r = rays + first;
+        Query* qq = q + first;
+        PacketLanes p;
+        p.K = K;
+        p.U = K == 0 ? 1 : 0;
+        p.V = K == 2 ? 1 : 2;
+        p.s = mean[K] > 0 ? 1 : -1;
+        p.width = (n + 7) & ~7;
+        float originAbs = 0;
+        for (int i = 0; i < p.width; ++i) {
+            p.oK[i] = p.oU[i] = p.oV[i] = p.dK[i] = p.dU[i] = p.dV[i] = p.invK[i] = 0;
+            p.t0[i] = p.t1[i] = p.cap[i] = 0;
+            p.fox[i] = p.foy[i] = p.foz[i] = p.fsx[i] = p.fsy[i] = p.fsz[i] = p.ftMin[i] = p.ftMax[i] = 0;
+            p.capId[i] = 0;
+            if (i >= n) continue;
+            const Ray& ray = r[i];
+            float t0, t1;
+            // A ray that misses the box has nothing to hit; one not along the packet's
+            // sign (impossible inside the cone, kept for safety) walks alone.
+            if (!ClipToBox(ray, box_, &p.invD[i], &t0, &t1)) continue;
+            if (!(ray.d[K] * float(p.s) > 0)) {
+                Walk(0, ray, p.invD[i], t0, t1, qq[i]);
+                continue;
+            }
+            p.ray[i] = &ray;
+            p.oK[i] = ray.o[K], p.oU[i] = ray.o[p.U], p.oV[i] = ray.o[p.V];
+            p.dK[i] = ray.d[K], p.dU[i] = ray.d[p.U], p.dV[i] = ray.d[p.V];
+            p.invK[i] = p.invD[i][K];
+            p.t0[i] = t0, p.t1[i] = t1;
+            p.cap[i] = qq[i].Cap();
+            p.capId[i] = qq[i].CapId();
+            p.live |= uint64_t(1) << i;
+            const detail::PreparedRay& pr = qq[i].ray;
+            if (!pr.valid) continue;
+            if (!p.frameLanes) p.fkx = pr.kx, p.fky = pr.ky, p.fkz = pr.kz;
+            if (pr.kx != p.fkx || pr.ky != p.fky || pr.kz != p.fkz) continue;
+            p.frameLanes |= uint64_t(1) << i;
+            p.fox[i] = pr.o[pr.kx], p.foy[i] = pr.o[pr.ky], p.foz[i] = pr.o[pr.kz];
+            p.fsx[i] = pr.sx, p.fsy[i] = pr.sy, p.fsz[i] = pr.sz;
+            p.ftMin[i] = pr.tMin, p.ftMax[i] = pr.tMax;
+            originAbs = std::max({originAbs, std::abs(ray.o.x), std::abs(ray.o.y), std::abs(ray.o.z)});
+        }
+        if (!p.live) continue;
+        // Rounding of o + d·t and of the planes' t is a few ulps of the coordinates
+        // involved; the cells' growth (epsAbs_) covers the walk's own rounding.
+        p.pad = epsAbs_ + 1e-6f * (boxAbs + originAbs);
+        PacketWalk(0, p, p.live, p.t0, p.t1, qq);
+    }
+}
+
+void NestedGridAccel::IntersectMany(const Ray* rays, size_t count, Hit* hits) const {
+    for (size_t first = 0; first < count; first += kPacketSize) {
+        const size_t n = std::min<size_t>(count - first, kPacketSize);
+        alignas(ClosestQuery) unsigned char storage[kPacketSize * sizeof(ClosestQuery)];
+        auto* q = reinterpret_cast<ClosestQuery*>(storage);
+        for (size_t i = 0; i < n; ++i) new (q + i) ClosestQuery(rays[first + i]);
+        TraceMany(rays + first, n, q);
+        for (size_t i = 0; i < n; ++i) hits[first + i] = q[i].found ? q[i].best : Hit{};
+    }
+}
+
+void NestedGridAccel::OccludedMany(const Ray* rays, size_t count, bool* occluded) const {
+    for (size_t first = 0; first < count; first += kPacketSize) {
+        const size_t n = std::min<size_t>(count - first, kPacketSize);
+        alignas(AnyQuery) unsigned char storage[kPacketSize * sizeof(AnyQuery)];
+        auto* q = reinterpret_cast<AnyQuery*>(storage);
+        for (size_t i = 0; i < n; ++i) new (q + i) AnyQuery(rays[first + i]);
+        TraceMany(rays + first, n, q);
+        for (size_t i = 0; i < n; ++i) occluded[first + i] = q[i].found;
+    }
 }
 
 bool NestedGridAccel::Intersect(const Ray& ray, Hit* hit) const {

@@ -38,8 +38,25 @@ class NestedGridAccel final : public Accelerator {
     std::string_view Name() const override { return "grid"; }
     bool Intersect(const Ray& ray, Hit* hit) const override;
     bool Occluded(const Ray& ray) const override;
+    /// Coherent rays (a tile's camera rays, a tile's shadow rays to one light) traverse as
+    /// packets of up to kPacketSize: slice by slice of the top level along the axis they
+    /// share a direction on, visiting each cell the packet's footprint covers once for all
+    /// its rays (coherent grid traversal, Wald et al. 2006). Rays that do not share it, and
+    /// packets that spread over too many cells, take the single-ray walk. Every ray gets the
+    /// answer Intersect / Occluded gives it alone, bit for bit.
+    void IntersectMany(const Ray* rays, size_t count, Hit* hits) const override;
+    void OccludedMany(const Ray* rays, size_t count, bool* occluded) const override;
     int CountCrossings(const Ray& ray) const override;
     AccelFigures Figures() const override;
+
+    /// Most rays one packet traverses at once (one bit each in a 64-bit mask).
+    static constexpr int kPacketSize = 64;
+    /// A packet whose footprint in one slice of the top level covers more cells than this
+    /// goes on ray by ray from there: a divergent packet visits cells most of its rays miss.
+    static constexpr int kMaxFootprintCells = 48;
+    /// A leaf cell met by at least this many of a packet's rays tests each triangle against
+    /// several rays at once; fewer rays test 8 triangles at once each, as single rays do.
+    static constexpr int kMinLeafGroup = 4;
 
     /// Cells per axis of the top level for `triangles` triangles in `box` (the box after
     /// GridBounds' padding). `resolution` > 0 forces that many cells along the longest side.
@@ -113,17 +130,35 @@ class NestedGridAccel final : public Accelerator {
         uint32_t count;
     };
     static constexpr uint32_t kChildBit = 0x80000000u;
-    /// Tests `count` (≤ 8) blocks against a prepared ray: bit 8·b + lane is set where the
-    /// watertight test hits that triangle (the same arithmetic, lane by lane), and wherever
-    /// an edge function is exactly zero (the tie-breaks, left to the scalar test).
-    using BlockFilter = uint64_t (*)(const TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray);
+    /// Tests `count` (≤ 8) blocks against a prepared ray with the watertight test's very
+    /// arithmetic, lane by lane: returns the bits 8·b + lane of the triangles it hits, their
+    /// t in t[8·b + lane]; *ties gets the bits of those with an edge function exactly zero
+    /// (the tie-breaks, left to the scalar test).
+    using BlockFilter = uint64_t (*)(const TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
+                                     float* t, uint64_t* ties);
 
   private:
     struct Builder;
+    struct PacketLanes;  // a packet's rays, lane by lane (grid.cpp)
     template <typename Query>
     bool Walk(uint32_t node, const Ray& ray, const Vec3& invD, float tEnter, float tExit, Query& query) const;
     template <typename Query>
     void Traverse(const Ray& ray, Query& query) const;
+    template <typename Query>
+    void TraceMany(const Ray* rays, size_t count, Query* queries) const;
+    template <typename Query>
+    void PacketWalk(uint32_t node, PacketLanes& p, uint64_t lanes, const float* tLo, const float* tHi,
+                    Query* queries) const;
+    template <typename Query>
+    void PacketWalkLanes4(uint32_t node, PacketLanes& p, uint64_t lanes, const float* tLo, const float* tHi,
+                          Query* queries) const;
+    template <typename Query>
+    void PacketWalkLanes8(uint32_t node, PacketLanes& p, uint64_t lanes, const float* tLo, const float* tHi,
+                          Query* queries) const;
+    template <typename Query>
+    bool PacketLeaf4(PacketLanes& p, uint64_t group, const CellRef& ref, Query* queries) const;
+    template <typename Query>
+    bool PacketLeaf8(PacketLanes& p, uint64_t group, const CellRef& ref, Query* queries) const;
 
     const TriangleMesh& mesh_;
     AccelOptions options_;

@@ -11,9 +11,11 @@ namespace lm::grid_detail {
 
 /// The leaf cells' triangle filters (NestedGridAccel::BlockFilter), 4 and 8 lanes at a time,
 /// defined with the queries that call them (grid.cpp); the build picks one for the machine.
-uint64_t FilterBlocks4(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray);
+uint64_t FilterBlocks4(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
+                       float* t, uint64_t* ties);
 /// Without AVX2 (not x86) the 4-lane filter.
-uint64_t FilterBlocks8(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray);
+uint64_t FilterBlocks8(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
+                       float* t, uint64_t* ties);
 /// Whether this CPU runs FilterBlocks8's AVX2 code.
 bool HasAvx2();
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <vector>
 
 #include "lightmesh/geometry/triangle.h"
 #include "lightmesh/util/error.h"
@@ -42,6 +43,10 @@ ShadingPoint WhittedRenderer::MakeShadingPoint(const TriangleMesh& mesh, const R
 Color WhittedRenderer::Li(const Ray& ray, int depth, RenderCounters& counters) const {
     Hit hit;
     if (!accel_.Intersect(ray, &hit)) return scene_.background;
+    return Shade(ray, hit, depth, counters);
+}
+
+Color WhittedRenderer::Shade(const Ray& ray, const Hit& hit, int depth, RenderCounters& counters) const {
     ++counters.shadingPoints;
     const TriangleMesh& mesh = scene_.mesh;
     const ShadingPoint sp = MakeShadingPoint(mesh, ray, hit);
@@ -109,20 +114,45 @@ Color WhittedRenderer::Pixel(int x, int y, RenderCounters& counters) const {
     Color sum;
     for (int sy = 0; sy < aa; ++sy) {
         for (int sx = 0; sx < aa; ++sx) {
-            const float px = static_cast<float>(x) + (static_cast<float>(sx) + 0.5f) / aa;
-            const float py = static_cast<float>(y) + (static_cast<float>(sy) + 0.5f) / aa;
             ++counters.cameraRays;
-            sum += Li(camera_.Generate(px, py), 0, counters);
+            sum += Li(camera_.Generate(SubPixel(x, sx), SubPixel(y, sy)), 0, counters);
         }
     }
     return sum * (1.0f / static_cast<float>(aa * aa));
 }
 
 void WhittedRenderer::RenderTile(int tile, Image* image, RenderCounters& counters) const {
-    const int w = options_.width, h = options_.height, tilesX = TilesX();
+    const int w = options_.width, h = options_.height, tilesX = TilesX(), aa = options_.aa;
     const int x0 = (tile % tilesX) * kTileSize, y0 = (tile / tilesX) * kTileSize;
-    for (int y = y0; y < std::min(y0 + kTileSize, h); ++y)
-        for (int x = x0; x < std::min(x0 + kTileSize, w); ++x) image->At(x, y) = Pixel(x, y, counters);
+    const int x1 = std::min(x0 + kTileSize, w), y1 = std::min(y0 + kTileSize, h);
+    // The camera rays of kPacketSize² pixels at a time, pixel by pixel and sub-pixel by
+    // sub-pixel as Pixel() makes them, go to the back-end together (a packet on the grid
+    // and on Embree); each gets the hit Intersect gives it alone, so the pixels are
+    // Pixel()'s bit for bit.
+    std::vector<Ray> rays;
+    std::vector<Hit> hits;
+    for (int by = y0; by < y1; by += kPacketSize)
+        for (int bx = x0; bx < x1; bx += kPacketSize) {
+            const int ex = std::min(bx + kPacketSize, x1), ey = std::min(by + kPacketSize, y1);
+            rays.clear();
+            for (int y = by; y < ey; ++y)
+                for (int x = bx; x < ex; ++x)
+                    for (int sy = 0; sy < aa; ++sy)
+                        for (int sx = 0; sx < aa; ++sx)
+                            rays.push_back(camera_.Generate(SubPixel(x, sx), SubPixel(y, sy)));
+            hits.resize(rays.size());
+            accel_.IntersectMany(rays.data(), rays.size(), hits.data());
+            size_t k = 0;
+            for (int y = by; y < ey; ++y)
+                for (int x = bx; x < ex; ++x) {
+                    Color sum;
+                    for (int s = 0; s < aa * aa; ++s, ++k) {
+                        ++counters.cameraRays;
+                        sum += hits[k].prim != UINT32_MAX ? Shade(rays[k], hits[k], 0, counters) : scene_.background;
+                    }
+                    image->At(x, y) = sum * (1.0f / static_cast<float>(aa * aa));
+                }
+        }
 }
 
 RenderResult WhittedRenderer::Render(ProgressReporter* progress) const {

@@ -32,6 +32,8 @@ class WhittedRenderer {
 
     /// Radiance arriving along `ray`; depth counts the rays already followed.
     Color Li(const Ray& ray, int depth, RenderCounters& counters) const;
+    /// Li for a ray whose closest hit is already known.
+    Color Shade(const Ray& ray, const Hit& hit, int depth, RenderCounters& counters) const;
 
     /// The value of pixel (x, y): the mean over aa × aa sub-pixel camera rays.
     Color Pixel(int x, int y, RenderCounters& counters) const;
@@ -47,14 +49,22 @@ class WhittedRenderer {
     int Height() const { return options_.height; }
     int TilesX() const { return (options_.width + kTileSize - 1) / kTileSize; }
     int TileCount() const { return TilesX() * ((options_.height + kTileSize - 1) / kTileSize); }
-    /// The pixels of one tile into *image (of the render's size).
+    /// The pixels of one tile into *image (of the render's size): Pixel()'s values, with the
+    /// camera rays of kPacketSize × kPacketSize pixels traced together (IntersectMany).
     void RenderTile(int tile, Image* image, RenderCounters& counters) const;
+    static constexpr int kPacketSize = 8;
 
     /// Builds the shading point for a hit of `ray` (also used by tests and the shadow
     /// methods' tests).
     static ShadingPoint MakeShadingPoint(const TriangleMesh& mesh, const Ray& ray, const Hit& hit);
 
   private:
+    /// Position of sub-pixel s (of aa) in pixel coordinate i: the centre of the s-th of aa
+    /// equal parts.
+    float SubPixel(int i, int s) const {
+        return static_cast<float>(i) + (static_cast<float>(s) + 0.5f) / static_cast<float>(options_.aa);
+    }
+
     const Scene& scene_;
     const Accelerator& accel_;
     const ShadowMethod& shadows_;
