@@ -479,6 +479,7 @@ struct NestedGridAccel::PacketLanes {
     int K = 0, U = 1, V = 2;  // the slicing axis and the other two
     int s = 1;               // the rays' direction along K
     float pad = 0;           // world units: how far rounding may put a computed point
+    float slope = 0;         // top-level cells a ray moves sideways (U or V) per slice, at most
     uint64_t live = 0;       // lanes still walking the top level
     alignas(32) float oK[kMax], oU[kMax], oV[kMax], dK[kMax], dU[kMax], dV[kMax], invK[kMax];
     alignas(32) float t0[kMax], t1[kMax];  // each ray's range clipped to the box
@@ -617,6 +618,15 @@ void NestedGridAccel::TraceMany(const Ray* rays, size_t count, Query* q) const {
             originAbs = std::max({originAbs, std::abs(ray.o.x), std::abs(ray.o.y), std::abs(ray.o.z)});
         }
         if (!p.live) continue;
+        const Node& top = nodes_[0];
+        for (uint64_t m = p.live; m; m &= m - 1) {
+            const int i = __builtin_ctzll(m);
+            const float perSlice = std::abs(top.cellSize[K] * p.invK[i]);  // t across one slice
+            p.slope = std::max({p.slope, std::abs(p.dU[i]) * perSlice * top.invCellSize[p.U],
+                                std::abs(p.dV[i]) * perSlice * top.invCellSize[p.V]});
+        }
+        // A little more for rounding, so that the empty-space skip stays conservative.
+        p.slope = p.slope * 1.001f + 1e-3f;
         // Rounding of o + d·t and of the planes' t is a few ulps of the coordinates
         // involved; the cells' growth (epsAbs_) covers the walk's own rounding.
         p.pad = epsAbs_ + 1e-6f * (boxAbs + originAbs);
