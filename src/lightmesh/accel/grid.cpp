@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <cstring>
 #include <new>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -141,7 +143,7 @@ uint64_t FilterBlocks4(const NestedGridAccel::TriBlock* blocks, uint32_t count, 
             SimdVectors<4>::I hits, tie;
             SimdVectors<4>::F tv;
             if (!FilterLanes<4>(blocks[b], h, r, &hits, &tie, &tv)) continue;
-            *reinterpret_cast<SimdVectors<4>::F*>(t + 8 * b + h) = tv;
+            std::memcpy(t + 8 * b + h, &tv, sizeof tv);
             hitBits |= uint64_t(LaneBits<4>(hits)) << (8 * b + h);
             tieBits |= uint64_t(LaneBits<4>(tie)) << (8 * b + h);
         }
@@ -159,7 +161,7 @@ __attribute__((target("avx2"))) uint64_t FilterBlocks8(const NestedGridAccel::Tr
         SimdVectors<8>::I hits, tie;
         SimdVectors<8>::F tv;
         if (!FilterLanes<8>(blocks[b], 0, r, &hits, &tie, &tv)) continue;
-        *reinterpret_cast<SimdVectors<8>::F*>(t + 8 * b) = tv;
+        std::memcpy(t + 8 * b, &tv, sizeof tv);
         hitBits |= uint64_t(LaneBits<8>(hits)) << (8 * b);
         tieBits |= uint64_t(LaneBits<8>(tie)) << (8 * b);
     }
@@ -202,7 +204,7 @@ template <bool kNearestOnly, typename Test>
     for (uint64_t b0 = begin / 8; b0 * 8 < end; b0 += 8) {
         const uint64_t base = b0 * 8, stop = std::min(end, base + 64);
         const NestedGridAccel::TriBlock* blocks = c.blocks + b0;
-        alignas(32) float t[64];
+        float t[64];  // not over-aligned: the walk's frame needs no realignment
         uint64_t ties;
         uint64_t hits = c.filter(blocks, static_cast<uint32_t>((stop - base + 7) / 8), ray, t, &ties);
         const uint64_t lo = begin > base ? begin - base : 0, hi = stop - base;
@@ -259,7 +261,7 @@ struct ClosestQuery {
         found = true;
         ray.tMax = NextFloatUp(t);
     }
-    bool Cell(const CellSpan& c) {
+    [[gnu::always_inline]] bool Cell(const CellSpan& c) {
         ForEachHit<true>(c, ray, [&](uint32_t id, const TriangleHit& th) {
             Offer(id, th.t, th.b1, th.b2);
             return false;
@@ -281,7 +283,7 @@ struct AnyQuery {
     detail::PreparedRay ray;
     bool found = false;
 
-    bool Cell(const CellSpan& c) {
+    [[gnu::always_inline]] bool Cell(const CellSpan& c) {
         found = ForEachHit<false>(c, ray, [](uint32_t, const TriangleHit&) { return true; });
         return found;
     }
@@ -309,7 +311,7 @@ struct CountQuery {
             if (local[i] == id) return true;
         return std::find(overflow.begin(), overflow.end(), id) != overflow.end();
     }
-    bool Cell(const CellSpan& c) {
+    [[gnu::always_inline]] bool Cell(const CellSpan& c) {
         ForEachHit<false>(c, ray, [&](uint32_t id, const TriangleHit&) {
             if (Counted(id)) return false;
             if (count < kLocal)
@@ -426,7 +428,7 @@ namespace {
 // Clips the ray's (tMin, tMax) to the box into [*t0, *t1], with 1/d per axis in *invD (∞
 // where d is 0: such an axis cannot be crossed, so the ray only has to start between its
 // slabs, and 0 · ∞ never happens). False if the ray misses the box or does not move.
-bool ClipToBox(const Ray& ray, const Bounds3& box, Vec3* invD, float* t0, float* t1) {
+[[gnu::always_inline]] inline bool ClipToBox(const Ray& ray, const Bounds3& box, Vec3* invD, float* t0, float* t1) {
     float lo = ray.tMin, hi = ray.tMax;
     bool moves = false;
     for (int a = 0; a < 3; ++a) {

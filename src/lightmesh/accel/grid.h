@@ -57,6 +57,9 @@ class NestedGridAccel final : public Accelerator {
     /// A leaf cell met by at least this many of a packet's rays tests each triangle against
     /// several rays at once; fewer rays test 8 triangles at once each, as single rays do.
     static constexpr int kMinLeafGroup = 4;
+    /// A sub-grid met by at least this many of a packet's rays is walked as a packet; fewer
+    /// rays walk it one by one.
+    static constexpr int kMinChildPacket = 8;
 
     /// Cells per axis of the top level for `triangles` triangles in `box` (the box after
     /// GridBounds' padding). `resolution` > 0 forces that many cells along the longest side.
