@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <memory>
 #include <vector>
 
 #include "lightmesh/geometry/triangle.h"
@@ -46,7 +47,7 @@ Color WhittedRenderer::Li(const Ray& ray, int depth, RenderCounters& counters) c
     return Shade(ray, hit, depth, counters);
 }
 
-Color WhittedRenderer::Shade(const Ray& ray, const Hit& hit, int depth, RenderCounters& counters) const {
+void WhittedRenderer::PrepareShading(const Ray& ray, const Hit& hit, Lighting* lit, RenderCounters& counters) const {
     ++counters.shadingPoints;
     const TriangleMesh& mesh = scene_.mesh;
     const ShadingPoint sp = MakeShadingPoint(mesh, ray, hit);
@@ -66,12 +67,11 @@ Color WhittedRenderer::Shade(const Ray& ray, const Hit& hit, int depth, RenderCo
     }
     const Vec3 toEye = Normalize(-ray.d);
 
-    Color result = scene_.ambient * mat.kd;
+    lit->sp = sp;
+    lit->ns = ns;
+    lit->mat = &mat;
+    lit->any = false;
     const size_t nLights = scene_.lights.size();
-    Color omega[kMaxLights];
-    bool needed[kMaxLights];
-    float vis[kMaxLights];
-    bool any = false;
     for (size_t i = 0; i < nLights; ++i) {
         const PointLight& light = scene_.lights[i];
         const Vec3 toLight = light.position - sp.p;
@@ -79,34 +79,46 @@ Color WhittedRenderer::Shade(const Ray& ray, const Hit& hit, int depth, RenderCo
         const Vec3 l = toLight / std::sqrt(dist2);
         // A light behind the geometric surface cannot light it, whatever the shading normal.
         const float cosN = Dot(ns, l);
-        needed[i] = Dot(sp.n, l) > 0 && cosN > 0;
-        vis[i] = 0.0f;
-        if (!needed[i]) continue;
+        bool& needed = lit->needed[i];
+        needed = Dot(sp.n, l) > 0 && cosN > 0;
+        if (!needed) continue;
         Color local = mat.kd * cosN;
         if (!mat.ks.IsBlack()) {
             const float cosR = Dot(Reflect(-l, ns), toEye);
             if (cosR > 0) local += mat.ks * std::pow(cosR, mat.phong);
         }
         const float falloff = light.falloff == Falloff::InverseSquare ? 1.0f / dist2 : 1.0f;
-        omega[i] = light.intensity * local * falloff;
-        any = any || !omega[i].IsBlack();
-        needed[i] = !omega[i].IsBlack();
+        lit->omega[i] = light.intensity * local * falloff;
+        lit->any = lit->any || !lit->omega[i].IsBlack();
+        needed = !lit->omega[i].IsBlack();
     }
-    if (any) {
-        shadows_.Visibility(sp, needed, vis, counters);
-        for (size_t i = 0; i < nLights; ++i)
-            if (needed[i]) result += omega[i] * vis[i];
-    }
+}
+
+Color WhittedRenderer::FinishShading(const Ray& ray, const Lighting& lit, const float* vis, int depth,
+                                     RenderCounters& counters) const {
+    const Material& mat = *lit.mat;
+    Color result = scene_.ambient * mat.kd;
+    if (lit.any)
+        for (size_t i = 0; i < scene_.lights.size(); ++i)
+            if (lit.needed[i]) result += lit.omega[i] * vis[i];
 
     if (!mat.mirror.IsBlack() && depth + 1 < options_.maxDepth) {
-        Vec3 r = Reflect(ray.d, ns);
+        Vec3 r = Reflect(ray.d, lit.ns);
         // A shading normal can send the mirror ray below the surface; reflect about the
         // geometric normal instead then.
-        if (Dot(r, sp.n) <= 0) r = Reflect(ray.d, sp.n);
+        if (Dot(r, lit.sp.n) <= 0) r = Reflect(ray.d, lit.sp.n);
         ++counters.reflectionRays;
-        result += mat.mirror * Li(Ray{sp.origin, r, 0.0f, Infinity}, depth + 1, counters);
+        result += mat.mirror * Li(Ray{lit.sp.origin, r, 0.0f, Infinity}, depth + 1, counters);
     }
     return result;
+}
+
+Color WhittedRenderer::Shade(const Ray& ray, const Hit& hit, int depth, RenderCounters& counters) const {
+    Lighting lit;
+    PrepareShading(ray, hit, &lit, counters);
+    float vis[kMaxLights] = {};
+    if (lit.any) shadows_.Visibility(lit.sp, lit.needed, vis, counters);
+    return FinishShading(ray, lit, vis, depth, counters);
 }
 
 Color WhittedRenderer::Pixel(int x, int y, RenderCounters& counters) const {
@@ -131,6 +143,12 @@ void WhittedRenderer::RenderTile(int tile, Image* image, RenderCounters& counter
     // Pixel()'s bit for bit.
     std::vector<Ray> rays;
     std::vector<Hit> hits;
+    std::vector<Color> colors;
+    const size_t nLights = scene_.lights.size();
+    std::vector<Lighting> batch(kShadingBatch);
+    std::vector<ShadingPoint> points(kShadingBatch);
+    const std::unique_ptr<bool[]> needed(new bool[kShadingBatch * std::max<size_t>(nLights, 1)]);
+    std::vector<float> vis(kShadingBatch * nLights);
     for (int by = y0; by < y1; by += kPacketSize)
         for (int bx = x0; bx < x1; bx += kPacketSize) {
             const int ex = std::min(bx + kPacketSize, x1), ey = std::min(by + kPacketSize, y1);
@@ -142,13 +160,40 @@ void WhittedRenderer::RenderTile(int tile, Image* image, RenderCounters& counter
                             rays.push_back(camera_.Generate(SubPixel(x, sx), SubPixel(y, sy)));
             hits.resize(rays.size());
             accel_.IntersectMany(rays.data(), rays.size(), hits.data());
+            // Shading, kShadingBatch hits at a time: their lights' visibility for all of
+            // them at once (ShadowMethod::VisibilityMany: hard shadows trace the batch's
+            // rays to one light as a packet), then each hit's colour as Shade gives it.
+            colors.resize(rays.size());
+            for (size_t first = 0; first < rays.size(); first += kShadingBatch) {
+                const size_t end = std::min(rays.size(), first + kShadingBatch);
+                size_t count = 0, shaded = 0;  // hits; hits whose lights' visibility is needed
+                for (size_t k = first; k < end; ++k) {
+                    if (hits[k].prim == UINT32_MAX) continue;
+                    Lighting& lit = batch[count++];
+                    PrepareShading(rays[k], hits[k], &lit, counters);
+                    if (!lit.any) continue;
+                    points[shaded] = lit.sp;
+                    std::copy(lit.needed, lit.needed + nLights, needed.get() + shaded * nLights);
+                    ++shaded;
+                }
+                std::fill(vis.begin(), vis.end(), 0.0f);
+                if (shaded) shadows_.VisibilityMany(points.data(), shaded, nLights, needed.get(), vis.data(), counters);
+                for (size_t k = first, j = 0, v = 0; k < end; ++k) {
+                    if (hits[k].prim == UINT32_MAX) {
+                        colors[k] = scene_.background;
+                        continue;
+                    }
+                    const Lighting& lit = batch[j++];
+                    colors[k] = FinishShading(rays[k], lit, lit.any ? vis.data() + (v++) * nLights : nullptr, 0, counters);
+                }
+            }
             size_t k = 0;
             for (int y = by; y < ey; ++y)
                 for (int x = bx; x < ex; ++x) {
                     Color sum;
                     for (int s = 0; s < aa * aa; ++s, ++k) {
                         ++counters.cameraRays;
-                        sum += hits[k].prim != UINT32_MAX ? Shade(rays[k], hits[k], 0, counters) : scene_.background;
+                        sum += colors[k];
                     }
                     image->At(x, y) = sum * (1.0f / static_cast<float>(aa * aa));
                 }

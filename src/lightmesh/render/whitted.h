@@ -59,6 +59,24 @@ class WhittedRenderer {
     static ShadingPoint MakeShadingPoint(const TriangleMesh& mesh, const Ray& ray, const Hit& hit);
 
   private:
+    /// A hit's shading before its lights' visibility is known (formula (1)'s terms).
+    struct Lighting {
+        ShadingPoint sp;
+        Vec3 ns;  ///< shading normal
+        const Material* mat = nullptr;
+        bool any = false;  ///< some light's term is not black (visibility is needed)
+        bool needed[kMaxLights];
+        Color omega[kMaxLights];  ///< light i's unshadowed term, where needed[i]
+    };
+    /// Hits shaded together in RenderTile: the points whose visibility one
+    /// ShadowMethod::VisibilityMany call computes.
+    static constexpr size_t kShadingBatch = 64;
+    /// Shade, before and after the visibility: PrepareShading fills *lit (and counts the
+    /// shading point); FinishShading adds the lights' terms times vis and the mirror's.
+    void PrepareShading(const Ray& ray, const Hit& hit, Lighting* lit, RenderCounters& counters) const;
+    Color FinishShading(const Ray& ray, const Lighting& lit, const float* vis, int depth,
+                        RenderCounters& counters) const;
+
     /// Position of sub-pixel s (of aa) in pixel coordinate i: the centre of the s-th of aa
     /// equal parts.
     float SubPixel(int i, int s) const {

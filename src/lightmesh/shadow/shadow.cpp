@@ -42,6 +42,11 @@ uint64_t LightsVisible(const Accelerator& accel, const Vec3& origin, const std::
     return visible;
 }
 
+void ShadowMethod::VisibilityMany(const ShadingPoint* sps, size_t count, size_t lights, const bool* needed,
+                                  float* vis, RenderCounters& counters) const {
+    for (size_t i = 0; i < count; ++i) Visibility(sps[i], needed + i * lights, vis + i * lights, counters);
+}
+
 namespace {
 
 /// "none": every light is visible everywhere (the floor that shadow work sits on).
@@ -71,6 +76,32 @@ class HardShadows final : public ShadowMethod {
         const uint64_t visible = LightsVisible(accel_, sp.origin, scene_.lights, mask);
         for (size_t i = 0; i < scene_.lights.size(); ++i)
             if (needed[i]) vis[i] = (visible >> i) & 1 ? 1.0f : 0.0f;
+    }
+    // Light by light, the points' shadow rays to it together: rays from neighbouring
+    // points to one light are coherent, which a back-end traces as a packet (Embree's
+    // rtcOccluded8, the grid's coherent traversal); each ray's answer is LightVisible's.
+    void VisibilityMany(const ShadingPoint* sps, size_t count, size_t lights, const bool* needed, float* vis,
+                        RenderCounters& counters) const override {
+        constexpr size_t kChunk = 64;
+        Ray rays[kChunk];
+        size_t which[kChunk];
+        bool blocked[kChunk];
+        for (size_t l = 0; l < lights; ++l) {
+            size_t n = 0;
+            auto trace = [&] {
+                accel_.OccludedMany(rays, n, blocked);
+                for (size_t k = 0; k < n; ++k) vis[which[k] * lights + l] = blocked[k] ? 0.0f : 1.0f;
+                counters.shadowRays += n;
+                n = 0;
+            };
+            for (size_t i = 0; i < count; ++i) {
+                if (!needed[i * lights + l]) continue;
+                rays[n] = LightSegment(sps[i].origin, scene_.lights[l].position);
+                which[n] = i;
+                if (++n == kChunk) trace();
+            }
+            if (n) trace();
+        }
     }
 
   private:

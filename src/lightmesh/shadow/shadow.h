@@ -41,6 +41,13 @@ class ShadowMethod {
     virtual void Visibility(const ShadingPoint& sp, const bool* needed, float* vis,
                             RenderCounters& counters) const = 0;
 
+    /// Visibility for `count` points at once (the camera hits of a block of pixels):
+    /// needed and vis hold `lights` entries per point, point after point. Each point must
+    /// get what Visibility gives it alone. The default calls Visibility point by point;
+    /// hard shadows trace the points' rays to one light together (a packet).
+    virtual void VisibilityMany(const ShadingPoint* sps, size_t count, size_t lights, const bool* needed, float* vis,
+                                RenderCounters& counters) const;
+
     /// Figures gathered during rendering and set-up, for --stats.
     virtual ShadowFigures Figures() const { return {}; }
     /// The method's own counts of a render (the slots of counters.method it fills), as
