@@ -243,6 +243,30 @@ const Accelerator& GetAccel(const BenchScene& s, const std::string& name) {
     return *slot;
 }
 
+// The timed loop of a workload: `items` calls of one(i), each returning its hits, on one
+// thread or all (TBB, `grain` items per task); the last iteration's hits.
+template <typename One>
+size_t TimeLoop(benchmark::State& state, size_t items, size_t grain, bool allThreads, One&& one) {
+    size_t hits = 0;
+    for (auto _ : state) {
+        if (allThreads) {
+            std::atomic<size_t> count{0};
+            tbb::parallel_for(tbb::blocked_range<size_t>(0, items, grain), [&](const tbb::blocked_range<size_t>& r) {
+                size_t c = 0;
+                for (size_t i = r.begin(); i != r.end(); ++i) c += one(i);
+                count += c;
+            });
+            hits = count;
+        } else {
+            size_t c = 0;
+            for (size_t i = 0; i < items; ++i) c += one(i);
+            hits = c;
+        }
+        benchmark::DoNotOptimize(hits);
+    }
+    return hits;
+}
+
 void RunPackets(benchmark::State& state, const Accelerator& accel, const std::vector<Ray>& rays,
                 const std::vector<size_t>& tiles, bool closest, bool allThreads) {
     const size_t packets = tiles.size() - 1;
@@ -260,23 +284,7 @@ void RunPackets(benchmark::State& state, const Accelerator& accel, const std::ve
         }
         return c;
     };
-    size_t hits = 0;
-    for (auto _ : state) {
-        if (allThreads) {
-            std::atomic<size_t> count{0};
-            tbb::parallel_for(tbb::blocked_range<size_t>(0, packets, 4), [&](const tbb::blocked_range<size_t>& r) {
-                size_t c = 0;
-                for (size_t k = r.begin(); k != r.end(); ++k) c += one(k);
-                count += c;
-            });
-            hits = count;
-        } else {
-            size_t c = 0;
-            for (size_t k = 0; k < packets; ++k) c += one(k);
-            hits = c;
-        }
-        benchmark::DoNotOptimize(hits);
-    }
+    const size_t hits = TimeLoop(state, packets, 4, allThreads, one);
     state.counters["rays/s"] =
         benchmark::Counter(double(rays.size()) * double(state.iterations()), benchmark::Counter::kIsRate);
     state.counters["hit%"] = 100.0 * double(hits) / double(std::max<size_t>(rays.size(), 1));
@@ -297,7 +305,6 @@ void RunQueries(benchmark::State& state, const BenchScene& s, const std::string&
     // Brute force gets every k-th ray (a spread-out sample, not the image's top rows).
     const size_t n = accelName == "brute" ? std::min(all.size(), kBruteRays) : all.size();
     const size_t stride = std::max<size_t>(1, all.size() / std::max<size_t>(n, 1));
-    size_t hits = 0;
     auto one = [&](size_t i) -> size_t {
         const Ray& r = all[i * stride];
         if (w == Workload::Camera) {
@@ -306,23 +313,7 @@ void RunQueries(benchmark::State& state, const BenchScene& s, const std::string&
         }
         return accel.Occluded(r) ? 1 : 0;
     };
-    for (auto _ : state) {
-        if (allThreads) {
-            std::atomic<size_t> count{0};
-            tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256),
-                              [&](const tbb::blocked_range<size_t>& r) {
-                                  size_t c = 0;
-                                  for (size_t i = r.begin(); i != r.end(); ++i) c += one(i);
-                                  count += c;
-                              });
-            hits = count;
-        } else {
-            size_t c = 0;
-            for (size_t i = 0; i < n; ++i) c += one(i);
-            hits = c;
-        }
-        benchmark::DoNotOptimize(hits);
-    }
+    const size_t hits = TimeLoop(state, n, 256, allThreads, one);
     state.counters["rays/s"] =
         benchmark::Counter(double(n) * double(state.iterations()), benchmark::Counter::kIsRate);
     state.counters["hit%"] = 100.0 * double(hits) / double(std::max<size_t>(n, 1));

@@ -636,26 +636,36 @@ void NestedGridAccel::TraceMany(const Ray* rays, size_t count, Query* q) const {
     }
 }
 
-void NestedGridAccel::IntersectMany(const Ray* rays, size_t count, Hit* hits) const {
-    for (size_t first = 0; first < count; first += kPacketSize) {
-        const size_t n = std::min<size_t>(count - first, kPacketSize);
-        alignas(ClosestQuery) unsigned char storage[kPacketSize * sizeof(ClosestQuery)];
-        auto* q = reinterpret_cast<ClosestQuery*>(storage);
-        for (size_t i = 0; i < n; ++i) new (q + i) ClosestQuery(rays[first + i]);
-        TraceMany(rays + first, n, q);
-        for (size_t i = 0; i < n; ++i) hits[first + i] = q[i].found ? q[i].best : Hit{};
+namespace {
+
+// Runs trace(rays, n, queries) over `count` rays in chunks of NestedGridAccel::kPacketSize,
+// with a Query built for each ray in place, and hands each finished query to
+// answer(index, query).
+template <typename Query, typename Trace, typename Answer>
+void InPackets(const Ray* rays, size_t count, Trace&& trace, Answer&& answer) {
+    constexpr size_t kSize = NestedGridAccel::kPacketSize;
+    for (size_t first = 0; first < count; first += kSize) {
+        const size_t n = std::min(count - first, kSize);
+        alignas(Query) unsigned char storage[kSize * sizeof(Query)];
+        auto* q = reinterpret_cast<Query*>(storage);
+        for (size_t i = 0; i < n; ++i) new (q + i) Query(rays[first + i]);
+        trace(rays + first, n, q);
+        for (size_t i = 0; i < n; ++i) answer(first + i, q[i]);
     }
 }
 
+}  // namespace
+
+void NestedGridAccel::IntersectMany(const Ray* rays, size_t count, Hit* hits) const {
+    InPackets<ClosestQuery>(
+        rays, count, [&](const Ray* r, size_t n, ClosestQuery* q) { TraceMany(r, n, q); },
+        [&](size_t i, const ClosestQuery& q) { hits[i] = q.found ? q.best : Hit{}; });
+}
+
 void NestedGridAccel::OccludedMany(const Ray* rays, size_t count, bool* occluded) const {
-    for (size_t first = 0; first < count; first += kPacketSize) {
-        const size_t n = std::min<size_t>(count - first, kPacketSize);
-        alignas(AnyQuery) unsigned char storage[kPacketSize * sizeof(AnyQuery)];
-        auto* q = reinterpret_cast<AnyQuery*>(storage);
-        for (size_t i = 0; i < n; ++i) new (q + i) AnyQuery(rays[first + i]);
-        TraceMany(rays + first, n, q);
-        for (size_t i = 0; i < n; ++i) occluded[first + i] = q[i].found;
-    }
+    InPackets<AnyQuery>(
+        rays, count, [&](const Ray* r, size_t n, AnyQuery* q) { TraceMany(r, n, q); },
+        [&](size_t i, const AnyQuery& q) { occluded[i] = q.found; });
 }
 
 bool NestedGridAccel::Intersect(const Ray& ray, Hit* hit) const {
