@@ -54,12 +54,12 @@ template <>
 
 // Whether any lane of a W-lane mask is set, in generic vector code (so that it inlines into
 // the AVX2 filter without a target attribute of its own).
-[[gnu::always_inline]] inline bool AnyLane(SimdVectors<4>::I m) {
+[[gnu::always_inline]] inline bool AnyLane(const SimdVectors<4>::I& m) {
     typedef long long Halves __attribute__((vector_size(16)));
     const Halves x = reinterpret_cast<Halves>(m);
     return (x[0] | x[1]) != 0;
 }
-[[gnu::always_inline]] inline bool AnyLane(SimdVectors<8>::I m) {
+[[gnu::always_inline]] inline bool AnyLane(const SimdVectors<8>::I& m) {
     typedef long long Quarters __attribute__((vector_size(32)));
     const Quarters x = reinterpret_cast<Quarters>(m);
     return (x[0] | x[1] | x[2] | x[3]) != 0;
@@ -542,25 +542,27 @@ void NestedGridAccel::PacketWalk(uint32_t nodeIndex, PacketLanes& p, uint64_t la
 }
 
 // The packet's walk of one level, 4 lanes at a time (SSE, the x86-64 baseline) and 8 (AVX2,
-// compiled for it here and chosen at run time): one body, grid_packet_walk.inc.
+// compiled for it with a target attribute on each definition, which GCC and clang both honour,
+// and chosen at run time): one body, grid_packet_walk.inc.
 #define LM_PACKET_LANES 4
+#define LM_PACKET_TARGET
 #define LM_PACKET_WALK_LANES PacketWalkLanes4
 #define LM_PACKET_LEAF PacketLeaf4
 #include "lightmesh/accel/grid_packet_walk.inc"
 #undef LM_PACKET_LANES
+#undef LM_PACKET_TARGET
 #undef LM_PACKET_WALK_LANES
 #undef LM_PACKET_LEAF
 #if defined(__x86_64__) || defined(__i386__)
-#pragma GCC push_options
-#pragma GCC target("avx2")
 #define LM_PACKET_LANES 8
+#define LM_PACKET_TARGET __attribute__((target("avx2")))
 #define LM_PACKET_WALK_LANES PacketWalkLanes8
 #define LM_PACKET_LEAF PacketLeaf8
 #include "lightmesh/accel/grid_packet_walk.inc"
 #undef LM_PACKET_LANES
+#undef LM_PACKET_TARGET
 #undef LM_PACKET_WALK_LANES
 #undef LM_PACKET_LEAF
-#pragma GCC pop_options
 #endif
 
 template <typename Query>

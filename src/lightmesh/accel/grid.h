@@ -156,12 +156,16 @@ class NestedGridAccel final : public Accelerator {
     void PacketWalkLanes4(uint32_t node, PacketLanes& p, uint64_t lanes, const float* tLo, const float* tHi,
                           Query* queries) const;
     template <typename Query>
-    void PacketWalkLanes8(uint32_t node, PacketLanes& p, uint64_t lanes, const float* tLo, const float* tHi,
-                          Query* queries) const;
-    template <typename Query>
     bool PacketLeaf4(PacketLanes& p, uint64_t group, const CellRef& ref, Query* queries) const;
+#if defined(__x86_64__) || defined(__i386__)
+    // Compiled for AVX2 (grid.cpp chooses them where the CPU has it).
     template <typename Query>
-    bool PacketLeaf8(PacketLanes& p, uint64_t group, const CellRef& ref, Query* queries) const;
+    __attribute__((target("avx2"))) void PacketWalkLanes8(uint32_t node, PacketLanes& p, uint64_t lanes,
+                                                          const float* tLo, const float* tHi, Query* queries) const;
+    template <typename Query>
+    __attribute__((target("avx2"))) bool PacketLeaf8(PacketLanes& p, uint64_t group, const CellRef& ref,
+                                                     Query* queries) const;
+#endif
 
     const TriangleMesh& mesh_;
     AccelOptions options_;
