@@ -488,9 +488,9 @@ struct NestedGridAccel::PacketLanes {
     alignas(32) float cap[kMax];           // Query::Cap(): hits beyond it cannot win
     const Ray* ray[kMax];
     Vec3 invD[kMax];
-    // The watertight test's frame (PreparedRay's axes) most lanes share, the lanes that
-    // share it, and their rays in it: a leaf cell tests one triangle against W of them at
-    // once (PacketLeaf in grid_packet_walk.inc).
+    // The watertight test's frame (PreparedRay's axes) of the first lane, the lanes that
+    // share it (in a coherent packet, nearly all), and their rays in it: a leaf cell tests
+    // one triangle against W of them at once (PacketLeaf in grid_packet_walk.inc).
     int fkx = 0, fky = 1, fkz = 2;
     uint64_t frameLanes = 0;
     alignas(32) float fox[kMax], foy[kMax], foz[kMax], fsx[kMax], fsy[kMax], fsz[kMax], ftMin[kMax], ftMax[kMax];
@@ -611,6 +611,7 @@ void NestedGridAccel::TraceMany(const Ray* rays, size_t count, Query* q) const {
             p.cap[i] = qq[i].Cap();
             p.capId[i] = qq[i].CapId();
             p.live |= uint64_t(1) << i;
+            originAbs = std::max({originAbs, std::abs(ray.o.x), std::abs(ray.o.y), std::abs(ray.o.z)});
             const detail::PreparedRay& pr = qq[i].ray;
             if (!pr.valid) continue;
             if (!p.frameLanes) p.fkx = pr.kx, p.fky = pr.ky, p.fkz = pr.kz;
@@ -619,7 +620,6 @@ void NestedGridAccel::TraceMany(const Ray* rays, size_t count, Query* q) const {
             p.fox[i] = pr.o[pr.kx], p.foy[i] = pr.o[pr.ky], p.foz[i] = pr.o[pr.kz];
             p.fsx[i] = pr.sx, p.fsy[i] = pr.sy, p.fsz[i] = pr.sz;
             p.ftMin[i] = pr.tMin, p.ftMax[i] = pr.tMax;
-            originAbs = std::max({originAbs, std::abs(ray.o.x), std::abs(ray.o.y), std::abs(ray.o.z)});
         }
         if (!p.live) continue;
         const Node& top = nodes_[0];
