@@ -522,8 +522,11 @@ bool Coherent(const Ray* rays, size_t count, Vec3* mean) {
     const float len = Length(sum);
     if (!(len > 0)) return false;
     *mean = sum / len;
-    for (size_t i = 0; i < count; ++i)
-        if (!(Dot(rays[i].d, *mean) >= kCoherentCos * Length(rays[i].d))) return false;
+    // cos >= kCoherentCos, squared (no second square root per ray).
+    for (size_t i = 0; i < count; ++i) {
+        const float dot = Dot(rays[i].d, *mean);
+        if (!(dot > 0 && dot * dot >= kCoherentCos * kCoherentCos * LengthSquared(rays[i].d))) return false;
+    }
     return true;
 }
 
@@ -567,6 +570,7 @@ void NestedGridAccel::PacketWalk(uint32_t nodeIndex, PacketLanes& p, uint64_t la
 
 template <typename Query>
 void NestedGridAccel::TraceMany(const Ray* rays, size_t count, Query* q) const {
+    // One packet: InPackets hands over at most kPacketSize rays.
     Vec3 mean;
     if (count < 4 || !Coherent(rays, count, &mean)) {
         for (size_t i = 0; i < count; ++i) Traverse(rays[i], q[i]);
@@ -577,65 +581,61 @@ void NestedGridAccel::TraceMany(const Ray* rays, size_t count, Query* q) const {
     const int K = MaxDimension(Abs(mean));
     float boxAbs = 0;
     for (int a = 0; a < 3; ++a) boxAbs = std::max({boxAbs, std::abs(box_.lo[a]), std::abs(box_.hi[a])});
-    for (size_t first = 0; first < count; first += kPacketSize) {
-        const int n = int(std::min<size_t>(count - first, kPacketSize));
-        const Ray* r = rays + first;
-        Query* qq = q + first;
-        PacketLanes p;
-        p.K = K;
-        p.U = K == 0 ? 1 : 0;
-        p.V = K == 2 ? 1 : 2;
-        p.s = mean[K] > 0 ? 1 : -1;
-        p.width = (n + 7) & ~7;
-        float originAbs = 0;
-        for (int i = 0; i < p.width; ++i) {
-            p.oK[i] = p.oU[i] = p.oV[i] = p.dK[i] = p.dU[i] = p.dV[i] = p.invK[i] = 0;
-            p.t0[i] = p.t1[i] = p.cap[i] = 0;
-            p.fox[i] = p.foy[i] = p.foz[i] = p.fsx[i] = p.fsy[i] = p.fsz[i] = p.ftMin[i] = p.ftMax[i] = 0;
-            p.capId[i] = 0;
-            if (i >= n) continue;
-            const Ray& ray = r[i];
-            float t0, t1;
-            // A ray that misses the box has nothing to hit; one not along the packet's
-            // sign (impossible inside the cone, kept for safety) walks alone.
-            if (!ClipToBox(ray, box_, &p.invD[i], &t0, &t1)) continue;
-            if (!(ray.d[K] * float(p.s) > 0)) {
-                Walk(0, ray, p.invD[i], t0, t1, qq[i]);
-                continue;
-            }
-            p.ray[i] = &ray;
-            p.oK[i] = ray.o[K], p.oU[i] = ray.o[p.U], p.oV[i] = ray.o[p.V];
-            p.dK[i] = ray.d[K], p.dU[i] = ray.d[p.U], p.dV[i] = ray.d[p.V];
-            p.invK[i] = p.invD[i][K];
-            p.t0[i] = t0, p.t1[i] = t1;
-            p.cap[i] = qq[i].Cap();
-            p.capId[i] = qq[i].CapId();
-            p.live |= uint64_t(1) << i;
-            originAbs = std::max({originAbs, std::abs(ray.o.x), std::abs(ray.o.y), std::abs(ray.o.z)});
-            const detail::PreparedRay& pr = qq[i].ray;
-            if (!pr.valid) continue;
-            if (!p.frameLanes) p.fkx = pr.kx, p.fky = pr.ky, p.fkz = pr.kz;
-            if (pr.kx != p.fkx || pr.ky != p.fky || pr.kz != p.fkz) continue;
-            p.frameLanes |= uint64_t(1) << i;
-            p.fox[i] = pr.o[pr.kx], p.foy[i] = pr.o[pr.ky], p.foz[i] = pr.o[pr.kz];
-            p.fsx[i] = pr.sx, p.fsy[i] = pr.sy, p.fsz[i] = pr.sz;
-            p.ftMin[i] = pr.tMin, p.ftMax[i] = pr.tMax;
+    const int n = int(count);
+    PacketLanes p;
+    p.K = K;
+    p.U = K == 0 ? 1 : 0;
+    p.V = K == 2 ? 1 : 2;
+    p.s = mean[K] > 0 ? 1 : -1;
+    p.width = (n + 7) & ~7;
+    float originAbs = 0;
+    for (int i = 0; i < p.width; ++i) {
+        p.oK[i] = p.oU[i] = p.oV[i] = p.dK[i] = p.dU[i] = p.dV[i] = p.invK[i] = 0;
+        p.t0[i] = p.t1[i] = p.cap[i] = 0;
+        p.fox[i] = p.foy[i] = p.foz[i] = p.fsx[i] = p.fsy[i] = p.fsz[i] = p.ftMin[i] = p.ftMax[i] = 0;
+        p.capId[i] = 0;
+        if (i >= n) continue;
+        const Ray& ray = rays[i];
+        float t0, t1;
+        // A ray that misses the box has nothing to hit; one not along the packet's
+        // sign (impossible inside the cone, kept for safety) walks alone.
+        if (!ClipToBox(ray, box_, &p.invD[i], &t0, &t1)) continue;
+        if (!(ray.d[K] * float(p.s) > 0)) {
+            Walk(0, ray, p.invD[i], t0, t1, q[i]);
+            continue;
         }
-        if (!p.live) continue;
-        const Node& top = nodes_[0];
-        for (uint64_t m = p.live; m; m &= m - 1) {
-            const int i = __builtin_ctzll(m);
-            const float perSlice = std::abs(top.cellSize[K] * p.invK[i]);  // t across one slice
-            p.slope = std::max({p.slope, std::abs(p.dU[i]) * perSlice * top.invCellSize[p.U],
-                                std::abs(p.dV[i]) * perSlice * top.invCellSize[p.V]});
-        }
-        // A little more for rounding, so that the empty-space skip stays conservative.
-        p.slope = p.slope * 1.001f + 1e-3f;
-        // Rounding of o + d·t and of the planes' t is a few ulps of the coordinates
-        // involved; the cells' growth (epsAbs_) covers the walk's own rounding.
-        p.pad = epsAbs_ + 1e-6f * (boxAbs + originAbs);
-        PacketWalk(0, p, p.live, p.t0, p.t1, qq);
+        p.ray[i] = &ray;
+        p.oK[i] = ray.o[K], p.oU[i] = ray.o[p.U], p.oV[i] = ray.o[p.V];
+        p.dK[i] = ray.d[K], p.dU[i] = ray.d[p.U], p.dV[i] = ray.d[p.V];
+        p.invK[i] = p.invD[i][K];
+        p.t0[i] = t0, p.t1[i] = t1;
+        p.cap[i] = q[i].Cap();
+        p.capId[i] = q[i].CapId();
+        p.live |= uint64_t(1) << i;
+        originAbs = std::max({originAbs, std::abs(ray.o.x), std::abs(ray.o.y), std::abs(ray.o.z)});
+        const detail::PreparedRay& pr = q[i].ray;
+        if (!pr.valid) continue;
+        if (!p.frameLanes) p.fkx = pr.kx, p.fky = pr.ky, p.fkz = pr.kz;
+        if (pr.kx != p.fkx || pr.ky != p.fky || pr.kz != p.fkz) continue;
+        p.frameLanes |= uint64_t(1) << i;
+        p.fox[i] = pr.o[pr.kx], p.foy[i] = pr.o[pr.ky], p.foz[i] = pr.o[pr.kz];
+        p.fsx[i] = pr.sx, p.fsy[i] = pr.sy, p.fsz[i] = pr.sz;
+        p.ftMin[i] = pr.tMin, p.ftMax[i] = pr.tMax;
     }
+    if (!p.live) return;
+    const Node& top = nodes_[0];
+    for (uint64_t m = p.live; m; m &= m - 1) {
+        const int i = __builtin_ctzll(m);
+        const float perSlice = std::abs(top.cellSize[K] * p.invK[i]);  // t across one slice
+        p.slope = std::max({p.slope, std::abs(p.dU[i]) * perSlice * top.invCellSize[p.U],
+                            std::abs(p.dV[i]) * perSlice * top.invCellSize[p.V]});
+    }
+    // A little more for rounding, so that the empty-space skip stays conservative.
+    p.slope = p.slope * 1.001f + 1e-3f;
+    // Rounding of o + d·t and of the planes' t is a few ulps of the coordinates
+    // involved; the cells' growth (epsAbs_) covers the walk's own rounding.
+    p.pad = epsAbs_ + 1e-6f * (boxAbs + originAbs);
+    PacketWalk(0, p, p.live, p.t0, p.t1, q);
 }
 
 namespace {
