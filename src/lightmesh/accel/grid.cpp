@@ -84,47 +84,76 @@ struct FilterRay {
     }
 };
 
-// Lanes h … h+W-1 of a block against the ray. A lane without an exactly zero edge function
-// is decided here with the scalar test's own operations (edge signs, det, t and its
-// range): all ones in *hits exactly where IntersectPrepared hits, with its t in *t. A lane
-// with a zero edge function (the tie-breaks, in double) is all ones in *ties, left to the
-// scalar test. Returns false, without computing det and t, when no lane can hit (most
-// blocks a ray meets).
+// IntersectPrepared's arithmetic, its very operations in its order, for W lanes at once: a
+// triangle's vertices and the ray's origin and shear in the ray's frame (x, y across it,
+// z along it), each a vector, so that either side may be the one broadcast (FilterLanes:
+// 8 triangles against one ray; the packets' leaf test: one triangle against 8 rays). Lane
+// by lane the values are the scalar test's, so a lane without an exactly zero edge
+// function is decided here exactly as that test decides it.
+template <typename VF, typename VI>
+struct WatertightLanes {
+    VF aZ, bZ, cZ, cu, cv, cw;
+    VI inside;    // no edge function exactly zero, and their signs agree
+    VI zeroEdge;  // an edge function exactly zero: the tie-breaks, left to the scalar test
+
+    [[gnu::always_inline]] WatertightLanes(const VF& Ax, const VF& Ay, const VF& Az, const VF& Bx, const VF& By,
+                                           const VF& Bz, const VF& Cx, const VF& Cy, const VF& Cz, const VF& ox,
+                                           const VF& oy, const VF& oz, const VF& sx, const VF& sy) {
+        const VF zero = {};
+        aZ = Az - oz, bZ = Bz - oz, cZ = Cz - oz;
+        const VF ax = (Ax - ox) - sx * aZ, ay = (Ay - oy) - sy * aZ;
+        const VF bx = (Bx - ox) - sx * bZ, by = (By - oy) - sy * bZ;
+        const VF cx = (Cx - ox) - sx * cZ, cy = (Cy - oy) - sy * cZ;
+        cu = cx * by - cy * bx, cv = ax * cy - ay * cx, cw = bx * ay - by * ax;
+        const VI neg = (cu < zero) | (cv < zero) | (cw < zero);
+        const VI pos = (cu > zero) | (cv > zero) | (cw > zero);
+        zeroEdge = (cu == zero) | (cv == zero) | (cw == zero);
+        inside = ~(neg & pos) & ~zeroEdge;
+    }
+    // For the `inside` lanes, as IntersectPrepared without a zero edge: d0 = u + v + w,
+    // sign = d0 > 0 ? 1 : -1, (u, v, w) ·= sign, det = u + v + w > 0, t = (u·az + v·bz +
+    // w·cz) / det within (tMin, tMax). Those hits into *hits (an output, not a return value:
+    // no 32-byte vector returned outside AVX code); *t, *v, *w and *det are the scalar
+    // test's values (b1 = v / det and b2 = w / det as it computes them).
+    [[gnu::always_inline]] void Hits(const VF& sz, const VF& tMin, const VF& tMax, VI* hits, VF* t, VF* v, VF* w,
+                                     VF* det) const {
+        const VF zero = {};
+        const VF d0 = cu + cv + cw;
+        const VI positive = d0 > zero;
+        const VF one = zero + 1.0f, minusOne = zero - 1.0f;
+        const VF sign =
+            reinterpret_cast<VF>((positive & reinterpret_cast<VI>(one)) | (~positive & reinterpret_cast<VI>(minusOne)));
+        const VF u = cu * sign;
+        *v = cv * sign, *w = cw * sign;
+        *det = u + *v + *w;
+        const VF az = sz * aZ, bz = sz * bZ, cz = sz * cZ;
+        *t = (u * az + *v * bz + *w * cz) / *det;
+        *hits = inside & (d0 != zero) & (*det > zero) & (*t > tMin) & (*t < tMax);
+    }
+};
+
+// Lanes h … h+W-1 of a block against the ray (WatertightLanes): all ones in *hits exactly
+// where IntersectPrepared hits, with its t in *t, and in *ties where an edge function is
+// exactly zero (the tie-breaks, left to the scalar test). Returns false, without computing
+// det and t, when no lane can hit (most blocks a ray meets).
 template <int W>
 [[gnu::always_inline]] inline bool FilterLanes(const NestedGridAccel::TriBlock& block, int h, const FilterRay<W>& r,
                                                typename SimdVectors<W>::I* hits, typename SimdVectors<W>::I* ties,
                                                typename SimdVectors<W>::F* t) {
     using VF = typename SimdVectors<W>::F;
     using VI = typename SimdVectors<W>::I;
-    const VF zero = {};
     auto at = [&](int row) -> const VF& { return *reinterpret_cast<const VF*>(&block.v[row][h]); };
     const int kx = r.kx, ky = r.ky, kz = r.kz;
-    const VF aZ = at(kz) - r.oz, bZ = at(3 + kz) - r.oz, cZ = at(6 + kz) - r.oz;
-    const VF ax = (at(kx) - r.ox) - r.sx * aZ, ay = (at(ky) - r.oy) - r.sy * aZ;
-    const VF bx = (at(3 + kx) - r.ox) - r.sx * bZ, by = (at(3 + ky) - r.oy) - r.sy * bZ;
-    const VF cx = (at(6 + kx) - r.ox) - r.sx * cZ, cy = (at(6 + ky) - r.oy) - r.sy * cZ;
-    const VF cu = cx * by - cy * bx, cv = ax * cy - ay * cx, cw = bx * ay - by * ax;
-    const VI neg = (cu < zero) | (cv < zero) | (cw < zero);
-    const VI pos = (cu > zero) | (cv > zero) | (cw > zero);
-    const VI zeroEdge = (cu == zero) | (cv == zero) | (cw == zero);
-    const VI inside = ~(neg & pos) & ~zeroEdge;
-    *ties = zeroEdge;
-    if (!AnyLane(inside)) {
+    const WatertightLanes<VF, VI> lanes(at(kx), at(ky), at(kz), at(3 + kx), at(3 + ky), at(3 + kz), at(6 + kx),
+                                        at(6 + ky), at(6 + kz), r.ox, r.oy, r.oz, r.sx, r.sy);
+    *ties = lanes.zeroEdge;
+    if (!AnyLane(lanes.inside)) {
         *hits = VI{};
-        *t = zero;
-        return AnyLane(zeroEdge);
+        *t = VF{};
+        return AnyLane(lanes.zeroEdge);
     }
-    // As IntersectPrepared without a zero edge: d0 = u + v + w, sign = d0 > 0 ? 1 : -1,
-    // (u, v, w) ·= sign, det = u + v + w > 0, t = (u·az + v·bz + w·cz) / det in range.
-    const VF d0 = cu + cv + cw;
-    const VI positive = d0 > zero;
-    const VF one = zero + 1.0f, minusOne = zero - 1.0f;
-    const VF sign = reinterpret_cast<VF>((positive & reinterpret_cast<VI>(one)) | (~positive & reinterpret_cast<VI>(minusOne)));
-    const VF u = cu * sign, v = cv * sign, w = cw * sign;
-    const VF det = u + v + w;
-    const VF az = r.sz * aZ, bz = r.sz * bZ, cz = r.sz * cZ;
-    *t = (u * az + v * bz + w * cz) / det;
-    *hits = inside & (d0 != zero) & (det > zero) & (*t > r.tMin) & (*t < r.tMax);
+    VF v, w, det;
+    lanes.Hits(r.sz, r.tMin, r.tMax, hits, t, &v, &w, &det);
     return true;
 }
 
