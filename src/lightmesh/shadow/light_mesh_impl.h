@@ -365,6 +365,7 @@ class LightMesh final : public LightMeshShadows {
             if (++pending == 255) Flush();
         }
         void Flush() {
+            if (pending == 0) return;  // the lanes are all 0 (the gathered sums add to visible directly)
             for (int b = 0; b < Bytes(); ++b) {
                 for (int k = 0; k < 8; ++k) visible[8 * b + k] += static_cast<uint32_t>((lanes[b] >> (8 * k)) & 0xFF);
                 lanes[b] = 0;

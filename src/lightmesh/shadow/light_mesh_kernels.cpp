@@ -209,7 +209,7 @@ __attribute__((target("avx2"))) bool PatchSeesAvx2(const FrontArrays& f, const P
 // Whether any lane of a comparison's mask is set: the halves OR-ed down to one lane
 // (shuffles the compiler keeps in registers), not a loop over lanes.
 template <int W>
-[[gnu::always_inline]] inline bool AnyLane(typename SimdVectors<W>::I v) {
+[[gnu::always_inline]] inline bool AnyLane(const typename SimdVectors<W>::I& v) {
     SimdVectors<4>::I low;
     if constexpr (W == 8)
         low = __builtin_shufflevector(v, v, 0, 1, 2, 3) | __builtin_shufflevector(v, v, 4, 5, 6, 7);
@@ -362,6 +362,59 @@ __attribute__((target("avx2,popcnt"))) bool SumFrontWordsAvx2(const FrontBlock* 
     *m += used;
     return true;
 }
+/// The same sum for 1-byte words (up to 6 lights: the common case), without a pass per
+/// light: a lane's light bits 0-3 are spread to the four bytes of its 32-bit lane by one
+/// multiply, (w & 15)·0x00204081 & 0x01010101 (the four shifted copies, by 0, 7, 14 and 21
+/// bits, do not overlap, so byte k holds bit k), and bits 4-5 likewise, and added to byte
+/// counters per lane; every 255 blocks at most (a lane's byte gains at most 1 per block)
+/// the counters are widened to 16 bits and summed over the lanes. The gathered lanes not
+/// in front are 0 and add nothing. Measured (callgrind, one thread, the castle's Нет at
+/// 1024×768, 4 lights): UseAll 541 → 496 instructions a point; with two lights (the
+/// gazebo) the two are even.
+__attribute__((target("avx2"), always_inline)) inline void AddByteCounters(__m256i counters, uint32_t* sums) {
+    const __m256i zero = _mm256_setzero_si256();
+    // Bytes 0-7 and 8-15 of each half as 16-bit lanes: byte i's light is i mod 4.
+    const __m256i wide = _mm256_add_epi16(_mm256_unpacklo_epi8(counters, zero), _mm256_unpackhi_epi8(counters, zero));
+    __m128i s = _mm_add_epi16(_mm256_castsi256_si128(wide), _mm256_extracti128_si256(wide, 1));
+    s = _mm_add_epi16(s, _mm_srli_si128(s, 8));  // 16-bit lanes 0-3: lights 0-3, at most 8·255
+    alignas(16) uint32_t out[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(out), _mm_cvtepu16_epi32(s));
+    for (int k = 0; k < 4; ++k) sums[k] += out[k];
+}
+__attribute__((target("avx2,popcnt"))) bool SumFrontBytesAvx2(const FrontBlock* blocks, const uint8_t* masks,
+                                                              uint32_t count, const void* nodes, int lights,
+                                                              uint32_t* visible, uint32_t* m) {
+    const __m256i low = _mm256_set1_epi32(0x0F), spread = _mm256_set1_epi32(0x00204081),
+                  ones = _mm256_set1_epi32(0x01010101);
+    __m256i lowCounters = _mm256_setzero_si256(), highCounters = _mm256_setzero_si256();
+    uint32_t sums[8] = {}, used = 0, pending = 0;
+    const bool high = lights > 4;
+    for (uint32_t b = 0; b < count; ++b) {
+        const int mask = masks[b];
+        if (!mask) continue;
+        __m256i w;
+        if (!GatherFrontWords<1>(blocks[b], mask, nodes, &w)) return false;
+        lowCounters = _mm256_add_epi32(
+            lowCounters, _mm256_and_si256(_mm256_mullo_epi32(_mm256_and_si256(w, low), spread), ones));
+        if (high)  // bits 4 and 5 (bit 6 is "inside", 7 "initialised")
+            highCounters = _mm256_add_epi32(
+                highCounters,
+                _mm256_and_si256(_mm256_mullo_epi32(_mm256_and_si256(_mm256_srli_epi32(w, 4), _mm256_set1_epi32(3)), spread),
+                                 ones));
+        used += static_cast<uint32_t>(__builtin_popcount(static_cast<unsigned>(mask)));
+        if (++pending == 255) {
+            AddByteCounters(lowCounters, sums);
+            AddByteCounters(highCounters, sums + 4);
+            lowCounters = highCounters = _mm256_setzero_si256();
+            pending = 0;
+        }
+    }
+    AddByteCounters(lowCounters, sums);
+    if (high) AddByteCounters(highCounters, sums + 4);
+    for (int l = 0; l < lights; ++l) visible[l] += sums[l];
+    *m += used;
+    return true;
+}
 
 /// The near-list filter one id at a time, without branches (a third of a list passes, at
 /// random): each id is written and kept if it passes. The AVX2 pass's oracle.
@@ -502,7 +555,7 @@ SumFrontFunction ChooseSumFrontFunction(int width, int wordBytes) {
 #else
     if (!((width == 0 || width == 8) && __builtin_cpu_supports("avx2"))) return nullptr;
     switch (wordBytes) {
-        case 1: return SumFrontWordsAvx2<1>;
+        case 1: return SumFrontBytesAvx2;
         case 2: return SumFrontWordsAvx2<2>;
         case 4: return SumFrontWordsAvx2<4>;
         default: return nullptr;  // 8-byte words (31-62 lights): the scalar sums

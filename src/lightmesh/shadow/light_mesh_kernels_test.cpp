@@ -142,6 +142,75 @@ TEST(LightMeshKernels, FrontTestsOfEveryWidthAgreeAndSkipPadding) {
     EXPECT_GT(padded, 100u);  // the padding's exclusion was tested where it matters
 }
 
+// Нет's gathered sums (LightMesh::UseAll) against a sum entry by entry, for node words of
+// 1, 2 and 4 bytes and every number of lights they hold: random words (the top bit,
+// "initialised", set; the bit below it, "inside", random), random front masks over blocks
+// of random nodes, runs longer than 255 blocks (the byte counters' widening), and an entry
+// in front not yet evaluated, which must make the sum fail without adding anything.
+TEST(LightMeshKernels, GatheredSumsEqualTheEntryByEntrySums) {
+    std::mt19937 rng(20261204);
+    const uint32_t kNodes = 4096;
+    for (const int bytes : {1, 2, 4}) {
+        const SumFrontFunction sum = ChooseSumFrontFunction(0, bytes);
+        if (!sum) GTEST_SKIP() << "no AVX2 (or ThreadSanitizer): the scalar sums are used";
+        const int bits = 8 * bytes;
+        // Words as bytes, padded after the last node as LightMesh pads its array.
+        std::vector<uint8_t> store((kNodes + 8) * bytes, 0);
+        auto word = [&](uint32_t i) {
+            uint32_t w = 0;
+            std::memcpy(&w, store.data() + size_t(i) * bytes, bytes);
+            return w;
+        };
+        for (const int lights : {1, 2, 3, 4, 5, 6, bits - 2})
+        for (const bool allLit : {false, true}) {  // all lit: every counter gains 1 per block
+            if (lights > bits - 2) continue;
+            for (uint32_t i = 0; i < kNodes; ++i) {
+                uint32_t w = (allLit ? ~0u : static_cast<uint32_t>(rng())) & ((1u << lights) - 1);
+                w |= (static_cast<uint32_t>(rng()) & 1u) << (bits - 2);  // "inside"
+                w |= 1u << (bits - 1);                                    // "initialised"
+                std::memcpy(store.data() + size_t(i) * bytes, &w, bytes);
+            }
+            for (const uint32_t count : {1u, 5u, 40u, 254u, 255u, 256u, 600u}) {
+                std::vector<FrontBlock> blocks(count);
+                std::vector<uint8_t> masks(count);
+                std::uniform_int_distribution<uint32_t> node(0, kNodes - 1);
+                for (uint32_t b = 0; b < count; ++b) {
+                    blocks[b] = FrontBlock{};
+                    blocks[b].lanes = static_cast<uint8_t>(rng());
+                    for (int k = 0; k < 8; ++k) blocks[b].linear[k] = static_cast<int32_t>(node(rng));
+                    masks[b] = static_cast<uint8_t>(rng() & rng() & blocks[b].lanes);  // a few empty
+                    if (count > 200) masks[b] = blocks[b].lanes = 0xFF;  // dense: counters at their limit
+                }
+                std::vector<uint32_t> want(lights, 7), got(lights, 7);
+                uint32_t wantM = 3, gotM = 3;
+                for (uint32_t b = 0; b < count; ++b)
+                    for (int k = 0; k < 8; ++k) {
+                        if (!((masks[b] >> k) & 1)) continue;
+                        const uint32_t w = word(static_cast<uint32_t>(blocks[b].linear[k]));
+                        ++wantM;
+                        for (int l = 0; l < lights; ++l) want[l] += (w >> l) & 1;
+                    }
+                ASSERT_TRUE(sum(blocks.data(), masks.data(), count, store.data(), lights, got.data(), &gotM));
+                EXPECT_EQ(gotM, wantM) << bytes << " bytes, " << lights << " lights, " << count << " blocks";
+                EXPECT_EQ(got, want) << bytes << " bytes, " << lights << " lights, " << count << " blocks";
+                // One entry in front of the last non-empty block not evaluated: false, nothing added.
+                uint32_t last = count;
+                while (last > 0 && masks[last - 1] == 0) --last;
+                if (last == 0) continue;
+                const uint32_t victim = static_cast<uint32_t>(blocks[last - 1].linear[std::countr_zero(masks[last - 1])]);
+                const uint32_t saved = word(victim), cleared = saved & ~(1u << (bits - 1));
+                std::memcpy(store.data() + size_t(victim) * bytes, &cleared, bytes);
+                std::vector<uint32_t> untouched(lights, 7);
+                uint32_t m = 3;
+                EXPECT_FALSE(sum(blocks.data(), masks.data(), count, store.data(), lights, untouched.data(), &m));
+                EXPECT_EQ(m, 3u);
+                EXPECT_EQ(untouched, std::vector<uint32_t>(lights, 7));
+                std::memcpy(store.data() + size_t(victim) * bytes, &saved, bytes);
+            }
+        }
+    }
+}
+
 // The cell summaries' brick lists (LightMesh::NearCodes, LightMesh::ComputeSummary): the
 // AVX2 near codes equal BrickAxisBits' for boxes touching the cells' bounds, around them,
 // and with a NaN bound; the filtered lists equal those of the definition, in the list's
