@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cassert>
 #include <cstddef>
 #include <cstdlib>
 #include <limits>
@@ -273,6 +274,14 @@ class LightMesh final : public LightMeshShadows {
     FrontList* Patch(const CellSummary& c, int64_t base, int ci, int cj, int ck, const ShadingPoint& sp) const;
     void BuildPatch(FrontList& list, int ci, int cj, int ck, const ShadingPoint& sp, float offset) const;
     bool PatchSees(FrontList& list, const FrontBlock& b, int k, const Vec3& x) const;
+    // What the patch already knows of entry k's node: 1 it sees the whole patch, 0 not
+    // certain (its segments need deciding), -1 not tested yet (PatchSees will).
+    int PatchKnown(const FrontList& list, const FrontBlock& b, int k) const {
+        const uint32_t bit = CubeBit(b, k), word = bit >> 6;
+        const uint64_t mask = uint64_t(1) << (bit & 63);
+        if (!(list.known[word] & mask)) return -1;
+        return (list.sees[word] & mask) != 0 ? 1 : 0;
+    }
     const FrontBlock* PatchWitness(const CellSummary& c, int64_t base, int ci, int cj, int ck, const ShadingPoint& sp,
                                    const FrontRun& all, RenderCounters& counters, int* lane = nullptr) const;
     void FindBlockers(const CellSummary& c, int64_t base, const ShadingPoint& sp, Blockers* b) const;
@@ -595,6 +604,13 @@ class LightMesh final : public LightMeshShadows {
         if (nodes_[index].compare_exchange_strong(expected, value, std::memory_order_acq_rel))
             evaluated_.fetch_add(1, std::memory_order_relaxed);
         return value;
+    }
+    // The word of a node a pass before evaluated (ConsensusWalk's pass 1 evaluates every
+    // candidate): no test of the "initialised" bit, no call.
+    Word EvaluatedWord(uint64_t index) const {
+        const Word w = nodes_[index].load(std::memory_order_acquire);
+        assert(w & kInit);
+        return w;
     }
 
     Word EvaluateVisibility(const Vec3& x, uint64_t index) const;
