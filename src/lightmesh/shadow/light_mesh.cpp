@@ -129,11 +129,12 @@ StatsLines LightMeshShadows::CounterLines(const RenderCounters& counters) const 
         lines.push_back(
             {"cells", StringPrintf("points answered by their cell's summary %s (%.1f%%), in planar cells %s (%.1f%%), "
                                    "segments decided without a ray %s (%s by the point's blockers, %s by a node that "
-                                   "sees the whole cell patch); mean m counts the other points only",
+                                   "sees the whole cell patch), points without a cell patch (too few camera rays for "
+                                   "its front triangles) %s; mean m counts the other points only",
                                    FormatCount(uniform).c_str(), 100.0 * static_cast<double>(uniform) / points,
                                    FormatCount(planar).c_str(), 100.0 * static_cast<double>(planar) / points,
                                    FormatCount(culled + patch).c_str(), FormatCount(culled).c_str(),
-                                   FormatCount(patch).c_str())});
+                                   FormatCount(patch).c_str(), FormatCount(n(LightMeshCount::kPatchesNotPaying)).c_str())});
     const uint64_t penumbra = n(LightMeshCount::kPenumbraLights);
     if (penumbra > 0)
         lines.push_back(
@@ -213,6 +214,7 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
     if (summaries_ && cellSummaries == "auto" && options.rayAngle > 0) {
         const float reach = lattice_.h / (options.rayAngle * std::sqrt(kMinRaysPerCell));
         summaryReach2_ = reach * reach;
+        patchRayAngle2_ = options.rayAngle * options.rayAngle;
     }
     if (summaries_) {
         bricksX_ = static_cast<uint64_t>(lattice.nx + kBrick - 1) / kBrick;

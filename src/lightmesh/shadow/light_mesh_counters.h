@@ -25,6 +25,7 @@ enum class LightMeshCount : size_t {
     kPenumbraSampled,    ///< … by rays to the light's disc (the rest: the lattice and P's ray)
     kThinChecks,         ///< (point, light) pairs where P's own ray checked the nodes' answer
     kThinFound,          ///< … of them where it disagreed (an occluder or gap thinner than h)
+    kPatchesNotPaying,   ///< points whose cell patch was not built: too few camera rays for its front triangles
     kNumber,             ///< how many there are (not a count)
 };
 static_assert(static_cast<size_t>(LightMeshCount::kNumber) <= kMethodCounterSlots,

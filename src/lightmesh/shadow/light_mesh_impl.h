@@ -271,7 +271,8 @@ class LightMesh final : public LightMeshShadows {
     // cell patch and the node that sees all of it, its blockers, the segment culling.
     FrontList& FrontTriangles(const CellSummary& c, int64_t base, const ShadingPoint& sp) const;
 
-    FrontList* Patch(const CellSummary& c, int64_t base, int ci, int cj, int ck, const ShadingPoint& sp) const;
+    FrontList* Patch(const CellSummary& c, int64_t base, int ci, int cj, int ck, const ShadingPoint& sp,
+                     RenderCounters& counters) const;
     void BuildPatch(FrontList& list, int ci, int cj, int ck, const ShadingPoint& sp, float offset) const;
     bool PatchSees(FrontList& list, const FrontBlock& b, int k, const Vec3& x) const;
     // What the patch already knows of entry k's node: 1 it sees the whole patch, 0 not
@@ -688,6 +689,23 @@ class LightMesh final : public LightMeshShadows {
     // do not pay: a matter of time only.
     static constexpr float kMinRaysPerCell = 8.0f;
     bool SummaryPays(const ShadingPoint& sp) const { return LengthSquared(sp.p - camera_) <= summaryReach2_; }
+    // A cell patch (Patch, ours) serves the points of one triangle in one cell. Building it
+    // scans the cell's front triangles, and each node's first test scans them again; a
+    // point without one decides its segments with its blockers or the back-end, as exactly.
+    // It pays where the triangle's part of the cell meets many camera rays for its number
+    // of front triangles: about min(area, h²) / (rayAngle·d)² rays at a distance d. "auto"
+    // builds one only where that is at least the number of front triangles (measured,
+    // callgrind, one thread: the garden's light mesh 4,422M -> 4,060M instructions at
+    // 1024×600, where a patch per leaf and cell, with ~100 front triangles, rarely decided
+    // a segment; the gazebo's 517M -> 512M, the castle's within 0.2 %; at 512×300 the
+    // garden -18 %, the parque -5 %, the castle -3 %). Like SummaryPays, a matter of the
+    // point and the camera only: the counts stay the same for any thread count.
+    float patchRayAngle2_ = 0;  // rayAngle² ("auto" with a known ray angle); 0: always
+    bool PatchPays(const ShadingPoint& sp, const Vec3& v0, const Vec3& v1, const Vec3& v2, uint32_t front) const {
+        if (patchRayAngle2_ == 0) return true;
+        const float area = std::min(0.5f * Length(Cross(v1 - v0, v2 - v0)), lattice_.h * lattice_.h);
+        return area >= static_cast<float>(front) * patchRayAngle2_ * LengthSquared(sp.p - camera_);
+    }
     uint64_t binPairs_ = 0;      // (triangle, brick) pairs the binning counted
     std::vector<int64_t> cellNodes_;  // linear offsets of the union of the templates
     std::vector<std::array<int8_t, 3>> cellOffsets_;  // the same nodes' offsets per axis

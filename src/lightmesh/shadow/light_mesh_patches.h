@@ -98,7 +98,7 @@ inline auto LightMesh<Word>::FrontTriangles(const CellSummary& c, int64_t base, 
 // before: --stats are the same for any thread count.
 template <typename Word>
 inline auto LightMesh<Word>::Patch(const CellSummary& c, int64_t base, int ci, int cj, int ck,
-                                   const ShadingPoint& sp) const -> FrontList* {
+                                   const ShadingPoint& sp, RenderCounters& counters) const -> FrontList* {
     if (!patches_ || c.reachCount == kTooMany || planes_[sp.prim].n == Vec3(0.0f)) return nullptr;
     const Vec3 &v0 = scene_.mesh.Vertex(sp.prim, 0), &v1 = scene_.mesh.Vertex(sp.prim, 1),
                &v2 = scene_.mesh.Vertex(sp.prim, 2);
@@ -110,6 +110,10 @@ inline auto LightMesh<Word>::Patch(const CellSummary& c, int64_t base, int ci, i
     const TrianglePlane& own = planes_[sp.prim];
     if (!(std::abs(Dot(own.n, sp.p) - own.d) <= 2 * c.delta)) return nullptr;
     FrontList& list = FrontTriangles(c, base, sp);
+    if (!PatchPays(sp, v0, v1, v2, list.arrays.count)) {
+        ++Count(counters, LightMeshCount::kPatchesNotPaying);
+        return nullptr;
+    }
     if (!list.patchTried) BuildPatch(list, ci, cj, ck, sp, offset);
     if (!list.patch || list.normal != sp.n) return nullptr;
     return &list;
@@ -222,7 +226,7 @@ template <typename Word>
 inline const FrontBlock* LightMesh<Word>::PatchWitness(const CellSummary& c, int64_t base, int ci, int cj, int ck,
                                                        const ShadingPoint& sp, const FrontRun& all,
                                                        RenderCounters& counters, int* lane) const {
-    FrontList* patch = Patch(c, base, ci, cj, ck, sp);
+    FrontList* patch = Patch(c, base, ci, cj, ck, sp, counters);
     if (!patch) return nullptr;
     const FrontBlock* found = nullptr;
     all.Any([&](const FrontBlock& b, int k) {

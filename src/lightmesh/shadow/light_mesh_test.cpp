@@ -519,6 +519,54 @@ TEST(LightMesh, AutoSummariesOnlyWhereTheImageIsFineEnough) {
     EXPECT_GT(Count(render(48, 36, "on").counters, Lmc::kUniformCellPoints), 0u);
 }
 
+// "auto" builds a cell patch only where the triangle's part of the cell meets at least as
+// many camera rays as the cell has front triangles (LightMesh::PatchPays). A floor of two
+// large triangles under six boxes: at 320×240 a cell (h 0.1) meets ~100 camera rays, more
+// than any cell has front triangles, and "auto" keeps every patch "on" builds; at 120×90
+// ~15, which the summaries still take (8 or more) but the cells among the boxes, with
+// more front triangles, get no patch. The images are ОТ's whatever the choice.
+TEST(LightMesh, AutoPatchesOnlyWhereTheyMeetEnoughRays) {
+    Scene s = FloorScene(2.0f);
+    AddBox(&s, {-0.5f, 0, -0.4f}, {0.3f, 0.7f, 0.3f});
+    AddBox(&s, {0.1f, 0.9f, -0.2f}, {0.7f, 0.95f, 0.4f});  // floating: a penumbra on the floor
+    for (int k = 0; k < 4; ++k) {  // small boxes around them: cells with 40-80 front triangles
+        const float x = -0.8f + 0.45f * static_cast<float>(k);
+        AddBox(&s, {x, 0, 0.45f}, {x + 0.12f, 0.15f, 0.57f});
+    }
+    s.lights = {{{-1.5f, 3, 1.5f}, Color(8.0f), Falloff::InverseSquare}, {{2.0f, 2.5f, -1.0f}, Color(6.0f), Falloff::InverseSquare}};
+    s.camera = Camera{{0.5f, 2.5f, 3.0f}, {0, 0, 0}, {0, 1, 0}, 50.0f};
+    s.render.lightMesh.cc = 40;
+    auto accel = CreateAccelerator("grid", s.mesh);
+    for (const int width : {320, 120}) {
+        auto render = [&](const char* variant, const char* summaries) {
+            Scene r = s;
+            r.render.width = width;
+            r.render.height = width * 3 / 4;
+            r.render.lightMesh.variant = variant;
+            r.render.lightMesh.cellSummaries = summaries;
+            auto lmm = CreateShadowMethod("lmm", r, *accel, r.render);
+            return WhittedRenderer(r, *accel, *lmm, r.render).Render();
+        };
+        const RenderResult ot = render("object", "auto"), on = render("consensus", "on"),
+                           automatic = render("consensus", "auto");
+        EXPECT_EQ(ot.image.pixels, on.image.pixels) << width;
+        EXPECT_EQ(ot.image.pixels, automatic.image.pixels) << width;
+        const uint64_t onPatch = Count(on.counters, Lmc::kPatchSegments);
+        const uint64_t autoPatch = Count(automatic.counters, Lmc::kPatchSegments);
+        const uint64_t notPaying = Count(automatic.counters, Lmc::kPatchesNotPaying);
+        EXPECT_GT(onPatch, 0u) << width;
+        EXPECT_EQ(Count(on.counters, Lmc::kPatchesNotPaying), 0u) << "\"on\" builds every patch";
+        if (width == 320) {
+            EXPECT_EQ(notPaying, 0u) << "every patch pays";
+            EXPECT_EQ(autoPatch, onPatch);
+        } else {
+            EXPECT_GT(notPaying, 0u) << "the cells next to the boxes get none";
+            EXPECT_LT(autoPatch, onPatch);
+        }
+        EXPECT_GT(Count(automatic.counters, Lmc::kUniformCellPoints), 0u) << width;  // the summaries still work
+    }
+}
+
 // The summaries' tolerances follow the coordinates a cell computes with, not the scene's
 // largest: small objects near the coordinates' origin of a scene that reaches 20 units
 // away (a floor of small tiles) keep their blockers and cell patches, whose conditions

@@ -333,7 +333,7 @@ template <typename Word>
 inline void LightMesh<Word>::MinorityFirst(const ShadingPoint& sp, Word neededMask, Word majority, const FrontRun& all,
                                            int64_t base, int ci, int cj, int ck, const CellSummary* summary,
                                            Blockers& blockers, Accumulator& acc, RenderCounters& counters) const {
-    FrontList* patch = summary ? Patch(*summary, base, ci, cj, ck, sp) : nullptr;
+    FrontList* patch = summary ? Patch(*summary, base, ci, cj, ck, sp, counters) : nullptr;
     // A segment decided without the back-end (the cell patch, the point's blockers): 1
     // sees, 0 blocked, -1 for the back-end.
     // The node's position is computed only where the patch has not already decided (most
