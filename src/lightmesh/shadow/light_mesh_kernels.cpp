@@ -325,7 +325,8 @@ void FrontMasksScalar(const FrontBlock* blocks, uint32_t count, const Vec3& n, f
     }
 }
 
-/// Нет's sum (LightMesh::UseAll) with AVX2 for node words of 1, 2 or 4 bytes: the words
+/// Нет's sum (LightMesh::UseAll) with AVX2 for node words of 2 or 4 bytes (1-byte words:
+/// SumFrontBytesAvx2 below; GatherFrontWords serves all three): the words
 /// of a block's eight entries gathered at once (32-bit loads at the words' addresses: the
 /// node array has padding after its end, and the bytes above a narrower word are shifted
 /// out), then per light the entries in front whose bit is set, by popcount of a movemask.
@@ -404,7 +405,7 @@ __attribute__((target("avx2,popcnt"))) bool SumFrontBytesAvx2(const FrontBlock* 
         used += static_cast<uint32_t>(__builtin_popcount(static_cast<unsigned>(mask)));
         if (++pending == 255) {
             AddByteCounters(lowCounters, sums);
-            AddByteCounters(highCounters, sums + 4);
+            if (high) AddByteCounters(highCounters, sums + 4);
             lowCounters = highCounters = _mm256_setzero_si256();
             pending = 0;
         }

@@ -204,9 +204,9 @@ inline void LightMesh<Word>::BuildPatch(FrontList& list, int ci, int cj, int ck,
 // when not certain (the caller tests the segment).
 template <typename Word>
 inline bool LightMesh<Word>::PatchSees(FrontList& list, const FrontBlock& b, int k, const Vec3& x) const {
+    if (const int known = PatchKnown(list, b, k); known >= 0) return known == 1;
     const uint32_t bit = CubeBit(b, k), word = bit >> 6;
     const uint64_t mask = uint64_t(1) << (bit & 63);
-    if (list.known[word] & mask) return (list.sees[word] & mask) != 0;
     PatchQuery q;
     q.x = x;
     q.lo = Min(x, list.qlo);

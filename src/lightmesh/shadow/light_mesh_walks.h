@@ -340,15 +340,11 @@ inline void LightMesh<Word>::MinorityFirst(const ShadingPoint& sp, Word neededMa
     // candidates of a cell's later points: 12 instructions each, 2 % of the castle's light
     // mesh).
     auto decide = [&](const FrontBlock& b, int k, Vec3* x) {
-        if (patch) {
-            const int known = PatchKnown(*patch, b, k);
-            if (known == 1 || (known < 0 && PatchSees(*patch, b, k, *x = EntryNode(ci, cj, ck, b, k)))) {
-                ++Count(counters, LightMeshCount::kPatchSegments);
-                return 1;
-            }
-            if (known == 0) *x = EntryNode(ci, cj, ck, b, k);
-        } else {
-            *x = EntryNode(ci, cj, ck, b, k);
+        const int known = patch ? PatchKnown(*patch, b, k) : 0;
+        if (known < 1) *x = EntryNode(ci, cj, ck, b, k);
+        if (known == 1 || (known < 0 && PatchSees(*patch, b, k, *x))) {
+            ++Count(counters, LightMeshCount::kPatchSegments);
+            return 1;
         }
         if (summary && !blockers.tried) FindBlockers(*summary, base, sp, &blockers);
         return CullSegment(*x, sp, blockers, counters);
