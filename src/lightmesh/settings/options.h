@@ -32,7 +32,8 @@ struct LightMeshOptions {
     /// The angle between neighbouring camera rays (radians: 2·tan(fov/2) / (height·aa)),
     /// filled in from the render's camera and size; 0 if unknown. With "auto" a cell's
     /// summary is used only where the image is fine enough for it to pay: where the cell
-    /// spans about kMinRaysPerCell camera rays or more (see LightMesh::SummaryPays).
+    /// spans about kMinRaysPerCell camera rays or more (see LightMesh::SummaryPays), and a
+    /// cell patch only where it meets enough rays for its front triangles (PatchPays).
     float rayAngle = 0.0f;
     /// Lanes of the vectorised loops (the templates' front test, the segment culling), for
     /// tests: 1 the scalar front test (the oracle of the others), 4 SSE, 8 AVX2 where the
