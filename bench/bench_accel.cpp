@@ -389,7 +389,10 @@ class RatioReporter : public benchmark::ConsoleReporter {
             std::string key = parts[0] + "/" + parts[1] + (parts.size() > 3 ? "/" + parts[3] : "");
             rows[key][parts[2]] = value;
         }
-        for (const auto& [key, byAccel] : rows) {
+        for (const auto& row : rows) {
+            // (Not a structured binding: clang before 16 does not let the lambdas capture one.)
+            const std::string& key = row.first;
+            const std::map<std::string, double>& byAccel = row.second;
             auto get = [&](const char* a) {
                 const auto it = byAccel.find(a);
                 return it == byAccel.end() ? -1.0 : it->second;

@@ -676,6 +676,9 @@ TEST(AccelBatch, CoherentPacketsGetTheAnswersTheyGetAlone) {
             }
             EXPECT_GT(hitCount, rays / 10) << sceneName << " " << name;
             EXPECT_LT(hitCount, rays - rays / 20) << sceneName << " " << name;
+            // The occlusion answers compared are both kinds too.
+            EXPECT_GT(blocked, rays / 10) << sceneName << " " << name;
+            EXPECT_LT(blocked, rays - rays / 20) << sceneName << " " << name;
             EXPECT_EQ(differ, 0) << sceneName << " " << name << ": " << differ << " of " << rays;
             EXPECT_EQ(differOcc, 0) << sceneName << " " << name << ": " << differOcc << " of " << rays;
         }

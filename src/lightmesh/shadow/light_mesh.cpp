@@ -181,6 +181,7 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
       filterNear_(ChooseFilterNearFunction(options.simdWidth)),
       nearCodes_(ChooseNearCodesFunction(options.simdWidth)),
       sumFront_(ChooseSumFrontFunction(options.simdWidth, static_cast<int>(sizeof(Word)))),
+      minority_(ChooseMinorityFunction(options.simdWidth, static_cast<int>(sizeof(Word)))),
       nodes_(ZeroedArray<Word>(lattice.NodeCount() + kNodePadding)),
       lightRadius_(options.lightRadius) {
     if (lightRadius_ > 0)

@@ -665,6 +665,7 @@ class LightMesh final : public LightMeshShadows {
     // Entry k's node's bit in the cube (the cell patches' node states).
     uint32_t CubeBit(const FrontBlock& b, int k) const { return CubeIndex(b.ox[k], b.oy[k], b.oz[k]); }
     SumFrontFunction sumFront_ = nullptr;  // for words of 1, 2 or 4 bytes
+    MinorityFunction minority_ = nullptr;  // likewise
     static constexpr size_t kPacketLights = 16;  // a node's rays as one packet from this many lights (EvaluateVisibility)
     static constexpr uint64_t kNodePadding = 8;  // words after the last node, for SumFrontWordsAvx2's loads
     const uint64_t serial_ = NextSerial();  // tells this mesh's thread-local caches from others'

@@ -417,6 +417,28 @@ __attribute__((target("avx2,popcnt"))) bool SumFrontBytesAvx2(const FrontBlock* 
     return true;
 }
 
+/// Consensus's minority and majority with AVX2: a block's words gathered as for the sums,
+/// their needed bits compared with the majority's lane by lane (the bytes above a narrower
+/// word are masked out with the bits not needed), instead of a load, a compare and a shift
+/// per entry. Measured (callgrind, one thread, castle at 1024×768): the light mesh's
+/// instructions 1,136M → 1,113M at kI 2 and 3,576M → 3,435M at kI 3.
+template <int Bytes>
+__attribute__((target("avx2"))) void MinorityMasksAvx2(const FrontBlock* blocks, const uint8_t* masks, uint32_t count,
+                                                       const void* nodes, uint32_t needed, uint32_t majority,
+                                                       uint8_t* minority, uint8_t* majorityMasks) {
+    const __m256i need = _mm256_set1_epi32(static_cast<int>(needed)), major = _mm256_set1_epi32(static_cast<int>(majority));
+    for (uint32_t b = 0; b < count; ++b) {
+        const int mask = masks[b];
+        minority[b] = majorityMasks[b] = 0;
+        if (!mask) continue;
+        __m256i w;
+        GatherFrontWords<Bytes>(blocks[b], mask, nodes, &w);  // all evaluated (the caller's pass 1)
+        const int same = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(w, need), major)));
+        minority[b] = static_cast<uint8_t>(~same & mask);
+        majorityMasks[b] = static_cast<uint8_t>(same & mask);
+    }
+}
+
 /// The near-list filter one id at a time, without branches (a third of a list passes, at
 /// random): each id is written and kept if it passes. The AVX2 pass's oracle.
 uint64_t FilterNearScalar(const uint32_t* ids, const uint32_t* codes, uint32_t count, uint32_t reachBits,
@@ -546,6 +568,22 @@ CullFunction ChooseCullFunction(int width) {
 FrontFunction ChooseFrontFunction(int width) {
     if (width == 1) return FrontMasksScalar;
     return width != 4 && __builtin_cpu_supports("avx2") ? FrontMasksAvx2 : FrontMasksSse;
+}
+
+MinorityFunction ChooseMinorityFunction(int width, int wordBytes) {
+#ifdef LIGHTMESH_TSAN
+    (void)width;
+    (void)wordBytes;
+    return nullptr;
+#else
+    if (!((width == 0 || width == 8) && __builtin_cpu_supports("avx2"))) return nullptr;
+    switch (wordBytes) {
+        case 1: return MinorityMasksAvx2<1>;
+        case 2: return MinorityMasksAvx2<2>;
+        case 4: return MinorityMasksAvx2<4>;
+        default: return nullptr;
+    }
+#endif
 }
 
 SumFrontFunction ChooseSumFrontFunction(int width, int wordBytes) {

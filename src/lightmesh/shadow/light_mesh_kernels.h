@@ -179,6 +179,14 @@ FrontFunction ChooseFrontFunction(int width);
 using SumFrontFunction = bool (*)(const FrontBlock* blocks, const uint8_t* masks, uint32_t count, const void* nodes,
                                   int lights, uint32_t* visible, uint32_t* m);
 SumFrontFunction ChooseSumFrontFunction(int width, int wordBytes);
+/// Consensus's two groups (LightMesh::MinorityFirst) for node words of `wordBytes` bytes:
+/// bit k of minority[b] is set when lane k of block b is in front (masks[b]) and its
+/// word's `needed` bits are not `majority`, of majorityMasks[b] when they are. Every entry
+/// in front must be evaluated. Null where the gathers are not used (as for
+/// SumFrontFunction).
+using MinorityFunction = void (*)(const FrontBlock* blocks, const uint8_t* masks, uint32_t count, const void* nodes,
+                                  uint32_t needed, uint32_t majority, uint8_t* minority, uint8_t* majorityMasks);
+MinorityFunction ChooseMinorityFunction(int width, int wordBytes);
 /// A point's blockers from its cell's front triangles; false if more than kMaxBlockers.
 using FindBlockersFunction = bool (*)(const FrontArrays& f, const BlockerQuery& q, Blockers* b);
 FindBlockersFunction ChooseFindBlockersFunction(int width);

@@ -211,6 +211,63 @@ TEST(LightMeshKernels, GatheredSumsEqualTheEntryByEntrySums) {
     }
 }
 
+// Consensus's minority and majority masks (LightMesh::MinorityFirst) against the comparison
+// entry by entry, for node words of 1, 2 and 4 bytes: random words whose needed bits are
+// the majority's about half the time, random needed masks (so bits not needed differ
+// freely, and the bytes above a narrower word, which the gathers load too, hold noise),
+// random front masks with empty blocks.
+TEST(LightMeshKernels, MinorityMasksEqualTheEntryByEntryComparison) {
+    std::mt19937 rng(20261205);
+    const uint32_t kNodes = 2048;
+    for (const int bytes : {1, 2, 4}) {
+        const MinorityFunction split = ChooseMinorityFunction(0, bytes);
+        if (!split) GTEST_SKIP() << "no AVX2 (or ThreadSanitizer): the scalar loop is used";
+        EXPECT_EQ(ChooseMinorityFunction(1, bytes), nullptr);
+        const int bits = 8 * bytes, lights = bits - 2;
+        std::vector<uint8_t> store((kNodes + 8) * bytes, 0);
+        uint64_t minorities = 0, majorities = 0;
+        for (int round = 0; round < 50; ++round) {
+            const uint32_t lightBits = lights >= 32 ? ~0u : (1u << lights) - 1;
+            uint32_t needed = static_cast<uint32_t>(rng()) & lightBits;
+            if (round % 5 == 0) needed = lightBits;
+            const uint32_t majority = static_cast<uint32_t>(rng()) & needed;
+            for (uint32_t i = 0; i < kNodes + 8; ++i) {
+                uint32_t w = static_cast<uint32_t>(rng()) & lightBits;
+                if (rng() & 1) w = (w & ~needed) | majority;  // the majority's bits where needed
+                w |= 1u << (bits - 1);                          // "initialised"
+                std::memcpy(store.data() + size_t(i) * bytes, &w, bytes);
+            }
+            const uint32_t count = 1 + static_cast<uint32_t>(rng() % 40);
+            std::vector<FrontBlock> blocks(count);
+            std::vector<uint8_t> masks(count), minority(count, 0xAA), majorityOut(count, 0x55);
+            std::uniform_int_distribution<uint32_t> node(0, kNodes - 1);
+            for (uint32_t b = 0; b < count; ++b) {
+                blocks[b] = FrontBlock{};
+                blocks[b].lanes = static_cast<uint8_t>(rng());
+                for (int k = 0; k < 8; ++k) blocks[b].linear[k] = static_cast<int32_t>(node(rng));
+                masks[b] = static_cast<uint8_t>(rng() & blocks[b].lanes);
+            }
+            split(blocks.data(), masks.data(), count, store.data(), needed, majority, minority.data(), majorityOut.data());
+            for (uint32_t b = 0; b < count; ++b) {
+                uint8_t wantMinority = 0, wantMajority = 0;
+                for (int k = 0; k < 8; ++k) {
+                    if (!((masks[b] >> k) & 1)) continue;
+                    uint32_t w = 0;
+                    std::memcpy(&w, store.data() + size_t(blocks[b].linear[k]) * bytes, bytes);
+                    if ((w & needed) != majority) wantMinority |= static_cast<uint8_t>(1 << k);
+                    else wantMajority |= static_cast<uint8_t>(1 << k);
+                }
+                ASSERT_EQ(minority[b], wantMinority) << bytes << " bytes, round " << round << ", block " << b;
+                ASSERT_EQ(majorityOut[b], wantMajority) << bytes << " bytes, round " << round << ", block " << b;
+                minorities += static_cast<uint64_t>(std::popcount(wantMinority));
+                majorities += static_cast<uint64_t>(std::popcount(wantMajority));
+            }
+        }
+        EXPECT_GT(minorities, 500u) << bytes;
+        EXPECT_GT(majorities, 500u) << bytes;
+    }
+}
+
 // The cell summaries' brick lists (LightMesh::NearCodes, LightMesh::ComputeSummary): the
 // AVX2 near codes equal BrickAxisBits' for boxes touching the cells' bounds, around them,
 // and with a NaN bound; the filtered lists equal those of the definition, in the list's

@@ -44,10 +44,11 @@ inline auto LightMesh<Word>::FrontTriangles(const CellSummary& c, int64_t base, 
     uint32_t count = 0;
     for (uint32_t i = 0; i < c.reachCount; ++i) {
         const uint32_t t = c.reach[i];
-        const bool front = (Dot(n, mesh.Vertex(t, 0)) - d > limit) | (Dot(n, mesh.Vertex(t, 1)) - d > limit) |
-                           (Dot(n, mesh.Vertex(t, 2)) - d > limit);
+        // (| on ints, not ||: no branch per vertex.)
+        const int front = int(Dot(n, mesh.Vertex(t, 0)) - d > limit) | int(Dot(n, mesh.Vertex(t, 1)) - d > limit) |
+                          int(Dot(n, mesh.Vertex(t, 2)) - d > limit);
         picked[count] = t;
-        count += front;
+        count += static_cast<uint32_t>(front);
     }
     for (uint32_t i = 0; i < count; ++i) {
         const uint32_t t = picked[i];

@@ -358,15 +358,22 @@ inline void LightMesh<Word>::MinorityFirst(const ShadingPoint& sp, Word neededMa
     Scratch<uint8_t, 256> maskScratch(2 * size_t(all.count));
     uint8_t* minorityMasks = maskScratch.data();
     uint8_t* majorityMasks = minorityMasks + all.count;
-    for (uint32_t b = 0; b < all.count; ++b) {
-        unsigned minority = 0;
-        for (unsigned m = all.masks[b]; m; m &= m - 1) {
-            const int k = __builtin_ctz(m);
-            const Word w = EvaluatedWord(static_cast<uint64_t>(base + all.blocks[b].linear[k]));
-            minority |= static_cast<unsigned>((w & neededMask) != majority) << k;
+    // (With gathers a block at a time: at kI 3 the entry-by-entry loop below was 4 % of
+    // the castle's light mesh.)
+    if (minority_) {
+        minority_(all.blocks, all.masks, all.count, static_cast<const void*>(nodes_.get() + base),
+                  static_cast<uint32_t>(neededMask), static_cast<uint32_t>(majority), minorityMasks, majorityMasks);
+    } else {
+        for (uint32_t b = 0; b < all.count; ++b) {
+            unsigned minority = 0;
+            for (unsigned m = all.masks[b]; m; m &= m - 1) {
+                const int k = __builtin_ctz(m);
+                const Word w = EvaluatedWord(static_cast<uint64_t>(base + all.blocks[b].linear[k]));
+                minority |= static_cast<unsigned>((w & neededMask) != majority) << k;
+            }
+            minorityMasks[b] = static_cast<uint8_t>(minority);
+            majorityMasks[b] = static_cast<uint8_t>(all.masks[b] & ~minority);
         }
-        minorityMasks[b] = static_cast<uint8_t>(minority);
-        majorityMasks[b] = static_cast<uint8_t>(all.masks[b] & ~minority);
     }
     const FrontRun minorityRun{all.blocks, minorityMasks, all.count}, majorityRun{all.blocks, majorityMasks, all.count};
     // Decides every segment of the run's candidates, and uses those that see P (the
