@@ -178,6 +178,7 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
       cull_(ChooseCullFunction(options.simdWidth)),
       findBlockers_(ChooseFindBlockersFunction(options.simdWidth)),
       patchSees_(ChoosePatchSeesFunction(options.simdWidth)),
+      sideNodes_(ChooseSideNodesFunction(options.simdWidth)),
       filterNear_(ChooseFilterNearFunction(options.simdWidth)),
       nearCodes_(ChooseNearCodesFunction(options.simdWidth)),
       sumFront_(ChooseSumFrontFunction(options.simdWidth, static_cast<int>(sizeof(Word)))),
@@ -443,9 +444,13 @@ inline void LightMesh<Word>::ConvertTemplates() {
             for (int x = 0; x < cubeSide; ++x, ++e)
                 if (present[e]) all.push_back({static_cast<int8_t>(x + minOffset_), static_cast<int8_t>(y + minOffset_),
                                                static_cast<int8_t>(z + minOffset_)});
-    for (const auto& o : all) cellNodes_.push_back(linear(o[0], o[1], o[2]));
+    for (const auto& o : all) {
+        cellNodes_.push_back(linear(o[0], o[1], o[2]));
+        cellOx_.push_back(o[0]);
+        cellOy_.push_back(o[1]);
+        cellOz_.push_back(o[2]);
+    }
     patchesFit_ = cubeFits;
-    cellOffsets_ = std::move(all);
 }
 
 template <typename Word>

@@ -310,22 +310,21 @@ inline auto LightMesh<Word>::Side(const CellSummary& c, SummaryBrick* brick, int
     }
     const LightMeshLattice& L = lattice_;
     const int64_t base = static_cast<int64_t>(L.Index(ci, cj, ck));
-    const double nf[3] = {c.n[0], c.n[1], c.n[2]};
-    // Only the slab of Π that points on Π can reach (planeSlab_: a point uses nodes within
-    // r of its snapped sub-position, so within pointReach_ of itself, and it lies within
-    // 2·planeDelta_ of Π, TemplateWalk's test); hx's rounding is far below the rest of the
-    // margin. The nodes of the cell's cube beyond it (a third of a side's nodes over a
-    // floor at kI 2) are neither evaluated nor compared.
-    const double slab = planeSlab_;
+    // The nodes on the side, off Π (hx of its node position, LightMeshLattice::Node, in
+    // double), and only in the slab of Π that points on Π can reach (planeSlab_: a point
+    // uses nodes within r of its snapped sub-position, so within pointReach_ of itself,
+    // and it lies within 2·planeDelta_ of Π, TemplateWalk's test); hx's rounding is far
+    // below the rest of the margin. The nodes of the cell's cube beyond it (a third of a
+    // side's nodes over a floor at kI 2) are neither evaluated nor compared.
+    const SideQuery q{{ci, cj, ck}, {L.origin.x, L.origin.y, L.origin.z}, L.h, {c.n[0], c.n[1], c.n[2]}, c.d,
+                      planeSlab_, side};
+    Scratch<uint32_t, 1024> keptScratch(cellNodes_.size());
+    uint32_t* kept = keptScratch.data();
+    const uint32_t count =
+        sideNodes_(cellOx_.data(), cellOy_.data(), cellOz_.data(), static_cast<uint32_t>(cellNodes_.size()), q, kept);
     Word all = kVisMask, any = 0;
-    for (size_t e = 0; e < cellNodes_.size(); ++e) {
-        const uint64_t index = static_cast<uint64_t>(base + cellNodes_[e]);
-        const std::array<int8_t, 3>& o = cellOffsets_[e];
-        const Vec3 x = L.Node(ci + o[0], cj + o[1], ck + o[2]);  // NodeAt(index), without its divisions
-        const double hx = nf[0] * x.x + nf[1] * x.y + nf[2] * x.z - c.d;
-        if (side == 0 ? !(hx > 0) : !(hx < 0)) continue;  // the other side, or on Π
-        if (std::abs(hx) > slab) continue;                 // out of reach of every point on Π
-        const Word w = Evaluate(index) & kVisMask;
+    for (uint32_t i = 0; i < count; ++i) {
+        const Word w = Evaluate(static_cast<uint64_t>(base + cellNodes_[kept[i]])) & kVisMask;
         all &= w;
         any |= w;
     }

@@ -651,6 +651,7 @@ class LightMesh final : public LightMeshShadows {
     CullFunction cull_ = nullptr;
     FindBlockersFunction findBlockers_ = nullptr;
     PatchSeesFunction patchSees_ = nullptr;
+    SideNodesFunction sideNodes_ = nullptr;
     FilterNearFunction filterNear_ = nullptr;
     NearCodesFunction nearCodes_ = nullptr;
     // Cell patches: on for consensus with summaries when the neighbourhood cube of a cell
@@ -709,7 +710,7 @@ class LightMesh final : public LightMeshShadows {
     }
     uint64_t binPairs_ = 0;      // (triangle, brick) pairs the binning counted
     std::vector<int64_t> cellNodes_;  // linear offsets of the union of the templates
-    std::vector<std::array<int8_t, 3>> cellOffsets_;  // the same nodes' offsets per axis
+    std::vector<int8_t> cellOx_, cellOy_, cellOz_;  // the same nodes' offsets, an array per axis
     ZeroedPtr<std::atomic<Word>> nodes_;
     // Penumbra mode (lightRadius_ > 0): per node and light, the nearest blocker's parameter
     // along the node's shadow segment, t·65535 (EvaluateVisibility); light l of node i at

@@ -187,6 +187,21 @@ SumFrontFunction ChooseSumFrontFunction(int width, int wordBytes);
 using MinorityFunction = void (*)(const FrontBlock* blocks, const uint8_t* masks, uint32_t count, const void* nodes,
                                   uint32_t needed, uint32_t majority, uint8_t* minority, uint8_t* majorityMasks);
 MinorityFunction ChooseMinorityFunction(int width, int wordBytes);
+/// The nodes of a cell's neighbourhood that its side summary compares (LightMesh::Side):
+/// of the `count` nodes at cell + (ox[e], oy[e], oz[e]), whose position is
+/// origin + (cell + offset)·h in float as LightMeshLattice::Node computes it, those with
+/// hx = n0·x + n1·y + n2·z − d (in double, in that order) > 0 for side 0 or < 0 for side 1,
+/// and |hx| <= slab. Writes their e to `kept` in increasing order and returns how many.
+struct SideQuery {
+    int cell[3];
+    float origin[3];
+    float h;
+    double n[3], d, slab;
+    int side;
+};
+using SideNodesFunction = uint32_t (*)(const int8_t* ox, const int8_t* oy, const int8_t* oz, uint32_t count,
+                                       const SideQuery& q, uint32_t* kept);
+SideNodesFunction ChooseSideNodesFunction(int width);
 /// A point's blockers from its cell's front triangles; false if more than kMaxBlockers.
 using FindBlockersFunction = bool (*)(const FrontArrays& f, const BlockerQuery& q, Blockers* b);
 FindBlockersFunction ChooseFindBlockersFunction(int width);

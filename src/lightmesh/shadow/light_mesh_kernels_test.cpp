@@ -268,6 +268,68 @@ TEST(LightMeshKernels, MinorityMasksEqualTheEntryByEntryComparison) {
     }
 }
 
+// The side summaries' node selection (LightMesh::Side): the AVX2 pass keeps exactly the
+// nodes the scalar one does, in the same order, for random cells, lattices and planes,
+// with nodes on the plane (hx = 0, axis-aligned planes through a node), a slab that ends
+// exactly at a node's |hx|, both sides, and every length up to three groups of four and more.
+TEST(LightMeshKernels, SideNodesOfTheVectorPassEqualTheScalarOnes) {
+    std::mt19937 rng(20261205);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    std::uniform_int_distribution<int> offset(-4, 5);
+    const SideNodesFunction scalar = ChooseSideNodesFunction(1), wide = ChooseSideNodesFunction(8);
+    uint64_t kept = 0, onPlane = 0, atSlab = 0;
+    for (int round = 0; round < 400; ++round) {
+        const uint32_t count = round < 40 ? static_cast<uint32_t>(round) : 1 + static_cast<uint32_t>(rng() % 300);
+        std::vector<int8_t> ox(count), oy(count), oz(count);
+        for (uint32_t e = 0; e < count; ++e) {
+            ox[e] = static_cast<int8_t>(offset(rng));
+            oy[e] = static_cast<int8_t>(offset(rng));
+            oz[e] = static_cast<int8_t>(offset(rng));
+        }
+        SideQuery q;
+        for (int a = 0; a < 3; ++a) {
+            q.cell[a] = static_cast<int>(rng() % 200);
+            q.origin[a] = (unit(rng) - 0.5f) * 1000.0f;
+        }
+        q.h = 0.01f + unit(rng) * 3.0f;
+        q.side = round % 2;
+        auto node = [&](uint32_t e, int a) {
+            const int8_t o = a == 0 ? ox[e] : a == 1 ? oy[e] : oz[e];
+            return q.origin[a] + static_cast<float>(q.cell[a] + o) * q.h;
+        };
+        if (round % 3 == 0 && count > 0) {  // axis-aligned through a node: exact zeros
+            const int a = static_cast<int>(rng() % 3);
+            q.n[0] = q.n[1] = q.n[2] = 0;
+            q.n[a] = rng() & 1 ? 1.0 : -1.0;
+            q.d = q.n[a] * node(static_cast<uint32_t>(rng() % count), a);
+        } else {
+            double n[3] = {unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5};
+            const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            for (int a = 0; a < 3; ++a) q.n[a] = n[a] / len;
+            q.d = count > 0 ? q.n[0] * node(0, 0) + q.n[1] * node(0, 1) + q.n[2] * node(0, 2) : 0.0;
+        }
+        q.slab = q.h * (0.5 + 3 * unit(rng));
+        if (round % 4 == 1 && count > 1) {  // the slab ends exactly at a node
+            const uint32_t e = static_cast<uint32_t>(rng() % count);
+            q.slab = std::abs(q.n[0] * node(e, 0) + q.n[1] * node(e, 1) + q.n[2] * node(e, 2) - q.d);
+            ++atSlab;
+        }
+        std::vector<uint32_t> want(count + 1, 7), got(count + 1, 7);
+        const uint32_t nWant = scalar(ox.data(), oy.data(), oz.data(), count, q, want.data());
+        const uint32_t nGot = wide(ox.data(), oy.data(), oz.data(), count, q, got.data());
+        ASSERT_EQ(nGot, nWant) << "round " << round;
+        want.resize(nWant);
+        got.resize(nGot);
+        ASSERT_EQ(got, want) << "round " << round;
+        kept += nWant;
+        for (uint32_t e = 0; e < count; ++e)
+            onPlane += q.n[0] * node(e, 0) + q.n[1] * node(e, 1) + q.n[2] * node(e, 2) - q.d == 0;
+    }
+    EXPECT_GT(kept, 5000u);
+    EXPECT_GT(onPlane, 1000u);  // nodes on Π, which neither side keeps, were there
+    EXPECT_GT(atSlab, 50u);
+}
+
 // The cell summaries' brick lists (LightMesh::NearCodes, LightMesh::ComputeSummary): the
 // AVX2 near codes equal BrickAxisBits' for boxes touching the cells' bounds, around them,
 // and with a NaN bound; the filtered lists equal those of the definition, in the list's

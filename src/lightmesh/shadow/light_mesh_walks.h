@@ -139,15 +139,16 @@ inline bool LightMesh<Word>::TemplateWalk(const ShadingPoint& sp, Word neededMas
     // (offset - frac)·n = offset·n - frac·n: the second term once per point.
     const float nfrac = Dot(sp.n, frac);
     auto node = [&](const FrontBlock& b, int k) { return EntryNode(ci, cj, ck, b, k); };
-    // The front test of all of s's entries at once, a bit mask per block of eight.
+    // The front test of all of s's entries at once, a bit mask per block of eight (after
+    // the cell summary: a uniform planar point only needs one entry in front).
     const FrontRuns& runs = frontRuns_[s];
     const uint32_t fb = runs.begin, fi = runs.inner, fe = runs.end;
     Scratch<uint8_t, 256> maskScratch(fe - fb);
     uint8_t* masks = maskScratch.data();
-    frontMasks_(frontBlocks_.data() + fb, fe - fb, sp.n, nfrac, frontEps_, masks);
     const FrontRun all{frontBlocks_.data() + fb, masks, fe - fb};
     const FrontRun boundary{frontBlocks_.data() + fb, masks, fi - fb};
     const FrontRun inner{frontBlocks_.data() + fi, masks + (fi - fb), fe - fi};
+    auto frontTest = [&] { frontMasks_(frontBlocks_.data() + fb, fe - fb, sp.n, nfrac, frontEps_, masks); };
 
     bool planar = false;
     Blockers blockers;
@@ -183,12 +184,24 @@ inline bool LightMesh<Word>::TemplateWalk(const ShadingPoint& sp, Word neededMas
             // candidate survives the variant's test, else the fallback (m = 0), exactly
             // as the walk would find.
             bool some = false;
+            if (variant_.local != LocalVisibility::Inside &&
+                (variant_.local != LocalVisibility::Consensus || planar || OwnRayChecksAgreement())) {
+                // Any entry in front: the blocks one at a time, stopping at the first with
+                // one (on the gazebo the full test was 5 % of the light mesh, and more than
+                // half of its points end here).
+                for (uint32_t b = fb; b < fe && !some; ++b) {
+                    uint8_t mask = 0;
+                    frontMasks_(frontBlocks_.data() + b, 1, sp.n, nfrac, frontEps_, &mask);
+                    some = mask != 0;
+                }
+                if (some) *uniform = (w & kVisMask) | kInit;
+                return true;  // with !some, m = 0: the caller falls back to shadow rays
+            }
+            frontTest();
             if (variant_.local == LocalVisibility::Inside) {
                 some = all.Any([&](const FrontBlock& b, int k) {
                     return !(Evaluate(static_cast<uint64_t>(base + b.linear[k])) & kInside);
                 });
-            } else if (variant_.local != LocalVisibility::Consensus || planar || OwnRayChecksAgreement()) {
-                some = all.Any([](const FrontBlock&, int) { return true; });
             } else {
                 some = PatchWitness(c, base, ci, cj, ck, sp, all, counters) != nullptr;
                 // Else usually the first candidate sees P: one ray is cheaper than
@@ -206,6 +219,7 @@ inline bool LightMesh<Word>::TemplateWalk(const ShadingPoint& sp, Word neededMas
         }
     }
 
+    frontTest();
     if (variant_.local == LocalVisibility::Consensus) {
         ConsensusWalk(sp, neededMask, all, base, ci, cj, ck, planar, summary, blockers, acc, counters);
         return true;
