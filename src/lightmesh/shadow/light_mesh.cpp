@@ -266,13 +266,24 @@ template <typename Word>
 inline void LightMesh<Word>::CheckThin(const ShadingPoint& sp, const bool* needed, uint64_t ownRays, float* vis,
                                        RenderCounters& counters) const {
     // P's own rays to the lights the nodes decided alone, traced together.
+    const uint64_t checked = ThinChecked(needed, ownRays, vis);
+    if (!checked) return;
+    ApplyThinCheck(sp, checked, LightsVisible(accel_, sp.origin, scene_.lights, checked), vis, counters);
+}
+
+template <typename Word>
+inline uint64_t LightMesh<Word>::ThinChecked(const bool* needed, uint64_t ownRays, const float* vis) const {
     uint64_t checked = 0;
     for (size_t l = 0; l < scene_.lights.size(); ++l) {
         if (!needed[l] || ((ownRays >> l) & 1)) continue;
         if (vis[l] == 1.0f || (thinCheck_ == ThinCheck::kAll && vis[l] == 0.0f)) checked |= uint64_t(1) << l;
     }
-    if (!checked) return;
-    const uint64_t visible = LightsVisible(accel_, sp.origin, scene_.lights, checked);
+    return checked;
+}
+
+template <typename Word>
+inline void LightMesh<Word>::ApplyThinCheck(const ShadingPoint& sp, uint64_t checked, uint64_t visible, float* vis,
+                                            RenderCounters& counters) const {
     for (size_t l = 0; l < scene_.lights.size(); ++l) {
         if (!((checked >> l) & 1)) continue;
         const bool lit = vis[l] == 1.0f;
@@ -285,6 +296,46 @@ inline void LightMesh<Word>::CheckThin(const ShadingPoint& sp, const bool* neede
         vis[l] = DiscLightVisibility(accel_, sp.origin, light, lightRadius_, kNarrowPerRing,
                                      AreaLightSeed(sp, static_cast<uint32_t>(l)), &rays);
         counters.shadowRays += static_cast<uint64_t>(rays);
+    }
+}
+
+template <typename Word>
+inline void LightMesh<Word>::VisibilityMany(const ShadingPoint* sps, size_t count, size_t lights, const bool* needed,
+                                            float* vis, RenderCounters& counters) const {
+    // The check's rays only touch 64 lights (LightsVisible's mask); beyond, point by point.
+    if (thinCheck_ == ThinCheck::kOff || lights > 64) {
+        ShadowMethod::VisibilityMany(sps, count, lights, needed, vis, counters);
+        return;
+    }
+    // Measured against the check point by point (the rays of one point to its lights
+    // together): see the README's penumbra benchmark.
+    constexpr size_t kChunk = 64;
+    for (size_t first = 0; first < count; first += kChunk) {
+        const size_t n = std::min(kChunk, count - first);
+        uint64_t checked[kChunk], visible[kChunk];
+        for (size_t i = 0; i < n; ++i) {
+            const size_t p = first + i;
+            const uint64_t ownRays = Interpolate(sps[p], needed + p * lights, vis + p * lights, counters);
+            checked[i] = ThinChecked(needed + p * lights, ownRays, vis + p * lights);
+            visible[i] = 0;
+        }
+        Ray rays[kChunk];
+        size_t which[kChunk];
+        bool blocked[kChunk];
+        for (size_t l = 0; l < lights; ++l) {
+            size_t m = 0;
+            for (size_t i = 0; i < n; ++i) {
+                if (!((checked[i] >> l) & 1)) continue;
+                rays[m] = LightSegment(sps[first + i].origin, scene_.lights[l].position);
+                which[m++] = i;
+            }
+            if (m == 0) continue;
+            accel_.OccludedMany(rays, m, blocked);
+            for (size_t k = 0; k < m; ++k)
+                if (!blocked[k]) visible[which[k]] |= uint64_t(1) << l;
+        }
+        for (size_t i = 0; i < n; ++i)
+            if (checked[i]) ApplyThinCheck(sps[first + i], checked[i], visible[i], vis + (first + i) * lights, counters);
     }
 }
 

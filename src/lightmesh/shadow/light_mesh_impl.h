@@ -150,6 +150,11 @@ class LightMesh final : public LightMeshShadows {
     // the thin-occluder check (CheckThin).
     void Visibility(const ShadingPoint& sp, const bool* needed, float* vis,
                     RenderCounters& counters) const override;
+    // With the thin-occluder check: every point's formula (2) first, then the check's rays
+    // of all the points light by light, as hard shadows trace theirs (coherent packets),
+    // then the check's answers; each point gets what Visibility gives it.
+    void VisibilityMany(const ShadingPoint* sps, size_t count, size_t lights, const bool* needed, float* vis,
+                        RenderCounters& counters) const override;
 
     ShadowFigures Figures() const override;
 
@@ -575,6 +580,11 @@ class LightMesh final : public LightMeshShadows {
     bool OwnRayChecksAgreement() const { return thinCheck_ == ThinCheck::kAll; }
     void CheckThin(const ShadingPoint& sp, const bool* needed, uint64_t ownRays, float* vis,
                    RenderCounters& counters) const;
+    // The lights whose nodes' answer P's own ray checks (CheckThin), and what to do with
+    // the rays' answers (bit l of `visible`: light l seen from P).
+    uint64_t ThinChecked(const bool* needed, uint64_t ownRays, const float* vis) const;
+    void ApplyThinCheck(const ShadingPoint& sp, uint64_t checked, uint64_t visible, float* vis,
+                        RenderCounters& counters) const;
     // Formula (2) itself (or the penumbra mode's answer); returns Accumulator::ownRays.
     uint64_t Interpolate(const ShadingPoint& sp, const bool* needed, float* vis, RenderCounters& counters) const;
     // Whether light sampling (not the nodes' kernel) answers a penumbra of support ρ.

@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
+#include <vector>
 
 #include "support/floor_scenes.h"
 #include "support/light_mesh_probe.h"
@@ -163,7 +165,9 @@ TEST(Penumbra, ContactShadowsStayHardWhereTodaysMethodBlurs) {
         hardFixed += vis[0] == 0.0f || vis[0] == 1.0f;
         const float v = p.Vis(sp);
         hardPenumbra += v == 0.0f || v == 1.0f;
-        if (std::abs(x) > 0.05f) EXPECT_EQ(v, x < 0 ? 1.0f : 0.0f) << x;
+        if (std::abs(x) > 0.05f) {
+            EXPECT_EQ(v, x < 0 ? 1.0f : 0.0f) << x;
+        }
     }
     // Soft only within the true penumbra (|x| <= w, about 7 of the points 0.01 apart);
     // today's fixed radius blurs a band of about 2r = 0.8 (the far part of it is dark).
@@ -298,8 +302,12 @@ TEST(Penumbra, ThinCheckGivesOccludersThinnerThanTheMeshTheirShadow) {
         // The true shadow: the disc fully covered within 0.0054 of the line, fully visible
         // beyond 0.046 (the rod's half-width plus the penumbra w = R·H/(D − H) = 0.0143,
         // projected from height 1 to the floor: ×8/7).
-        if (std::abs(dx) < 0.004f) EXPECT_EQ(vLit, 0.0f) << dx;
-        if (std::abs(dx) > 0.05f) EXPECT_EQ(vLit, 1.0f) << dx;
+        if (std::abs(dx) < 0.004f) {
+            EXPECT_EQ(vLit, 0.0f) << dx;
+        }
+        if (std::abs(dx) > 0.05f) {
+            EXPECT_EQ(vLit, 1.0f) << dx;
+        }
     }
     // The points whose own ray the rod blocks (|dx| < 0.017: 7 of these); the outer part
     // of its penumbra, where P's ray passes, keeps the nodes' 1 (a limit of the check).
@@ -318,12 +326,57 @@ TEST(Penumbra, ThinCheckAllLetsLightThroughGapsThinnerThanTheMesh) {
         const ShadingPoint sp = FloorPoint(t.x + dx, 0.3f);
         const float vLit = lit.Vis(sp), vAll = all.Vis(sp);
         EXPECT_GE(vAll, vLit) << dx;
-        if (std::abs(dx) > 0.05f) EXPECT_EQ(vAll, 0.0f) << dx;
+        if (std::abs(dx) > 0.05f) {
+            EXPECT_EQ(vAll, 0.0f) << dx;
+        }
     }
     // Without a light radius the setting does nothing: the fixed-radius method.
     const testing::LightMeshProbe fixedAll = t.Probe("all", 0.0f), fixedOff = t.Probe("off", 0.0f);
     for (float dx = -0.3f; dx <= 0.3f; dx += 0.01f)
         EXPECT_EQ(fixedAll.Vis(FloorPoint(t.x + dx, 0.3f)), fixedOff.Vis(FloorPoint(t.x + dx, 0.3f))) << dx;
+}
+
+// The batched thin check (VisibilityMany: every point's nodes first, then the check's rays
+// light by light as packets, then the disc where a ray disagrees) gives each point what
+// Visibility gives it alone: the same values, the slots of lights not needed untouched,
+// the same counts. Over more points than a packet holds (150), one and three lights, with
+// points under the rod and the slit where the check disagrees with the nodes.
+TEST(Penumbra, BatchedThinCheckGivesEachPointItsOwnAnswer) {
+    const ThinScene rod(false), slit(true);
+    Scene three = rod.scene;  // the rod with two more lights, off to the sides
+    three.lights.push_back({{rod.x - 3.0f, 6.0f, 1.0f}, Color(0.5f), Falloff::None});
+    three.lights.push_back({{rod.x + 2.0f, 7.0f, -2.0f}, Color(0.5f), Falloff::None});
+    struct Case {
+        const Scene* scene;
+        float x;  // the thin object's line
+        const char* check;
+    };
+    const Case cases[] = {{&rod.scene, rod.x, "lit"}, {&slit.scene, slit.x, "all"}, {&three, rod.x, "all"},
+                          {&three, rod.x, "lit"}};
+    uint64_t checks = 0, found = 0;
+    for (const Case& c : cases) {
+        LightMeshOptions options = testing::LightMeshSettings(100, 2.0f, "", 0.1f);
+        options.thinCheck = c.check;
+        const testing::LightMeshProbe probe(*c.scene, options);
+        const size_t lights = c.scene->lights.size();
+        std::vector<ShadingPoint> points;
+        for (int k = 0; k < 150; ++k) points.push_back(FloorPoint(c.x - 0.375f + 0.005f * k, 0.3f + 0.01f * (k % 7)));
+        const size_t slots = points.size() * lights;
+        std::unique_ptr<bool[]> needed(new bool[slots]);
+        for (size_t i = 0; i < slots; ++i) needed[i] = lights == 1 || (i * 7) % 5 != 0;  // some lights not needed
+        std::vector<float> one(slots, -1.0f), many(slots, -1.0f);
+        RenderCounters cOne, cMany;
+        for (size_t i = 0; i < points.size(); ++i)
+            probe.lmm->Visibility(points[i], needed.get() + i * lights, one.data() + i * lights, cOne);
+        probe.lmm->VisibilityMany(points.data(), points.size(), lights, needed.get(), many.data(), cMany);
+        EXPECT_EQ(many, one) << c.check << ", " << lights << " lights";
+        EXPECT_EQ(cMany.shadowRays, cOne.shadowRays) << c.check;
+        for (size_t k = 0; k < kMethodCounterSlots; ++k) EXPECT_EQ(cMany.method[k], cOne.method[k]) << c.check << " " << k;
+        checks += Count(cOne, Lmc::kThinChecks);
+        found += Count(cOne, Lmc::kThinFound);
+    }
+    EXPECT_GT(checks, 400u);
+    EXPECT_GT(found, 10u);  // the disc's path ran
 }
 
 TEST(Penumbra, BadLightRadiusOrVariantIsAnError) {
