@@ -623,36 +623,35 @@ SideNodesFunction ChooseSideNodesFunction(int width) {
     return (width == 0 || width == 8) && __builtin_cpu_supports("avx2") ? SideNodesAvx2 : SideNodesScalar;
 }
 
-MinorityFunction ChooseMinorityFunction(int width, int wordBytes) {
+// The kernels that gather node words (the sums, the minority): AVX2 only, and not under
+// ThreadSanitizer, which does not see their loads as atomic.
+static bool GathersUsable(int width) {
 #ifdef LIGHTMESH_TSAN
     (void)width;
-    (void)wordBytes;
-    return nullptr;
+    return false;
 #else
-    if (!((width == 0 || width == 8) && __builtin_cpu_supports("avx2"))) return nullptr;
+    return (width == 0 || width == 8) && __builtin_cpu_supports("avx2");
+#endif
+}
+
+MinorityFunction ChooseMinorityFunction(int width, int wordBytes) {
+    if (!GathersUsable(width)) return nullptr;
     switch (wordBytes) {
         case 1: return MinorityMasksAvx2<1>;
         case 2: return MinorityMasksAvx2<2>;
         case 4: return MinorityMasksAvx2<4>;
         default: return nullptr;
     }
-#endif
 }
 
 SumFrontFunction ChooseSumFrontFunction(int width, int wordBytes) {
-#ifdef LIGHTMESH_TSAN
-    (void)width;
-    (void)wordBytes;
-    return nullptr;
-#else
-    if (!((width == 0 || width == 8) && __builtin_cpu_supports("avx2"))) return nullptr;
+    if (!GathersUsable(width)) return nullptr;
     switch (wordBytes) {
         case 1: return SumFrontBytesAvx2;
         case 2: return SumFrontWordsAvx2<2>;
         case 4: return SumFrontWordsAvx2<4>;
         default: return nullptr;  // 8-byte words (31-62 lights): the scalar sums
     }
-#endif
 }
 
 }  // namespace lm::kernels
