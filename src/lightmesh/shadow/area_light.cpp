@@ -150,59 +150,66 @@ float SphereLightVisibility(const Accelerator& accel, const Vec3& origin, const 
     return static_cast<float>(visible) / static_cast<float>(samples);
 }
 
+DiscRings::DiscRings(const Vec3& origin, const Vec3& center, float radius, int perRing, uint64_t seed)
+    : origin_(origin), oc_(center - origin), radius_(radius), perRing_(std::clamp(perRing, 1, kMaxPerRing)) {
+    const float d2 = LengthSquared(oc_);
+    inside_ = d2 <= radius * radius;  // inside the light: all of it is visible
+    if (inside_) return;
+    CoordinateSystem(oc_ / std::sqrt(d2), &e1_, &e2_);
+    // The rings' directions by rotation from one sine and cosine per point: point k of the
+    // outer ring at turn + k·step, of the inner ring at turn + (k + ½)·step.
+    const float step = 2 * Pi / static_cast<float>(perRing_);
+    const float turn = UnitFloat(seed >> 40) * step;
+    cs_ = std::cos(0.5f * step);
+    sn_ = std::sin(0.5f * step);
+    c0_ = std::cos(turn);
+    s0_ = std::sin(turn);
+}
+
+void DiscRings::Rays(float ringRadius, bool inner, Ray* out) const {
+    float c = c0_, s = s0_;
+    auto advance = [&] {  // the angle += step / 2
+        const float c2 = c * cs_ - s * sn_;
+        s = s * cs_ + c * sn_;
+        c = c2;
+    };
+    if (inner) advance();
+    const float r = ringRadius * radius_;
+    for (int k = 0; k < perRing_; ++k, advance(), advance()) {
+        const Vec3 to = oc_ + e1_ * (r * c) + e2_ * (r * s);
+        // Like LightVisible, stop just short of the light itself.
+        out[k] = Ray{origin_, to, 0.0f, 1.0f - 1e-5f};
+    }
+}
+
 float DiscLightVisibility(const Accelerator& accel, const Vec3& origin, const Vec3& center, float radius,
                           int perRing, uint64_t seed, int* rays) {
     if (rays) *rays = 0;
-    const Vec3 oc = center - origin;
-    const float d2 = LengthSquared(oc);
-    if (d2 <= radius * radius) return 1.0f;  // inside the light: all of it is visible
-    perRing = std::clamp(perRing, 1, 32);
-    Vec3 e1, e2;
-    CoordinateSystem(oc / std::sqrt(d2), &e1, &e2);
-    // The rings' directions by rotation from one sine and cosine per call: point k of the
-    // outer ring at turn + k·step, of the inner ring at turn + (k + ½)·step.
-    const float step = 2 * Pi / static_cast<float>(perRing);
-    const float turn = UnitFloat(seed >> 40) * step;
-    const float cs = std::cos(0.5f * step), sn = std::sin(0.5f * step);
-    float c = std::cos(turn), s = std::sin(turn);
-    auto advance = [&] {  // the angle += step / 2
-        const float c2 = c * cs - s * sn;
-        s = s * cs + c * sn;
-        c = c2;
+    const DiscRings rings(origin, center, radius, perRing, seed);
+    if (rings.Inside()) return 1.0f;
+    // One ring's rays at once: from one point to a small disc, the coherent rays a packet
+    // traces best (Accelerator::OccludedMany). The outer ring first (radius sqrt(3/4): the
+    // middle of the outer half of the area), then the inner (sqrt(1/4)), each point the
+    // centre of an equal share of the disc.
+    const int n = rings.PerRing();
+    Ray batch[DiscRings::kMaxPerRing];
+    bool blocked[DiscRings::kMaxPerRing];
+    auto visible = [&] {
+        accel.OccludedMany(batch, static_cast<size_t>(n), blocked);
+        int v = 0;
+        for (int k = 0; k < n; ++k) v += !blocked[k];
+        return v;
     };
-    // One ring's rays at once, up to kRayBatch at a time: from one point to a small disc,
-    // the coherent rays a packet traces best (Accelerator::OccludedMany).
-    Ray batch[kRayBatch];
-    bool blocked[kRayBatch];
-    auto ringVisible = [&](float ringRadius) {
-        const float r = ringRadius * radius;
-        int visible = 0;
-        for (int first = 0; first < perRing; first += kRayBatch) {
-            const int n = std::min(kRayBatch, perRing - first);
-            for (int k = 0; k < n; ++k, advance(), advance()) {
-                const Vec3 to = oc + e1 * (r * c) + e2 * (r * s);
-                // Like LightVisible, stop just short of the light itself.
-                batch[k] = Ray{origin, to, 0.0f, 1.0f - 1e-5f};
-            }
-            accel.OccludedMany(batch, static_cast<size_t>(n), blocked);
-            for (int k = 0; k < n; ++k) visible += !blocked[k];
-        }
-        return visible;
-    };
-    // The outer ring first (radius sqrt(3/4): the middle of the outer half of the area),
-    // then the inner (sqrt(1/4)), each point the centre of an equal share of the disc.
-    const float c0 = c, s0 = s;
-    int visible = ringVisible(0.8660254f);
-    if (visible == 0 || visible == perRing) {
-        if (rays) *rays = perRing;
-        return visible == 0 ? 0.0f : 1.0f;
+    rings.OuterRays(batch);
+    const int outer = visible();
+    if (rings.OuterDecides(outer)) {
+        if (rays) *rays = n;
+        return rings.Value(outer, 0);
     }
-    c = c0;
-    s = s0;
-    advance();
-    visible += ringVisible(0.5f);
-    if (rays) *rays = 2 * perRing;
-    return static_cast<float>(visible) / static_cast<float>(2 * perRing);
+    rings.InnerRays(batch);
+    const int inner = visible();
+    if (rays) *rays = 2 * n;
+    return rings.Value(outer, inner);
 }
 
 namespace {

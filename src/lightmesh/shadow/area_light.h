@@ -38,6 +38,36 @@ float SphereLightVisibility(const Accelerator& accel, const Vec3& origin, const 
 float DiscLightVisibility(const Accelerator& accel, const Vec3& origin, const Vec3& center, float radius,
                           int perRing, uint64_t seed, int* rays = nullptr);
 
+/// DiscLightVisibility in steps, for a caller that traces the rings of many points together
+/// (each ray's answer from a back-end does not depend on the rays traced with it): the
+/// rays of the outer ring, whether its count decides, the inner ring's rays, the
+/// estimate. DiscLightVisibility itself is these steps.
+class DiscRings {
+  public:
+    static constexpr int kMaxPerRing = 32;
+    DiscRings(const Vec3& origin, const Vec3& center, float radius, int perRing, uint64_t seed);
+    /// The origin lies inside the light: V = 1 without rays.
+    bool Inside() const { return inside_; }
+    int PerRing() const { return perRing_; }
+    /// The rings' perRing rays each, to out[0 .. perRing-1].
+    void OuterRays(Ray* out) const { Rays(0.8660254f, false, out); }
+    void InnerRays(Ray* out) const { Rays(0.5f, true, out); }
+    /// Whether the outer ring's count of visible rays is the answer (all or none visible).
+    bool OuterDecides(int outerVisible) const { return outerVisible == 0 || outerVisible == perRing_; }
+    /// The estimate from the visible rays of the outer ring and (unless it decided) the inner.
+    float Value(int outerVisible, int innerVisible) const {
+        if (OuterDecides(outerVisible)) return outerVisible == 0 ? 0.0f : 1.0f;
+        return static_cast<float>(outerVisible + innerVisible) / static_cast<float>(2 * perRing_);
+    }
+
+  private:
+    void Rays(float ringRadius, bool inner, Ray* out) const;
+    Vec3 origin_, oc_, e1_, e2_;
+    float radius_ = 0, c0_ = 1, s0_ = 0, cs_ = 1, sn_ = 0;
+    int perRing_ = 1;
+    bool inside_ = false;
+};
+
 /// Direction `index` of `samples` in the cone around the unit vector `axis` whose
 /// half-angle θmax has 1 - cos θmax = `oneMinusCosMax` (in [0, 1]): uniform in solid
 /// angle and stratified, shifted by (`shift0`, `shift1`) in [0, 1)² (Cranley–Patterson

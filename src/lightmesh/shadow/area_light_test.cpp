@@ -222,7 +222,9 @@ TEST(AreaLight, DiscEstimateFollowsTheClosedFormAndStopsEarlyWhereTheRingAgrees)
         }
         const double exact = ExactVisibleFraction(sp.origin);
         EXPECT_NEAR(sum / 256, exact, 0.08) << "x = " << sp.p.x;
-        if (exact > 0.2 && exact < 0.8) EXPECT_GT(traced, 256 * 7) << "the inner ring is traced in the penumbra";
+        if (exact > 0.2 && exact < 0.8) {
+            EXPECT_GT(traced, 256 * 7) << "the inner ring is traced in the penumbra";
+        }
         // The same seed, the same estimate.
         EXPECT_EQ(DiscLightVisibility(*accel, sp.origin, light, R, 4, 42), DiscLightVisibility(*accel, sp.origin, light, R, 4, 42));
     }

@@ -302,23 +302,36 @@ inline void LightMesh<Word>::ApplyThinCheck(const ShadingPoint& sp, uint64_t che
 template <typename Word>
 inline void LightMesh<Word>::VisibilityMany(const ShadingPoint* sps, size_t count, size_t lights, const bool* needed,
                                             float* vis, RenderCounters& counters) const {
-    // The check's rays only touch 64 lights (LightsVisible's mask); beyond, point by point.
-    if (thinCheck_ == ThinCheck::kOff || lights > 64) {
+    // Without a light radius there is nothing to batch; the check's rays only reach 64
+    // lights (LightsVisible's mask): beyond, point by point.
+    if (lightRadius_ == 0 || lights > 64) {
         ShadowMethod::VisibilityMany(sps, count, lights, needed, vis, counters);
         return;
     }
-    // Measured against the check point by point (the rays of one point to its lights
-    // together): see the README's penumbra benchmark.
+    // Every point's walk first, its narrow penumbrae's discs queued; then the discs, the
+    // rings of several points to one light together; then the thin check's rays light by
+    // light, as hard shadows trace theirs. Measured: see the README's penumbra benchmark.
     constexpr size_t kChunk = 64;
+    thread_local DiscQueue queue;
+    struct Restore {
+        DiscQueue* previous;
+        ~Restore() { ThreadDiscQueue() = previous; }
+    } restore{ThreadDiscQueue()};
     for (size_t first = 0; first < count; first += kChunk) {
         const size_t n = std::min(kChunk, count - first);
         uint64_t checked[kChunk], visible[kChunk];
+        queue.entries.clear();
+        ThreadDiscQueue() = &queue;
         for (size_t i = 0; i < n; ++i) {
             const size_t p = first + i;
+            queue.point = i;
             const uint64_t ownRays = Interpolate(sps[p], needed + p * lights, vis + p * lights, counters);
-            checked[i] = ThinChecked(needed + p * lights, ownRays, vis + p * lights);
+            checked[i] = thinCheck_ == ThinCheck::kOff ? 0 : ThinChecked(needed + p * lights, ownRays, vis + p * lights);
             visible[i] = 0;
         }
+        ThreadDiscQueue() = restore.previous;
+        TraceDiscs(queue, lights, vis + first * lights, counters);
+        if (thinCheck_ == ThinCheck::kOff) continue;
         Ray rays[kChunk];
         size_t which[kChunk];
         bool blocked[kChunk];
@@ -336,6 +349,60 @@ inline void LightMesh<Word>::VisibilityMany(const ShadingPoint* sps, size_t coun
         }
         for (size_t i = 0; i < n; ++i)
             if (checked[i]) ApplyThinCheck(sps[first + i], checked[i], visible[i], vis + (first + i) * lights, counters);
+    }
+}
+
+template <typename Word>
+inline void LightMesh<Word>::TraceDiscs(const DiscQueue& queue, size_t lights, float* vis,
+                                        RenderCounters& counters) const {
+    // Per light, the outer rings of kGroup queued points in one packet, then the inner
+    // rings of those the outer ring left undecided, likewise. Each ray's answer is the one
+    // it gets alone, so every value is DiscLightVisibility's.
+    constexpr size_t kGroup = 4, kMaxRays = kGroup * kNarrowPerRing;
+    thread_local std::vector<int> outer;
+    thread_local std::vector<size_t> pending, undecided;
+    outer.assign(queue.entries.size(), 0);
+    Ray rays[kMaxRays];
+    bool blocked[kMaxRays];
+    // Traces the given ring of the entries `ids` (of one light), kGroup at a time, and hands
+    // each entry's count of visible rays to `use`.
+    auto trace = [&](const std::vector<size_t>& ids, bool inner, auto&& use) {
+        for (size_t g = 0; g < ids.size(); g += kGroup) {
+            const size_t n = std::min(kGroup, ids.size() - g);
+            for (size_t k = 0; k < n; ++k) {
+                const DiscRings& rings = queue.entries[ids[g + k]].rings;
+                if (inner) rings.InnerRays(rays + k * kNarrowPerRing);
+                else rings.OuterRays(rays + k * kNarrowPerRing);
+            }
+            accel_.OccludedMany(rays, n * kNarrowPerRing, blocked);
+            counters.shadowRays += n * kNarrowPerRing;
+            for (size_t k = 0; k < n; ++k) {
+                int visible = 0;
+                for (int r = 0; r < kNarrowPerRing; ++r) visible += !blocked[k * kNarrowPerRing + static_cast<size_t>(r)];
+                use(ids[g + k], visible);
+            }
+        }
+    };
+    for (size_t l = 0; l < lights; ++l) {
+        pending.clear();
+        for (size_t e = 0; e < queue.entries.size(); ++e) {
+            const auto& entry = queue.entries[e];
+            if (entry.light != l) continue;
+            if (entry.rings.Inside()) vis[entry.point * lights + l] = 1.0f;
+            else pending.push_back(e);
+        }
+        if (pending.empty()) continue;
+        undecided.clear();
+        trace(pending, false, [&](size_t e, int visible) {
+            const auto& entry = queue.entries[e];
+            outer[e] = visible;
+            if (entry.rings.OuterDecides(visible)) vis[entry.point * lights + l] = entry.rings.Value(visible, 0);
+            else undecided.push_back(e);
+        });
+        trace(undecided, true, [&](size_t e, int visible) {
+            const auto& entry = queue.entries[e];
+            vis[entry.point * lights + l] = entry.rings.Value(outer[e], visible);
+        });
     }
 }
 

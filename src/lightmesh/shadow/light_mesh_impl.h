@@ -589,6 +589,25 @@ class LightMesh final : public LightMeshShadows {
     uint64_t Interpolate(const ShadingPoint& sp, const bool* needed, float* vis, RenderCounters& counters) const;
     // Whether light sampling (not the nodes' kernel) answers a penumbra of support ρ.
     bool Sampled(float rho2) const { return !(rho2 >= kNarrow * kNarrow * lattice_.h * lattice_.h); }
+    // The batched penumbra mode (VisibilityMany): the (point, light) pairs whose light's
+    // disc is sampled, queued by NarrowPenumbra while a thread walks a block's points and
+    // traced after the walks, the rings of several points to one light together (coherent
+    // rays, wider packets). Null outside VisibilityMany: the disc is sampled at once.
+    struct DiscQueue {
+        struct Entry {
+            size_t point;
+            size_t light;
+            DiscRings rings;
+        };
+        size_t point = 0;  // the point being walked
+        std::vector<Entry> entries;
+    };
+    static DiscQueue*& ThreadDiscQueue() {
+        thread_local DiscQueue* queue = nullptr;
+        return queue;
+    }
+    // The queued discs' values into vis (`lights` per point, the block's first point at 0).
+    void TraceDiscs(const DiscQueue& queue, size_t lights, float* vis, RenderCounters& counters) const;
     // The penumbra mode's answers (light_mesh_penumbra.h).
     float NarrowPenumbra(const ShadingPoint& sp, size_t l, float rho, const std::vector<PenumbraNode>& nodes,
                          RenderCounters& counters) const;

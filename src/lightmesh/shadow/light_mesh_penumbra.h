@@ -32,6 +32,13 @@ inline float LightMesh<Word>::NarrowPenumbra(const ShadingPoint& sp, size_t l, f
         if (centre == (first != 0)) return centre ? 1.0f : 0.0f;
     }
     ++Count(counters, LightMeshCount::kPenumbraSampled);
+    if (DiscQueue* queue = ThreadDiscQueue()) {
+        // Traced after the block's walks (TraceDiscs); the value here is replaced then.
+        queue->entries.push_back({queue->point, l,
+                                  DiscRings(sp.origin, light, lightRadius_, kNarrowPerRing,
+                                            AreaLightSeed(sp, static_cast<uint32_t>(l)))});
+        return 0.0f;
+    }
     int rays = 0;
     const float v =
         DiscLightVisibility(accel_, sp.origin, light, lightRadius_, kNarrowPerRing, AreaLightSeed(sp, static_cast<uint32_t>(l)), &rays);

@@ -336,24 +336,27 @@ TEST(Penumbra, ThinCheckAllLetsLightThroughGapsThinnerThanTheMesh) {
         EXPECT_EQ(fixedAll.Vis(FloorPoint(t.x + dx, 0.3f)), fixedOff.Vis(FloorPoint(t.x + dx, 0.3f))) << dx;
 }
 
-// The batched thin check (VisibilityMany: every point's nodes first, then the check's rays
-// light by light as packets, then the disc where a ray disagrees) gives each point what
-// Visibility gives it alone: the same values, the slots of lights not needed untouched,
-// the same counts. Over more points than a packet holds (150), one and three lights, with
-// points under the rod and the slit where the check disagrees with the nodes.
-TEST(Penumbra, BatchedThinCheckGivesEachPointItsOwnAnswer) {
+// The batched penumbra mode (VisibilityMany: every point's walk first, the narrow
+// penumbrae's discs queued and traced several points to a light at a time, then the thin
+// check's rays light by light as packets, then the disc where a ray disagrees) gives each
+// point what Visibility gives it alone: the same values, the slots of lights not needed
+// untouched, the same counts. Over more points than a block holds (150), one and three
+// lights, with points under the rod and the slit where the check disagrees with the nodes,
+// and along the edge of a plate low over the floor, whose penumbra is narrow (the discs).
+TEST(Penumbra, BatchedPointsGetWhatEachGetsAlone) {
     const ThinScene rod(false), slit(true);
     Scene three = rod.scene;  // the rod with two more lights, off to the sides
     three.lights.push_back({{rod.x - 3.0f, 6.0f, 1.0f}, Color(0.5f), Falloff::None});
     three.lights.push_back({{rod.x + 2.0f, 7.0f, -2.0f}, Color(0.5f), Falloff::None});
+    const Scene plate = PlateScene(0.5f);
     struct Case {
         const Scene* scene;
-        float x;  // the thin object's line
+        float x;  // the thin object's line, or the plate's edge
         const char* check;
     };
     const Case cases[] = {{&rod.scene, rod.x, "lit"}, {&slit.scene, slit.x, "all"}, {&three, rod.x, "all"},
-                          {&three, rod.x, "lit"}};
-    uint64_t checks = 0, found = 0;
+                          {&three, rod.x, "lit"},     {&plate, 0.0f, "off"},        {&plate, 0.0f, "all"}};
+    uint64_t checks = 0, found = 0, sampled = 0;
     for (const Case& c : cases) {
         LightMeshOptions options = testing::LightMeshSettings(100, 2.0f, "", 0.1f);
         options.thinCheck = c.check;
@@ -374,9 +377,11 @@ TEST(Penumbra, BatchedThinCheckGivesEachPointItsOwnAnswer) {
         for (size_t k = 0; k < kMethodCounterSlots; ++k) EXPECT_EQ(cMany.method[k], cOne.method[k]) << c.check << " " << k;
         checks += Count(cOne, Lmc::kThinChecks);
         found += Count(cOne, Lmc::kThinFound);
+        sampled += Count(cOne, Lmc::kPenumbraSampled);
     }
     EXPECT_GT(checks, 400u);
-    EXPECT_GT(found, 10u);  // the disc's path ran
+    EXPECT_GT(found, 10u);    // the check's disc ran
+    EXPECT_GT(sampled, 50u);  // and the queued discs
 }
 
 TEST(Penumbra, BadLightRadiusOrVariantIsAnError) {
