@@ -327,26 +327,12 @@ inline void LightMesh<Word>::VisibilityMany(const ShadingPoint* sps, size_t coun
             queue.point = i;
             const uint64_t ownRays = Interpolate(sps[p], needed + p * lights, vis + p * lights, counters);
             checked[i] = thinCheck_ == ThinCheck::kOff ? 0 : ThinChecked(needed + p * lights, ownRays, vis + p * lights);
-            visible[i] = 0;
         }
         ThreadDiscQueue() = restore.previous;
         TraceDiscs(queue, lights, vis + first * lights, counters);
         if (thinCheck_ == ThinCheck::kOff) continue;
-        Ray rays[kChunk];
-        size_t which[kChunk];
-        bool blocked[kChunk];
-        for (size_t l = 0; l < lights; ++l) {
-            size_t m = 0;
-            for (size_t i = 0; i < n; ++i) {
-                if (!((checked[i] >> l) & 1)) continue;
-                rays[m] = LightSegment(sps[first + i].origin, scene_.lights[l].position);
-                which[m++] = i;
-            }
-            if (m == 0) continue;
-            accel_.OccludedMany(rays, m, blocked);
-            for (size_t k = 0; k < m; ++k)
-                if (!blocked[k]) visible[which[k]] |= uint64_t(1) << l;
-        }
+        // (ApplyThinCheck counts the rays, one per checked light, as CheckThin does.)
+        LightsVisibleMany(accel_, sps + first, n, scene_.lights, checked, visible);
         for (size_t i = 0; i < n; ++i)
             if (checked[i]) ApplyThinCheck(sps[first + i], checked[i], visible[i], vis + (first + i) * lights, counters);
     }

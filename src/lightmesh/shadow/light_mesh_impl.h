@@ -150,9 +150,10 @@ class LightMesh final : public LightMeshShadows {
     // the thin-occluder check (CheckThin).
     void Visibility(const ShadingPoint& sp, const bool* needed, float* vis,
                     RenderCounters& counters) const override;
-    // With the thin-occluder check: every point's formula (2) first, then the check's rays
-    // of all the points light by light, as hard shadows trace theirs (coherent packets),
-    // then the check's answers; each point gets what Visibility gives it.
+    // With a light radius, a block of points in stages: every point's walk, its narrow
+    // penumbrae's discs queued (DiscQueue); the discs, light by light (TraceDiscs); the
+    // thin check's rays light by light, as hard shadows trace theirs (LightsVisibleMany);
+    // each point gets what Visibility gives it. Without one, point by point.
     void VisibilityMany(const ShadingPoint* sps, size_t count, size_t lights, const bool* needed, float* vis,
                         RenderCounters& counters) const override;
 

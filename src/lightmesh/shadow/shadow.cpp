@@ -42,6 +42,34 @@ uint64_t LightsVisible(const Accelerator& accel, const Vec3& origin, const std::
     return visible;
 }
 
+uint64_t LightsVisibleMany(const Accelerator& accel, const ShadingPoint* sps, size_t count,
+                           const std::vector<PointLight>& lights, const uint64_t* masks, uint64_t* visible) {
+    constexpr size_t kChunk = 64;
+    Ray rays[kChunk];
+    size_t which[kChunk];
+    bool blocked[kChunk];
+    uint64_t traced = 0;
+    std::fill(visible, visible + count, uint64_t(0));
+    for (size_t l = 0; l < std::min<size_t>(lights.size(), 64); ++l) {
+        size_t n = 0;
+        auto trace = [&] {
+            accel.OccludedMany(rays, n, blocked);
+            for (size_t k = 0; k < n; ++k)
+                if (!blocked[k]) visible[which[k]] |= uint64_t(1) << l;
+            traced += n;
+            n = 0;
+        };
+        for (size_t i = 0; i < count; ++i) {
+            if (!((masks[i] >> l) & 1)) continue;
+            rays[n] = LightSegment(sps[i].origin, lights[l].position);
+            which[n] = i;
+            if (++n == kChunk) trace();
+        }
+        if (n) trace();
+    }
+    return traced;
+}
+
 void ShadowMethod::VisibilityMany(const ShadingPoint* sps, size_t count, size_t lights, const bool* needed,
                                   float* vis, RenderCounters& counters) const {
     for (size_t i = 0; i < count; ++i) Visibility(sps[i], needed + i * lights, vis + i * lights, counters);
@@ -77,30 +105,28 @@ class HardShadows final : public ShadowMethod {
         for (size_t i = 0; i < scene_.lights.size(); ++i)
             if (needed[i]) vis[i] = (visible >> i) & 1 ? 1.0f : 0.0f;
     }
-    // Light by light, the points' shadow rays to it together: rays from neighbouring
-    // points to one light are coherent, which a back-end traces as a packet (Embree's
-    // rtcOccluded8, the grid's coherent traversal); each ray's answer is LightVisible's.
+    // Light by light, the points' shadow rays to it together (LightsVisibleMany): rays
+    // from neighbouring points to one light are coherent, which a back-end traces as a
+    // packet (Embree's rtcOccluded8, the grid's coherent traversal).
     void VisibilityMany(const ShadingPoint* sps, size_t count, size_t lights, const bool* needed, float* vis,
                         RenderCounters& counters) const override {
-        constexpr size_t kChunk = 64;
-        Ray rays[kChunk];
-        size_t which[kChunk];
-        bool blocked[kChunk];
-        for (size_t l = 0; l < lights; ++l) {
-            size_t n = 0;
-            auto trace = [&] {
-                accel_.OccludedMany(rays, n, blocked);
-                for (size_t k = 0; k < n; ++k) vis[which[k] * lights + l] = blocked[k] ? 0.0f : 1.0f;
-                counters.shadowRays += n;
-                n = 0;
-            };
-            for (size_t i = 0; i < count; ++i) {
-                if (!needed[i * lights + l]) continue;
-                rays[n] = LightSegment(sps[i].origin, scene_.lights[l].position);
-                which[n] = i;
-                if (++n == kChunk) trace();
+        if (lights > 64) {  // beyond a mask (the renderer refuses more than kMaxLights = 64)
+            ShadowMethod::VisibilityMany(sps, count, lights, needed, vis, counters);
+            return;
+        }
+        constexpr size_t kChunk = 64;  // points at a time, for the masks on the stack
+        uint64_t masks[kChunk], visible[kChunk];
+        for (size_t first = 0; first < count; first += kChunk) {
+            const size_t n = std::min(kChunk, count - first);
+            for (size_t i = 0; i < n; ++i) {
+                masks[i] = 0;
+                for (size_t l = 0; l < lights; ++l)
+                    if (needed[(first + i) * lights + l]) masks[i] |= uint64_t(1) << l;
             }
-            if (n) trace();
+            counters.shadowRays += LightsVisibleMany(accel_, sps + first, n, scene_.lights, masks, visible);
+            for (size_t i = 0; i < n; ++i)
+                for (size_t l = 0; l < lights; ++l)
+                    if (needed[(first + i) * lights + l]) vis[(first + i) * lights + l] = (visible[i] >> l) & 1 ? 1.0f : 0.0f;
         }
     }
 

@@ -80,4 +80,12 @@ bool LightVisible(const Accelerator& accel, const Vec3& origin, const Vec3& ligh
 uint64_t LightsVisible(const Accelerator& accel, const Vec3& origin, const std::vector<PointLight>& lights,
                        uint64_t mask);
 
+/// LightsVisible for many points at once, light by light: for each light, the shadow rays
+/// of the points whose mask has it go to the back-end together, 64 at a time (rays from
+/// neighbouring points to one light are coherent: a packet on Embree, the grid's coherent
+/// traversal). visible[i] gets bit l where light l is seen from sps[i].origin; each ray's
+/// answer is LightVisible's. Returns the number of rays traced.
+uint64_t LightsVisibleMany(const Accelerator& accel, const ShadingPoint* sps, size_t count,
+                           const std::vector<PointLight>& lights, const uint64_t* masks, uint64_t* visible);
+
 }  // namespace lm

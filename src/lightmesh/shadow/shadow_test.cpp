@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <memory>
 #include <random>
+#include <vector>
 
 #include "support/floor_scenes.h"
 #include "lightmesh/util/error.h"
@@ -46,6 +48,51 @@ TEST(Shadow, LightsVisibleGivesEachLightItsOwnRaysAnswer) {
         }
         EXPECT_GT(visible, checked / 10) << name;  // some lit, some in the box's shadow
         EXPECT_LT(visible, checked - checked / 10) << name;
+    }
+}
+
+// LightsVisibleMany traces many points' rays light by light (64 at a time): each (point,
+// light) of the masks must get LightVisible's answer, the bits outside a mask stay clear,
+// and the count of rays is the masks' bits; over more points than a chunk holds.
+TEST(Shadow, LightsVisibleManyGivesEachPointItsOwnRaysAnswer) {
+    Scene s = FloorScene();
+    AddBox(&s, {-1, 0.5f, -1}, {1, 0.8f, 1});
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    s.lights.clear();
+    for (int l = 0; l < 5; ++l) s.lights.push_back({{3 * u(rng), 2 + u(rng), 3 * u(rng)}, Color(1.0f), Falloff::None});
+    for (const char* name : {"brute", "grid", "embree"}) {
+        std::unique_ptr<Accelerator> accel;
+        try {
+            accel = CreateAccelerator(name, s.mesh);
+        } catch (const Error&) {
+            continue;  // a build without Embree
+        }
+        constexpr size_t kPoints = 150;
+        std::vector<ShadingPoint> points(kPoints);
+        std::vector<uint64_t> masks(kPoints), visible(kPoints, ~uint64_t(0));
+        uint64_t bits = 0;
+        for (size_t i = 0; i < kPoints; ++i) {
+            points[i].p = Vec3(2 * u(rng), 0, 2 * u(rng));
+            points[i].n = Vec3(0, 1, 0);
+            points[i].origin = points[i].p + Vec3(0, 1e-4f, 0);
+            masks[i] = rng() & 31;
+            bits += static_cast<uint64_t>(__builtin_popcountll(masks[i]));
+        }
+        EXPECT_EQ(LightsVisibleMany(*accel, points.data(), kPoints, s.lights, masks.data(), visible.data()), bits) << name;
+        int seen = 0, checked = 0;
+        for (size_t i = 0; i < kPoints; ++i) {
+            EXPECT_EQ(visible[i] & ~masks[i], 0u) << name;
+            for (size_t l = 0; l < s.lights.size(); ++l) {
+                if (!((masks[i] >> l) & 1)) continue;
+                const bool alone = LightVisible(*accel, points[i].origin, s.lights[l].position);
+                EXPECT_EQ(((visible[i] >> l) & 1) != 0, alone) << name << " point " << i << " light " << l;
+                seen += alone;
+                ++checked;
+            }
+        }
+        EXPECT_GT(seen, checked / 10) << name;  // some lit, some in the box's shadow
+        EXPECT_LT(seen, checked - checked / 10) << name;
     }
 }
 
