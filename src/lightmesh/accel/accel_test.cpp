@@ -254,6 +254,9 @@ TEST_P(AccelDifferentialTest, MatchesBruteForce) {
             // A different triangle is fine for Embree at a tie: its plane is hit at that t.
             if (same && h.prim != e.h.prim)
                 same = !exact && std::abs(PlaneT(mesh, h.prim, r) - e.h.t) <= tol;
+            // Ours give brute force's barycentrics too, bit for bit (shading interpolates
+            // normals with them; the grid's filter computes them for its nearest hit).
+            if (same && exact) same = h.b1 == e.h.b1 && h.b2 == e.h.b2;
         }
         // Embree's edges are inclusive and its arithmetic is its own: a ray aimed exactly at
         // a vertex, or starting on a face, may hit a triangle there that IntersectTriangle
@@ -264,8 +267,8 @@ TEST_P(AccelDifferentialTest, MatchesBruteForce) {
         const bool graze = !same && !exact && grazeKind && Grazes(mesh, r, e.hit, e.h, hit, h, tol);
         if (graze) ++grazes;
         if (!same && !graze)
-            fail(i, StringPrintf("Intersect %d t=%a prim %u, brute force %d t=%a prim %u", hit, h.t,
-                                 h.prim, e.hit, e.h.t, e.h.prim));
+            fail(i, StringPrintf("Intersect %d t=%a prim %u b1=%a b2=%a, brute force %d t=%a prim %u b1=%a b2=%a", hit,
+                                 h.t, h.prim, h.b1, h.b2, e.hit, e.h.t, e.h.prim, e.h.b1, e.h.b2));
         const bool occ = accel->Occluded(r);
         if (occ != e.occluded && !graze)
             fail(i, StringPrintf("Occluded %d, brute force %d", occ, e.occluded));

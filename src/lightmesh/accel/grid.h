@@ -136,9 +136,11 @@ class NestedGridAccel final : public Accelerator {
     /// Tests `count` (≤ 8) blocks against a prepared ray with the watertight test's very
     /// arithmetic, lane by lane: returns the bits 8·b + lane of the triangles it hits, their
     /// t in t[8·b + lane]; *ties gets the bits of those with an edge function exactly zero
-    /// (the tie-breaks, left to the scalar test).
+    /// (the tie-breaks, left to the scalar test). The closest-hit variant also writes their
+    /// b0, b1, b2 to bary[64·k + 8·b + lane] (3 × 64 floats), as the scalar test computes
+    /// them; the other ignores `bary`.
     using BlockFilter = uint64_t (*)(const TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
-                                     float* t, uint64_t* ties);
+                                     float* t, uint64_t* ties, float* bary);
 
   private:
     struct Builder;
@@ -182,7 +184,8 @@ class NestedGridAccel final : public Accelerator {
     static constexpr int kMaxEmptyReach = 8;
     static constexpr size_t kMaxEmptyReachCells = size_t(1) << 24;
     void ComputeEmptyReach();
-    BlockFilter filter_ = nullptr;
+    BlockFilter filter_ = nullptr;         // t only
+    BlockFilter nearestFilter_ = nullptr;  // and the hits' barycentrics (closest-hit queries)
     int simdWidth_ = 0;
     Stats stats_;
 };

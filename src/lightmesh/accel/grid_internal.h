@@ -12,10 +12,15 @@ namespace lm::grid_detail {
 /// The leaf cells' triangle filters (NestedGridAccel::BlockFilter), 4 and 8 lanes at a time,
 /// defined with the queries that call them (grid.cpp); the build picks one for the machine.
 uint64_t FilterBlocks4(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
-                       float* t, uint64_t* ties);
+                       float* t, uint64_t* ties, float* bary);
 /// Without AVX2 (not x86) the 4-lane filter.
 uint64_t FilterBlocks8(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
-                       float* t, uint64_t* ties);
+                       float* t, uint64_t* ties, float* bary);
+/// The same writing the hits' barycentrics too (closest-hit queries).
+uint64_t FilterBlocks4Bary(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
+                           float* t, uint64_t* ties, float* bary);
+uint64_t FilterBlocks8Bary(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
+                           float* t, uint64_t* ties, float* bary);
 /// Whether this CPU runs FilterBlocks8's AVX2 code.
 bool HasAvx2();
 
