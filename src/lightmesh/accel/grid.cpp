@@ -177,7 +177,7 @@ namespace grid_detail {
 
 namespace {
 template <bool kBary>
-uint64_t Filter4(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray, float* t,
+[[gnu::always_inline]] inline uint64_t Filter4(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray, float* t,
                  uint64_t* ties, float* bary) {
     *ties = 0;
     if (!ray.valid) return 0;
@@ -199,8 +199,9 @@ uint64_t Filter4(const NestedGridAccel::TriBlock* blocks, uint32_t count, const 
 }
 #if defined(__x86_64__) || defined(__i386__)
 template <bool kBary>
-__attribute__((target("avx2"))) uint64_t Filter8(const NestedGridAccel::TriBlock* blocks, uint32_t count,
-                                                 const detail::PreparedRay& ray, float* t, uint64_t* ties, float* bary) {
+[[gnu::always_inline]] __attribute__((target("avx2"))) inline uint64_t Filter8(const NestedGridAccel::TriBlock* blocks,
+                                                                               uint32_t count, const detail::PreparedRay& ray,
+                                                                               float* t, uint64_t* ties, float* bary) {
     *ties = 0;
     if (!ray.valid) return 0;
     const FilterRay<8> r(ray);
@@ -230,11 +231,11 @@ uint64_t FilterBlocks4Bary(const NestedGridAccel::TriBlock* blocks, uint32_t cou
     return Filter4<true>(blocks, count, ray, t, ties, bary);
 }
 #if defined(__x86_64__) || defined(__i386__)
-uint64_t FilterBlocks8(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
-                       float* t, uint64_t* ties, float*) {
+__attribute__((target("avx2"))) uint64_t FilterBlocks8(const NestedGridAccel::TriBlock* blocks, uint32_t count,
+                                                       const detail::PreparedRay& ray, float* t, uint64_t* ties, float*) {
     return Filter8<false>(blocks, count, ray, t, ties, nullptr);
 }
-uint64_t FilterBlocks8Bary(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
+__attribute__((target("avx2"))) uint64_t FilterBlocks8Bary(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
                            float* t, uint64_t* ties, float* bary) {
     return Filter8<true>(blocks, count, ray, t, ties, bary);
 }
