@@ -113,14 +113,8 @@ struct WatertightLanes {
     // For the `inside` lanes, as IntersectPrepared without a zero edge: d0 = u + v + w,
     // sign = d0 > 0 ? 1 : -1, (u, v, w) ·= sign, det = u + v + w > 0, t = (u·az + v·bz +
     // w·cz) / det within (tMin, tMax). Those hits into *hits (an output, not a return value:
-    // no 32-byte vector returned outside AVX code); *t, *v, *w and *det are the scalar
-    // test's values (b1 = v / det and b2 = w / det as it computes them).
-    [[gnu::always_inline]] void Hits(const VF& sz, const VF& tMin, const VF& tMax, VI* hits, VF* t, VF* v, VF* w,
-                                     VF* det) const {
-        VF u;
-        Hits(sz, tMin, tMax, hits, t, &u, v, w, det);
-    }
-    // The same with u too (b0 = u / det).
+    // no 32-byte vector returned outside AVX code); *t, *uOut, *v, *w and *det are the scalar
+    // test's values (b0 = u / det, b1 = v / det and b2 = w / det as it computes them).
     [[gnu::always_inline]] void Hits(const VF& sz, const VF& tMin, const VF& tMax, VI* hits, VF* t, VF* uOut, VF* v,
                                      VF* w, VF* det) const {
         const VF zero = {};
@@ -177,8 +171,8 @@ namespace grid_detail {
 
 namespace {
 template <bool kBary>
-[[gnu::always_inline]] inline uint64_t Filter4(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray, float* t,
-                 uint64_t* ties, float* bary) {
+[[gnu::always_inline]] inline uint64_t Filter4(const NestedGridAccel::TriBlock* blocks, uint32_t count,
+                                               const detail::PreparedRay& ray, float* t, uint64_t* ties, float* bary) {
     *ties = 0;
     if (!ray.valid) return 0;
     const FilterRay<4> r(ray);
@@ -235,8 +229,9 @@ __attribute__((target("avx2"))) uint64_t FilterBlocks8(const NestedGridAccel::Tr
                                                        const detail::PreparedRay& ray, float* t, uint64_t* ties, float*) {
     return Filter8<false>(blocks, count, ray, t, ties, nullptr);
 }
-__attribute__((target("avx2"))) uint64_t FilterBlocks8Bary(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
-                           float* t, uint64_t* ties, float* bary) {
+__attribute__((target("avx2"))) uint64_t FilterBlocks8Bary(const NestedGridAccel::TriBlock* blocks, uint32_t count,
+                                                           const detail::PreparedRay& ray, float* t, uint64_t* ties,
+                                                           float* bary) {
     return Filter8<true>(blocks, count, ray, t, ties, bary);
 }
 bool HasAvx2() { return __builtin_cpu_supports("avx2"); }
