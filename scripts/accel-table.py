@@ -39,8 +39,9 @@ for sc in order:
     if not any(k[0] == sc for k in rows): continue
     cells = []
     for kind in ['camera', 'camera-packets', 'shadow', 'shadow-packets', 'short']:
-        r = [rows.get((sc, kind, 'grid', th), 0) / rows.get((sc, kind, 'embree', th), 1) for th in ['1t', '2t']]
-        cells.append('%.2f / %.2f' % tuple(r))
-    cells.append('%.2f' % (rows[(sc, 'build', 'grid', 'build')] / rows[(sc, 'build', 'embree', 'build')]))
+        r = [(rows.get((sc, kind, 'grid', th)), rows.get((sc, kind, 'embree', th))) for th in ['1t', '2t']]
+        cells.append(' / '.join('%.2f' % (g / e) if g and e else '?' for g, e in r))
+    gb, eb = rows.get((sc, 'build', 'grid', 'build')), rows.get((sc, 'build', 'embree', 'build'))
+    cells.append('%.2f' % (gb / eb) if gb and eb else '?')
     cells.append('%s / %s' % (fmt(bytes_.get((sc, 'grid'))), fmt(bytes_.get((sc, 'embree')))))
     print('| %s | %s |' % (sc, ' | '.join(cells)))
