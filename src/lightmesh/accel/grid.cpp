@@ -576,15 +576,19 @@ struct NestedGridAccel::PacketLanes {
     alignas(32) int capId[kMax];  // Query::CapId()
 };
 
-namespace {
-
-// One slice of one level as the packet's rays cross it: each ray's stretch [a, b] and the
-// cells (u0 … u1) × (v0 … v1) it may touch; an empty range for rays not in the slice.
-struct SliceLanes {
-    alignas(32) float a[NestedGridAccel::kPacketSize], b[NestedGridAccel::kPacketSize];
-    alignas(32) int u0[NestedGridAccel::kPacketSize], u1[NestedGridAccel::kPacketSize];
-    alignas(32) int v0[NestedGridAccel::kPacketSize], v1[NestedGridAccel::kPacketSize];
+// One slice of one level as the packet's rays cross it: each ray's stretch [a, b], the
+// rectangle [uLo, uHi] × [vLo, vHi] its points there lie in (padded by the packet's `pad`),
+// and the cells (u0 … u1) × (v0 … v1) of that rectangle; empty ranges for rays not in the
+// slice.
+struct NestedGridAccel::SliceLanes {
+    static constexpr int kMax = kPacketSize;
+    alignas(32) float a[kMax], b[kMax];
+    alignas(32) float uLo[kMax], uHi[kMax], vLo[kMax], vHi[kMax];
+    alignas(32) int u0[kMax], u1[kMax];
+    alignas(32) int v0[kMax], v1[kMax];
 };
+
+namespace {
 
 // Whether the rays' directions lie within a narrow cone (cosine to their mean direction at
 // least kCoherentCos): only then does a packet's footprint stay a few cells wide. The light

@@ -145,6 +145,7 @@ class NestedGridAccel final : public Accelerator {
   private:
     struct Builder;
     struct PacketLanes;  // a packet's rays, lane by lane (grid.cpp)
+    struct SliceLanes;   // the rays' stretches across one slice of one level (grid.cpp)
     template <typename Query>
     bool Walk(uint32_t node, const Ray& ray, const Vec3& invD, float tEnter, float tExit, Query& query) const;
     template <typename Query>
@@ -158,15 +159,16 @@ class NestedGridAccel final : public Accelerator {
     void PacketWalkLanes4(uint32_t node, PacketLanes& p, uint64_t lanes, const float* tLo, const float* tHi,
                           Query* queries) const;
     template <typename Query>
-    bool PacketLeaf4(PacketLanes& p, uint64_t group, const CellRef& ref, Query* queries) const;
+    bool PacketLeaf4(PacketLanes& p, const SliceLanes& sl, uint64_t group, const CellRef& ref,
+                     Query* queries) const;
 #if defined(__x86_64__) || defined(__i386__)
     // Compiled for AVX2 (grid.cpp chooses them where the CPU has it).
     template <typename Query>
     __attribute__((target("avx2"))) void PacketWalkLanes8(uint32_t node, PacketLanes& p, uint64_t lanes,
                                                           const float* tLo, const float* tHi, Query* queries) const;
     template <typename Query>
-    __attribute__((target("avx2"))) bool PacketLeaf8(PacketLanes& p, uint64_t group, const CellRef& ref,
-                                                     Query* queries) const;
+    __attribute__((target("avx2"))) bool PacketLeaf8(PacketLanes& p, const SliceLanes& sl, uint64_t group,
+                                                     const CellRef& ref, Query* queries) const;
 #endif
 
     const TriangleMesh& mesh_;
