@@ -1,6 +1,11 @@
 // whitted.h -- Whitted ray tracing, formula (1) of the paper, with a pluggable shadow term.
 #pragma once
 
+#include <algorithm>
+#include <cstddef>
+#include <memory>
+#include <vector>
+
 #include "lightmesh/accel/accelerator.h"
 #include "lightmesh/io/image.h"
 #include "lightmesh/util/counters.h"
@@ -71,6 +76,24 @@ class WhittedRenderer {
     /// Hits shaded together in RenderTile: the points whose visibility one
     /// ShadowMethod::VisibilityMany call computes.
     static constexpr size_t kShadingBatch = 64;
+    /// RenderTile's buffers, one set per thread, kept from tile to tile.
+    struct TileBuffers {
+        std::vector<Ray> rays;
+        std::vector<Hit> hits;
+        std::vector<Color> colors;
+        std::vector<Lighting> batch;
+        std::vector<ShadingPoint> points;
+        std::unique_ptr<bool[]> needed;  // kShadingBatch × lights
+        size_t neededLights = 0;
+        bool inUse = false;  // a RenderTile on this thread holds them
+        void Reserve(size_t lights) {
+            if (batch.size() < kShadingBatch) batch.resize(kShadingBatch), points.resize(kShadingBatch);
+            if (!needed || neededLights < lights) {
+                neededLights = std::max<size_t>(lights, 1);
+                needed.reset(new bool[kShadingBatch * neededLights]);
+            }
+        }
+    };
     /// Shade, before and after the visibility: PrepareShading fills *lit (and counts the
     /// shading point); FinishShading adds the lights' terms times vis and the mirror's.
     void PrepareShading(const Ray& ray, const Hit& hit, Lighting* lit, RenderCounters& counters) const;
