@@ -170,7 +170,9 @@ template <int W>
 namespace grid_detail {
 
 namespace {
-template <bool kBary>
+// With kFirstHit (occlusion) the blocks after the first that holds a hit are not tested:
+// any hit decides an occlusion query.
+template <bool kBary, bool kFirstHit = false>
 [[gnu::always_inline]] inline uint64_t Filter4(const NestedGridAccel::TriBlock* blocks, uint32_t count,
                                                const detail::PreparedRay& ray, float* t, uint64_t* ties, float* bary) {
     *ties = 0;
@@ -187,12 +189,16 @@ template <bool kBary>
                 for (int k = 0; k < 3; ++k) std::memcpy(bary + 64 * k + 8 * b + h, &bv[k], sizeof bv[k]);
             hitBits |= uint64_t(LaneBits<4>(hits)) << (8 * b + h);
             tieBits |= uint64_t(LaneBits<4>(tie)) << (8 * b + h);
+            if (kFirstHit && hitBits) {
+                *ties = tieBits;
+                return hitBits;
+            }
         }
     *ties = tieBits;
     return hitBits;
 }
 #if defined(__x86_64__) || defined(__i386__)
-template <bool kBary>
+template <bool kBary, bool kFirstHit = false>
 [[gnu::always_inline]] __attribute__((target("avx2"))) inline uint64_t Filter8(const NestedGridAccel::TriBlock* blocks,
                                                                                uint32_t count, const detail::PreparedRay& ray,
                                                                                float* t, uint64_t* ties, float* bary) {
@@ -209,6 +215,7 @@ template <bool kBary>
             for (int k = 0; k < 3; ++k) std::memcpy(bary + 64 * k + 8 * b, &bv[k], sizeof bv[k]);
         hitBits |= uint64_t(LaneBits<8>(hits)) << (8 * b);
         tieBits |= uint64_t(LaneBits<8>(tie)) << (8 * b);
+        if (kFirstHit && hitBits) break;
     }
     *ties = tieBits;
     return hitBits;
@@ -224,6 +231,10 @@ uint64_t FilterBlocks4Bary(const NestedGridAccel::TriBlock* blocks, uint32_t cou
                            float* t, uint64_t* ties, float* bary) {
     return Filter4<true>(blocks, count, ray, t, ties, bary);
 }
+uint64_t FilterBlocks4Any(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
+                          float* t, uint64_t* ties, float*) {
+    return Filter4<false, true>(blocks, count, ray, t, ties, nullptr);
+}
 #if defined(__x86_64__) || defined(__i386__)
 __attribute__((target("avx2"))) uint64_t FilterBlocks8(const NestedGridAccel::TriBlock* blocks, uint32_t count,
                                                        const detail::PreparedRay& ray, float* t, uint64_t* ties, float*) {
@@ -234,6 +245,11 @@ __attribute__((target("avx2"))) uint64_t FilterBlocks8Bary(const NestedGridAccel
                                                            float* bary) {
     return Filter8<true>(blocks, count, ray, t, ties, bary);
 }
+__attribute__((target("avx2"))) uint64_t FilterBlocks8Any(const NestedGridAccel::TriBlock* blocks, uint32_t count,
+                                                          const detail::PreparedRay& ray, float* t, uint64_t* ties,
+                                                          float*) {
+    return Filter8<false, true>(blocks, count, ray, t, ties, nullptr);
+}
 bool HasAvx2() { return __builtin_cpu_supports("avx2"); }
 #else
 uint64_t FilterBlocks8(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
@@ -243,6 +259,10 @@ uint64_t FilterBlocks8(const NestedGridAccel::TriBlock* blocks, uint32_t count, 
 uint64_t FilterBlocks8Bary(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
                            float* t, uint64_t* ties, float* bary) {
     return FilterBlocks4Bary(blocks, count, ray, t, ties, bary);
+}
+uint64_t FilterBlocks8Any(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
+                          float* t, uint64_t* ties, float* bary) {
+    return FilterBlocks4Any(blocks, count, ray, t, ties, bary);
 }
 bool HasAvx2() { return false; }
 #endif
@@ -256,8 +276,9 @@ namespace {
 struct CellSpan {
     const NestedGridAccel::TriBlock* blocks;  // all of them
     uint32_t first, count;                    // the cell's lanes: first … first + count - 1
-    NestedGridAccel::BlockFilter filter;         // t only (any hit, counts)
+    NestedGridAccel::BlockFilter filter;         // t only (counts)
     NestedGridAccel::BlockFilter nearestFilter;  // t, b0, b1, b2 (closest hit)
+    NestedGridAccel::BlockFilter anyFilter;      // t only, up to the first block with a hit (occlusion)
     float tCellExit;
 };
 
@@ -268,7 +289,15 @@ struct CellSpan {
 // query keeps no other. Hits the filter decided carry only t (b0, b1, b2 are not computed)
 // unless kNearestOnly, whose filter computes them as the scalar test does (re-running that
 // test on the nearest hit for them was ~9 % of a camera ray's instructions).
-template <bool kNearestOnly, typename Test>
+//
+// With kAnyHit (occlusion: the first hit ends the query) the filter stops at the first block
+// that holds a hit, and a hit of a neighbouring cell's lane in a shared block counts too:
+// every lane of the blocks is a triangle of the mesh (the last block's spare lanes are
+// degenerate and never hit), and the filter's hit is IntersectPrepared's, so that triangle
+// is one brute force finds on the ray as well. Exact, and a blocked segment skips the rest
+// of its cell's blocks. (So with kAnyHit `test` must end the query: it is handed the first
+// hit only, without its t.)
+template <bool kNearestOnly, bool kAnyHit = false, typename Test>
 [[gnu::always_inline]] inline bool ForEachHit(const CellSpan& c, const detail::PreparedRay& ray, Test&& test) {
     // The blocks that hold the cell's lanes, up to 8 (64 lanes) per filter call; lanes of
     // the neighbouring cells that share the first and last block are masked off.
@@ -279,10 +308,11 @@ template <bool kNearestOnly, typename Test>
         float t[64];  // not over-aligned: the walk's frame needs no realignment
         float bary[kNearestOnly ? 3 * 64 : 1];
         uint64_t ties;
-        uint64_t hits = (kNearestOnly ? c.nearestFilter : c.filter)(blocks, static_cast<uint32_t>((stop - base + 7) / 8),
-                                                                   ray, t, &ties, bary);
+        uint64_t hits = (kNearestOnly ? c.nearestFilter : kAnyHit ? c.anyFilter : c.filter)(
+            blocks, static_cast<uint32_t>((stop - base + 7) / 8), ray, t, &ties, bary);
         const uint64_t lo = begin > base ? begin - base : 0, hi = stop - base;
         const uint64_t own = (hi == 64 ? ~uint64_t(0) : (uint64_t(1) << hi) - 1) & ~((uint64_t(1) << lo) - 1);
+        if (kAnyHit && hits) return test(blocks[__builtin_ctzll(hits) / 8].id[__builtin_ctzll(hits) % 8], TriangleHit{});
         hits &= own;
         ties &= own;
         auto scalar = [&](uint32_t k) {
@@ -359,7 +389,7 @@ struct AnyQuery {
     bool found = false;
 
     [[gnu::always_inline]] bool Cell(const CellSpan& c) {
-        found = ForEachHit<false>(c, ray, [](uint32_t, const TriangleHit&) { return true; });
+        found = ForEachHit<false, true>(c, ray, [](uint32_t, const TriangleHit&) { return true; });
         return found;
     }
     static constexpr bool kClosest = false;
@@ -454,7 +484,7 @@ bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD,
             if (ref.count & kChildBit) {
                 if (Walk(ref.count & ~kChildBit, ray, invD, tCell, tCellExit, query)) return true;
             } else {
-                const CellSpan span{blocks_.get(), ref.first, ref.count, filter_, nearestFilter_, tCellExit};
+                const CellSpan span{blocks_.get(), ref.first, ref.count, filter_, nearestFilter_, anyFilter_, tCellExit};
                 if (query.Cell(span)) return true;
             }
         } else if (empty && empty[idx] > 2) {

@@ -188,6 +188,7 @@ class NestedGridAccel final : public Accelerator {
     void ComputeEmptyReach();
     BlockFilter filter_ = nullptr;         // t only
     BlockFilter nearestFilter_ = nullptr;  // and the hits' barycentrics (closest-hit queries)
+    BlockFilter anyFilter_ = nullptr;      // t only, up to the first block with a hit (occlusion)
     int simdWidth_ = 0;
     Stats stats_;
 };

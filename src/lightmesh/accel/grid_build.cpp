@@ -345,6 +345,7 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
     simdWidth_ = options_.gridSimdWidth == 4 || !HasAvx2() ? 4 : 8;
     filter_ = simdWidth_ == 8 ? FilterBlocks8 : FilterBlocks4;
     nearestFilter_ = simdWidth_ == 8 ? grid_detail::FilterBlocks8Bary : grid_detail::FilterBlocks4Bary;
+    anyFilter_ = simdWidth_ == 8 ? grid_detail::FilterBlocks8Any : grid_detail::FilterBlocks4Any;
 
     stats_.bytes = nodes_.size() * sizeof(Node) + cells_.size() * sizeof(CellRef) +
                    occupied_.size() * sizeof(uint64_t) + blockCount_ * sizeof(TriBlock) + emptyReach_.size();

@@ -21,6 +21,11 @@ uint64_t FilterBlocks4Bary(const NestedGridAccel::TriBlock* blocks, uint32_t cou
                            float* t, uint64_t* ties, float* bary);
 uint64_t FilterBlocks8Bary(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
                            float* t, uint64_t* ties, float* bary);
+/// The same stopping at the first block that holds a hit (occlusion queries).
+uint64_t FilterBlocks4Any(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
+                          float* t, uint64_t* ties, float* bary);
+uint64_t FilterBlocks8Any(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
+                          float* t, uint64_t* ties, float* bary);
 /// Whether this CPU runs FilterBlocks8's AVX2 code.
 bool HasAvx2();
 
