@@ -295,8 +295,8 @@ struct CellSpan {
 // every lane of the blocks is a triangle of the mesh (the last block's spare lanes are
 // degenerate and never hit), and the filter's hit is IntersectPrepared's, so that triangle
 // is one brute force finds on the ray as well. Exact, and a blocked segment skips the rest
-// of its cell's blocks. (So with kAnyHit `test` must end the query: it is handed the first
-// hit only, without its t.)
+// of its cell's blocks. (So kAnyHit is for a query that any hit ends: the filter's hits
+// return true without calling `test`, which sees only the tie-breaks' hits.)
 template <bool kNearestOnly, bool kAnyHit = false, typename Test>
 [[gnu::always_inline]] inline bool ForEachHit(const CellSpan& c, const detail::PreparedRay& ray, Test&& test) {
     // The blocks that hold the cell's lanes, up to 8 (64 lanes) per filter call; lanes of
@@ -312,7 +312,9 @@ template <bool kNearestOnly, bool kAnyHit = false, typename Test>
             blocks, static_cast<uint32_t>((stop - base + 7) / 8), ray, t, &ties, bary);
         const uint64_t lo = begin > base ? begin - base : 0, hi = stop - base;
         const uint64_t own = (hi == 64 ? ~uint64_t(0) : (uint64_t(1) << hi) - 1) & ~((uint64_t(1) << lo) - 1);
-        if (kAnyHit && hits) return test(blocks[__builtin_ctzll(hits) / 8].id[__builtin_ctzll(hits) % 8], TriangleHit{});
+        if constexpr (kAnyHit) {
+            if (hits) return true;  // any hit ends an occlusion query
+        }
         hits &= own;
         ties &= own;
         auto scalar = [&](uint32_t k) {
