@@ -158,10 +158,22 @@ DiscRings::DiscRings(const Vec3& origin, const Vec3& center, float radius, int p
     CoordinateSystem(oc_ / std::sqrt(d2), &e1_, &e2_);
     // The rings' directions by rotation from one sine and cosine per point: point k of the
     // outer ring at turn + k·step, of the inner ring at turn + (k + ½)·step.
+    // The half step's cosine and sine per ring size, computed once (the same floats).
+    struct HalfSteps {
+        float cs[kMaxPerRing + 1], sn[kMaxPerRing + 1];
+        HalfSteps() {
+            for (int n = 1; n <= kMaxPerRing; ++n) {
+                const float step = 2 * Pi / static_cast<float>(n);
+                cs[n] = std::cos(0.5f * step);
+                sn[n] = std::sin(0.5f * step);
+            }
+        }
+    };
+    static const HalfSteps halfSteps;
     const float step = 2 * Pi / static_cast<float>(perRing_);
     const float turn = UnitFloat(seed >> 40) * step;
-    cs_ = std::cos(0.5f * step);
-    sn_ = std::sin(0.5f * step);
+    cs_ = halfSteps.cs[perRing_];
+    sn_ = halfSteps.sn[perRing_];
     c0_ = std::cos(turn);
     s0_ = std::sin(turn);
 }

@@ -18,18 +18,18 @@ inline float LightMesh<Word>::NarrowPenumbra(const ShadingPoint& sp, size_t l, f
     const Vec3& light = scene_.lights[l].position;
     const float reach = rho + kDetect * lattice_.h, reach2 = reach * reach;
     const Word bit = Word(1) << l;
-    int near = 0;
-    Word first = 0;
-    bool same = true;
+    // Whether some node within reach sees the light, and whether some does not (without
+    // a branch per node: about every other one mispredicted where they are mixed).
+    Word seeing = 0, hidden = 0;
     for (const PenumbraNode& c : nodes) {
-        if (!(c.d2 < reach2)) continue;
-        if (near++ == 0) first = c.w & bit;
-        else if ((c.w & bit) != first) same = false;
+        const Word within = c.d2 < reach2 ? bit : Word(0);
+        seeing |= c.w & within;
+        hidden |= ~c.w & within;
     }
-    if (near > 0 && same) {
+    if ((seeing != 0) != (hidden != 0)) {  // some node within reach, and they agree
         ++counters.shadowRays;
         const bool centre = LightVisible(accel_, sp.origin, light);
-        if (centre == (first != 0)) return centre ? 1.0f : 0.0f;
+        if (centre == (seeing != 0)) return centre ? 1.0f : 0.0f;
     }
     ++Count(counters, LightMeshCount::kPenumbraSampled);
     if (DiscQueue* queue = ThreadDiscQueue()) {
@@ -88,7 +88,11 @@ inline void LightMesh<Word>::PenumbraInterpolate(const ShadingPoint& sp, Word ne
     }
     // The segments: every node that gets a weight, then, for the lights the candidates
     // agree on, until one node sees P (consensus's rule).
-    kept.assign(n, 0);
+    // Which nodes passed their segment test: only the kernel reads it, and only consensus's
+    // search below fills it otherwise (most points: every penumbra narrow, P's ray checking
+    // the agreement, so no node is tested).
+    const bool testsNodes = rhoMax2 > 0 || !OwnRayChecksAgreement();
+    if (testsNodes) kept.assign(n, 0);
     uint32_t keptCount = 0;
     auto test = [&](size_t i) {
         if (!planar) {
@@ -98,8 +102,9 @@ inline void LightMesh<Word>::PenumbraInterpolate(const ShadingPoint& sp, Word ne
         kept[i] = 1;
         ++keptCount;
     };
-    for (size_t i = 0; i < n; ++i)
-        if (nodes[i].d2 < rhoMax2) test(i);
+    if (rhoMax2 > 0)
+        for (size_t i = 0; i < n; ++i)
+            if (nodes[i].d2 < rhoMax2) test(i);
     int firstKept = -1;
     if (OwnRayChecksAgreement()) {
         firstKept = 0;  // any node's bit: P's own ray checks it (CheckThin)

@@ -292,18 +292,35 @@ inline void LightMesh<Word>::ConsensusWalk(const ShadingPoint& sp, Word neededMa
     Count(counters, LightMeshCount::kCandidates) += n;
     if (lightRadius_ > 0) {
         if (!agree) {
+            // The candidates' positions and squared distances to P from tables per offset
+            // and axis: the floats EntryNode and LengthSquared give, in a third of the
+            // operations (a point's candidates share cubeSide_ offsets per axis).
+            const LightMeshLattice& L = lattice_;
+            float coord[3][kMaxCubeSide], square[3][kMaxCubeSide];
+            const int corner[3] = {ci + minOffset_, cj + minOffset_, ck + minOffset_};
+            const float origin[3] = {L.origin.x, L.origin.y, L.origin.z}, p[3] = {sp.p.x, sp.p.y, sp.p.z};
+            for (int a = 0; a < 3; ++a)
+                for (int o = 0; o < cubeSide_; ++o) {
+                    coord[a][o] = origin[a] + static_cast<float>(corner[a] + o) * L.h;
+                    const float d = coord[a][o] - p[a];
+                    square[a][o] = d * d;
+                }
             thread_local std::vector<PenumbraNode> nodes;
             nodes.clear();
             all.ForEach([&](const FrontBlock& b, int k) {
                 const uint64_t index = static_cast<uint64_t>(base + b.linear[k]);
-                const Vec3 x = EntryNode(ci, cj, ck, b, k);
-                nodes.push_back({x, LengthSquared(x - sp.p), index, Evaluate(index)});  // evaluated by pass 1
+                const int ox = b.ox[k] - minOffset_, oy = b.oy[k] - minOffset_, oz = b.oz[k] - minOffset_;
+                nodes.push_back({Vec3(coord[0][ox], coord[1][oy], coord[2][oz]),
+                                 square[0][ox] + square[1][oy] + square[2][oz], index,
+                                 EvaluatedWord(index)});  // evaluated by pass 1
             });
             PenumbraInterpolate(sp, neededMask, nodes, base, planar, summary, blockers, acc, counters);
             return;
         }
         if (planar || OwnRayChecksAgreement()) {
-            UseAll(all, base, acc);
+            // Every candidate's word: pass 1's sums already (acc is still empty here).
+            assert(acc.m == 0);
+            acc = counts;
             return;
         }
     }
