@@ -157,8 +157,8 @@ DiscRings::DiscRings(const Vec3& origin, const Vec3& center, float radius, int p
     if (inside_) return;
     CoordinateSystem(oc_ / std::sqrt(d2), &e1_, &e2_);
     // The rings' directions by rotation from one sine and cosine per point: point k of the
-    // outer ring at turn + k·step, of the inner ring at turn + (k + ½)·step.
-    // The half step's cosine and sine per ring size, computed once (the same floats).
+    // outer ring at turn + k·step, of the inner ring at turn + (k + ½)·step. The half
+    // step's cosine and sine per ring size are computed once (the same floats).
     struct HalfSteps {
         float cs[kMaxPerRing + 1], sn[kMaxPerRing + 1];
         HalfSteps() {

@@ -505,7 +505,7 @@ inline void LightMesh<Word>::ConvertTemplates() {
         ThrowError("light mesh %dx%dx%d: too many nodes for the templates' 32-bit offsets: lower --cc", lattice_.nx,
                    lattice_.ny, lattice_.nz);
     const int cubeSide = maxOffset_ - minOffset_ + 1;
-    if (cubeSide > kMaxCubeSide)
+    if (cubeSide > kMaxCubeSide)  // (an internal error: the templates' parser checks the offsets)
         ThrowError("light mesh: sphere templates with offsets %d .. %d: more than kI <= 16 allows", minOffset_, maxOffset_);
     cubeSide_ = cubeSide;
     const uint64_t cubeNodes = static_cast<uint64_t>(cubeSide) * cubeSide * cubeSide;

@@ -688,8 +688,9 @@ class LightMesh final : public LightMeshShadows {
     // (the nodes any of its points may use) has at most kCubeWords·64 nodes.
     bool patches_ = false, patchesFit_ = false;
     uint32_t cubeWords_ = 0;
-    // The templates' offsets run from -floor(kI) to floor(kI) + 1, and kI <= 16.
-    static constexpr int kMaxCubeSide = 2 * 16 + 2;
+    // Offsets within ±(ceil(kI) + 1), kI <= 16: ParseSphereTemplates refuses a template
+    // file with others, and the built ones run from -floor(kI) to floor(kI) + 1.
+    static constexpr int kMaxCubeSide = 2 * (16 + 1) + 1;
     int cubeSide_ = 0;  // nodes along a side of the neighbourhood cube (maxOffset_ - minOffset_ + 1)
     // An offset's place in the neighbourhood cube of all offsets, x fastest.
     uint32_t CubeIndex(int dx, int dy, int dz) const {

@@ -293,18 +293,16 @@ inline void LightMesh<Word>::ConsensusWalk(const ShadingPoint& sp, Word neededMa
     if (lightRadius_ > 0) {
         if (!agree) {
             // The candidates' positions and squared distances to P from tables per offset
-            // and axis: the floats EntryNode and LengthSquared give, in a third of the
-            // operations (a point's candidates share cubeSide_ offsets per axis).
-            const LightMeshLattice& L = lattice_;
+            // and axis: the floats EntryNode and LengthSquared give (Node is per axis, and
+            // Dot adds x², y², z² in this order), in a third of the operations (a point's
+            // candidates share cubeSide_ offsets per axis).
             float coord[3][kMaxCubeSide], square[3][kMaxCubeSide];
-            const int corner[3] = {ci + minOffset_, cj + minOffset_, ck + minOffset_};
-            const float origin[3] = {L.origin.x, L.origin.y, L.origin.z}, p[3] = {sp.p.x, sp.p.y, sp.p.z};
-            for (int a = 0; a < 3; ++a)
-                for (int o = 0; o < cubeSide_; ++o) {
-                    coord[a][o] = origin[a] + static_cast<float>(corner[a] + o) * L.h;
-                    const float d = coord[a][o] - p[a];
-                    square[a][o] = d * d;
-                }
+            for (int o = 0; o < cubeSide_; ++o) {
+                const Vec3 x = lattice_.Node(ci + minOffset_ + o, cj + minOffset_ + o, ck + minOffset_ + o);
+                const Vec3 d = x - sp.p;
+                coord[0][o] = x.x, coord[1][o] = x.y, coord[2][o] = x.z;
+                square[0][o] = d.x * d.x, square[1][o] = d.y * d.y, square[2][o] = d.z * d.z;
+            }
             thread_local std::vector<PenumbraNode> nodes;
             nodes.clear();
             all.ForEach([&](const FrontBlock& b, int k) {
