@@ -4,8 +4,10 @@
 # light radius R = FRAC × the scene's diagonal), then RUNS interleaved rounds of no shadows,
 # RT, the light mesh with its fixed radius, the light mesh with --light-radius R (with the
 # default --thin-check all, and with off and lit), and naive soft shadows with 1, 2 and 4
-# rays per light; prints the median render times as ratios to RT from the same rounds and
-# PSNR/SSIM against the reference.
+# rays per light, and Нет (the walk without local visibility); prints the median render
+# times as ratios to RT from the same rounds and PSNR/SSIM against the reference, then the
+# mode's floor with its default --thin-check all: RT's work (P's own ray) plus Нет's walk,
+# 1 + (Нет − none) / RT.
 #   scripts/bench-penumbra.sh [SCENE...]   (default: gazebo, playground, castle, garden)
 # Environment: W, H (1024×768), RUNS (3), FRAC (0.015), REF (256), LM (the binary), OUT
 # (folder of the images, default a temporary one).
@@ -16,7 +18,7 @@ W=${W:-1024}; H=${H:-768}; RUNS=${RUNS:-3}; FRAC=${FRAC:-0.015}; REF=${REF:-256}
 OUT=${OUT:-$(mktemp -d)}
 mkdir -p "$OUT"
 [ $# -gt 0 ] || set -- builtin:gazebo scenes/real/parque.json scenes/real/castle.json scenes/real/garden.json
-methods=(none rt lmm penumbra-off penumbra-lit penumbra area1 area2 area4)
+methods=(none rt net lmm penumbra-off penumbra-lit penumbra area1 area2 area4)
 median() { tr ' ' '\n' | grep . | sort -g | awk '{a[NR]=$1} END {print a[int((NR+1)/2)]}'; }
 for scene in "$@"; do
   tag=$(basename "$scene" .json | sed 's/^builtin://')
@@ -32,6 +34,7 @@ for scene in "$@"; do
       case $m in
         none) args=(--shadows none) ;;
         rt) args=(--shadows rt) ;;
+        net) args=(--shadows lmm --variant none) ;;
         lmm) args=(--shadows lmm) ;;
         penumbra) args=(--shadows lmm --light-radius "$R") ;;
         penumbra-*) args=(--shadows lmm --light-radius "$R" --thin-check "${m#penumbra-}") ;;
@@ -53,6 +56,9 @@ for scene in "$@"; do
     ssim=$(echo "$q" | grep -o '"ssim":[^,]*' | cut -d: -f2)
     printf '| %s | %s | %.2f | %.2f | %.4f |\n' "$m" "$t" "$(awk -v a="$t" -v b="$rt" 'BEGIN {print a / b}')" "$psnr" "$ssim"
   done
+  echo
+  none=$(echo "${times[none]}" | median); net=$(echo "${times[net]}" | median)
+  echo "Floor of the penumbra mode with --thin-check all, RT + Нет's walk: $(awk -v n="$net" -v z="$none" -v r="$rt" 'BEGIN {printf "%.2f", 1 + (n - z) / r}')× RT"
   echo
   unset times
 done

@@ -788,7 +788,7 @@ std::vector<Case> Corpus() {
          .output = "$D/box.obj/out.png"},
         {.name = "scene_beyond_float_precision",
          .args = kRender,
-         .expected = "lightmesh: error: $D/scene.json /meshes: all 12 triangles have zero area in "
+         .expected = "lightmesh: error: $D/scene.json /meshes: all 12 triangles are degenerate in "
                      "single precision: at coordinates around 1e+12 single precision cannot tell "
                      "its vertices apart (they span 0; move the model nearer the origin)\n",
          .files = {{"scene.json",

@@ -77,6 +77,11 @@ std::string PrecisionHint(const TriangleMesh& mesh) {
     if (mesh.positions.empty() || !IsFinite(b.lo) || !IsFinite(b.hi)) return "";
     const float reach = std::max(Reach(b.lo), Reach(b.hi));
     const float extent = b.MaxExtent();
+    // Edges this long overflow the normal's cross product to infinity (CleanMesh).
+    if (reach > kMaxCoordinate)
+        return StringPrintf(": its coordinates reach %g, beyond the ±%g that single-precision "
+                            "rendering allows (scale the model down)",
+                            double(reach), double(kMaxCoordinate));
     if (reach > 0 && reach < 1e-30f)
         return StringPrintf(": its coordinates are at most %g, below what single precision "
                             "resolves (scale the model up)",
@@ -145,7 +150,7 @@ void CheckLightsOutsideSolids(const Reader& r, const Scene& scene) {
 std::string NoTrianglesMessage(const SceneReport& report, const TriangleMesh& mesh) {
     if (report.degenerateRemoved > 0) {
         if (std::string hint = PrecisionHint(mesh); !hint.empty())
-            return StringPrintf("all %zu triangles have zero area in single precision%s",
+            return StringPrintf("all %zu triangles are degenerate in single precision%s",
                                 report.degenerateRemoved, hint.c_str());
         return StringPrintf(
             "the scene has zero extent: all %zu triangles are degenerate (zero area)",

@@ -756,6 +756,13 @@ TEST(SceneFile, BareMeshErrorsNameTheFile) {
         LoadError(folder + "/point.obj"),
         folder +
             "/point.obj: the scene has zero extent: all 1 triangles are degenerate (zero area)");
+    // Finite coordinates whose triangle's normal overflows: the message says to scale down
+    // (it said "zero extent ... (zero area)").
+    WriteFile(folder, "huge.obj", "v 0 0 0\nv 1e38 0 0\nv 0 1e38 0\nf 1 2 3\n");
+    EXPECT_EQ(LoadError(folder + "/huge.obj"),
+              folder + "/huge.obj: all 1 triangles are degenerate in single precision: its coordinates "
+                       "reach 1e+38, beyond the ±1e+18 that single-precision rendering allows (scale the "
+                       "model down)");
 }
 
 /// Projects p with the scene's pinhole camera; true if it lands inside the image.
