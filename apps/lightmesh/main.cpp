@@ -20,6 +20,10 @@ int main(int argc, char** argv) {
     CLI::App app{"lightmesh: soft shadows from point lights by the light mesh method"};
     app.require_subcommand(1);
     app.set_version_flag("--version", "lightmesh 0.1.0");
+    // Command-line mistakes read like every other error ("lightmesh: error: ...").
+    app.failure_message([](const CLI::App*, const CLI::Error& e) {
+        return std::string("lightmesh: error: ") + e.what() + "\nRun with --help for more information.\n";
+    });
 
     RenderCommand render;
     CLI::App* renderCmd = app.add_subcommand("render", "Render a scene to a PNG or EXR image");

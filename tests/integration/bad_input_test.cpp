@@ -467,7 +467,7 @@ std::vector<Case> Corpus() {
         // --- Resolution ---------------------------------------------------------------------
         {.name = "width_zero",
          .args = "render builtin:gazebo --width 0 -o $OUT",
-         .expected = "--width: Value 0 not in range 1 to 16384\n"},
+         .expected = "lightmesh: error: --width: Value 0 not in range 1 to 16384\n"},
         {.name = "width_negative",
          .args = "render builtin:gazebo --width -640 -o $OUT",
          .expected = "--width: Value -640 not in range 1 to 16384\n"},
