@@ -29,6 +29,13 @@ float Reach(const Vec3& p) {
     return MaxComponent(Abs(p));
 }
 
+/// "coordinates reach R, beyond ...": why a mesh reaching `reach` cannot be rendered.
+std::string CoordinatesBeyondLimit(float reach) {
+    return StringPrintf("coordinates reach %g, beyond the ±%g that single-precision rendering allows "
+                        "(scale the model down)",
+                        double(reach), double(kMaxCoordinate));
+}
+
 /// "" when p can be used in a ray, else why not.
 std::string CoordinateProblem(const Vec3& p, const char* what) {
     if (!IsFinite(p)) return StringPrintf("%s %s is not finite", what, FormatVec(p).c_str());
@@ -78,10 +85,7 @@ std::string PrecisionHint(const TriangleMesh& mesh) {
     const float reach = std::max(Reach(b.lo), Reach(b.hi));
     const float extent = b.MaxExtent();
     // Edges this long overflow the normal's cross product to infinity (CleanMesh).
-    if (reach > kMaxCoordinate)
-        return StringPrintf(": its coordinates reach %g, beyond the ±%g that single-precision "
-                            "rendering allows (scale the model down)",
-                            double(reach), double(kMaxCoordinate));
+    if (reach > kMaxCoordinate) return ": its " + CoordinatesBeyondLimit(reach);
     if (reach > 0 && reach < 1e-30f)
         return StringPrintf(": its coordinates are at most %g, below what single precision "
                             "resolves (scale the model up)",
@@ -101,10 +105,7 @@ void CheckExtent(const Reader& r, const std::string& path, const Scene& scene) {
     if (!(b.MaxExtent() > 0)) r.Fail(path, "the scene has zero extent");
     // Beyond ±1e18, ray set-up, light-mesh node positions and shading overflow to inf or NaN.
     const float reach = std::max(MaxComponent(Abs(b.lo)), MaxComponent(Abs(b.hi)));
-    if (reach > kMaxCoordinate)
-        r.Fail(path, StringPrintf("the scene's coordinates reach %g, beyond the ±%g that "
-                                  "single-precision rendering allows (scale the model down)",
-                                  double(reach), double(kMaxCoordinate)));
+    if (reach > kMaxCoordinate) r.Fail(path, "the scene's " + CoordinatesBeyondLimit(reach));
 }
 
 /// Whether p is inside a closed solid of the mesh: the number of surfaces crossed on the
