@@ -473,6 +473,47 @@ bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD,
     };
     enter(tEnter);
     float tCell = tEnter;
+    // The cells' content boxes (CellRef), the three axes in the lanes of one vector. Along
+    // an axis the ray moves on, t of a box face is t of the cell's low plane plus its steps
+    // times the t across one step (signed); t of the cell's low plane is the walk's t of its
+    // far plane (tx, ty, tz) or one cell before it. The box is grown by rounding's reach, in
+    // t. An axis the ray does not move along, and the fourth lane, get (-∞, ∞): the cell
+    // holds the ray's coordinate there.
+    using F4 = SimdVectors<4>::F;
+    using I4 = SimdVectors<4>::I;
+    typedef uint16_t U16x4 __attribute__((vector_size(8)));
+    const float reach = RoundingReach(std::max({std::abs(ray.o.x), std::abs(ray.o.y), std::abs(ray.o.z)}));
+    const F4 invV = {invD.x, invD.y, invD.z, 0.0f};
+    const F4 absInv = {std::abs(invD.x), std::abs(invD.y), std::abs(invD.z), 0.0f};
+    const I4 moves = {sx ? -1 : 0, sy ? -1 : 0, sz ? -1 : 0, 0};
+    const F4 sizeV = {g.cellSize.x, g.cellSize.y, g.cellSize.z, 0.0f};
+    const F4 zeroV = {};
+    const F4 stepV = reinterpret_cast<F4>(reinterpret_cast<I4>(sizeV * (1.0f / kBoxSteps) * invV) & moves);
+    const F4 lowV = reinterpret_cast<F4>(reinterpret_cast<I4>(invV > zeroV ? -sizeV * invV : zeroV) & moves);
+    const F4 padV = reinterpret_cast<F4>(reinterpret_cast<I4>(reach * absInv) & moves);
+    const I4 nearRest = ~moves & reinterpret_cast<I4>(zeroV - Infinity);
+    const I4 farRest = ~moves & reinterpret_cast<I4>(zeroV + Infinity);
+    // Whether the ray's stretch [tCell, tCellExit] through the cell meets its content box.
+    // (A NaN lane is dropped by the min / max, or fails the last comparison: the cell is
+    // then tested.)
+    auto meetsBox = [&](const CellRef& ref, float tCellExit) {
+        U16x4 qLo, qHi;
+        std::memcpy(&qLo, ref.box, sizeof qLo);
+        std::memcpy(&qHi, ref.box + 4, sizeof qHi);
+        const F4 tLow = F4{tx, ty, tz, 0.0f} + lowV;
+        const F4 t0 = tLow + __builtin_convertvector(__builtin_convertvector(qLo, I4), F4) * stepV;
+        const F4 t1 = tLow + __builtin_convertvector(__builtin_convertvector(qHi, I4), F4) * stepV;
+        F4 n = reinterpret_cast<F4>((reinterpret_cast<I4>((t0 < t1 ? t0 : t1) - padV) & moves) | nearRest);
+        F4 f = reinterpret_cast<F4>((reinterpret_cast<I4>((t0 > t1 ? t0 : t1) + padV) & moves) | farRest);
+        const F4 n2 = __builtin_shufflevector(n, n, 2, 3, 0, 1), f2 = __builtin_shufflevector(f, f, 2, 3, 0, 1);
+        n = n > n2 ? n : n2;
+        f = f < f2 ? f : f2;
+        const F4 n1 = __builtin_shufflevector(n, n, 1, 0, 3, 2), f1 = __builtin_shufflevector(f, f, 1, 0, 3, 2);
+        n = n > n1 ? n : n1;
+        f = f < f1 ? f : f1;
+        const float lo = n[0] > tCell ? n[0] : tCell, hi = f[0] < tCellExit ? f[0] : tCellExit;
+        return !(lo > hi);
+    };
     const uint64_t* occupied = occupied_.data();
     // Empty space (top level): an empty cell knows how far the empty cells around it reach.
     const uint8_t* empty = nodeIndex == 0 && !emptyReach_.empty() ? emptyReach_.data() : nullptr;
@@ -482,8 +523,10 @@ bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD,
         // Most cells are empty; their bit (a small array that stays in cache) spares the
         // load from the much larger cells_.
         if ((occupied[idx >> 6] >> (idx & 63)) & 1) {
-            const CellRef ref = cells_[idx];
-            if (ref.count & kChildBit) {
+            const CellRef& ref = cells_[idx];
+            if (!meetsBox(ref, tCellExit)) {
+                // Nothing the cell holds is on this stretch of the ray.
+            } else if (ref.count & kChildBit) {
                 if (Walk(ref.count & ~kChildBit, ray, invD, tCell, tCellExit, query)) return true;
             } else {
                 const CellSpan span{blocks_.get(), ref.first, ref.count, filter_, nearestFilter_, anyFilter_, tCellExit};
@@ -694,8 +737,6 @@ void NestedGridAccel::TraceMany(const Ray* rays, size_t count, Query* q) const {
     // The slicing axis: the mean direction's largest; Coherent's cone keeps every ray's
     // component along it of the mean's sign and away from zero.
     const int K = MaxDimension(Abs(mean));
-    float boxAbs = 0;
-    for (int a = 0; a < 3; ++a) boxAbs = std::max({boxAbs, std::abs(box_.lo[a]), std::abs(box_.hi[a])});
     const int n = int(count);
     PacketLanes p;
     p.K = K;
@@ -749,7 +790,7 @@ void NestedGridAccel::TraceMany(const Ray* rays, size_t count, Query* q) const {
     p.slope = p.slope * 1.001f + 1e-3f;
     // Rounding of o + d·t and of the planes' t is a few ulps of the coordinates
     // involved; the cells' growth (epsAbs_) covers the walk's own rounding.
-    p.pad = epsAbs_ + 1e-6f * (boxAbs + originAbs);
+    p.pad = RoundingReach(originAbs);
     PacketWalk(0, p, p.live, p.t0, p.t1, q);
 }
 

@@ -128,10 +128,25 @@ class NestedGridAccel final : public Accelerator {
     /// blocks_ (lane L is lane L % 8 of block L / 8: cells share blocks, so every block is
     /// full), or (count with kChildBit) the sub-grid node count & ~kChildBit; count 0 when
     /// empty.
+    ///
+    /// And the box of what a non-empty cell holds (ours, in the spirit of a BVH's leaf
+    /// bounds): along axis a, from box[a] to box[4 + a] kBoxSteps-ths of the cell (rounded
+    /// outwards), it holds the bounds of every triangle of the cell clipped to the cell. A
+    /// ray whose stretch through the cell misses that box, grown by rounding's reach, hits
+    /// nothing there: the walk skips the cell's triangles, or its sub-grid, and a packet the
+    /// rays whose rectangle misses it. Half the non-empty cells a ray meets are skipped so
+    /// (a surface across a corner of the cell, foliage, a floor under the ray, a triangle
+    /// that only touches the cell's growth).
     struct CellRef {
         uint32_t first;
         uint32_t count;
+        // boxLo x, y, z, 0, then boxHi x, y, z, 0: two 4-lane vectors for the queries' test
+        uint16_t box[8];
     };
+    /// Steps per cell side of CellRef's box (16 bits). With 255 steps a triangle on a cell's
+    /// face left a whole step of box inside the cell, and far fewer cells were skipped
+    /// (callgrind, bench_accel's gazebo shadow rays: 91.4M instructions against 81.9M).
+    static constexpr int kBoxSteps = 65535;
     static constexpr uint32_t kChildBit = 0x80000000u;
     /// Tests `count` (≤ 8) blocks against a prepared ray with the watertight test's very
     /// arithmetic, lane by lane: returns the bits 8·b + lane of the triangles it hits, their
@@ -175,6 +190,7 @@ class NestedGridAccel final : public Accelerator {
     AccelOptions options_;
     Bounds3 box_;
     float epsAbs_ = 0;         // least growth of a cell when assigning triangles (scene scale)
+    float boxAbs_ = 0;         // the largest coordinate of box_, in magnitude
     std::vector<Node> nodes_;  // [0] is the top level
     std::vector<CellRef> cells_;       // all cells of all nodes, node by node
     std::vector<uint64_t> occupied_;   // one bit per cell: not empty
@@ -186,6 +202,10 @@ class NestedGridAccel final : public Accelerator {
     static constexpr int kMaxEmptyReach = 8;
     static constexpr size_t kMaxEmptyReachCells = size_t(1) << 24;
     void ComputeEmptyReach();
+    // How far rounding may put a point computed along a ray whose origin's largest coordinate
+    // is `originAbs` (o + d·t, a plane's t) from where it belongs, in world units: the
+    // packets' rectangles and the cells' content boxes (CellRef) are grown by it.
+    float RoundingReach(float originAbs) const { return epsAbs_ + 1e-6f * (boxAbs_ + originAbs); }
     BlockFilter filter_ = nullptr;         // t only
     BlockFilter nearestFilter_ = nullptr;  // and the hits' barycentrics (closest-hit queries)
     BlockFilter anyFilter_ = nullptr;      // t only, up to the first block with a hit (occlusion)

@@ -37,6 +37,49 @@ void ForEachIndex(size_t n, size_t minParallel, const Body& body) {
 
 }  // namespace
 
+namespace grid_detail {
+
+void SetContentBox(const NestedGridAccel::Node& node, const int cell[3], const float lo[3], const float hi[3],
+                   NestedGridAccel::CellRef* ref) {
+    constexpr double kSteps = NestedGridAccel::kBoxSteps;
+    for (int a = 0; a < 3; ++a) {
+        const double cellLo = double(node.lo[a]) + cell[a] * double(node.cellSize[a]);
+        const double scale = kSteps / double(node.cellSize[a]);
+        // [lo, hi] ∩ the cell, in steps from the cell's low face, rounded outwards (the
+        // cell's triangles are finite, and so is every value here).
+        const double from = std::clamp(std::floor((double(lo[a]) - cellLo) * scale), 0.0, kSteps);
+        const double to = std::clamp(std::ceil((double(hi[a]) - cellLo) * scale), from, kSteps);
+        ref->box[a] = uint16_t(from);
+        ref->box[4 + a] = uint16_t(to);
+    }
+}
+
+void SetBoxFromSubGrid(const NestedGridAccel::Node& child, const NestedGridAccel::CellRef* cells,
+                       NestedGridAccel::CellRef* ref) {
+    constexpr double kSteps = NestedGridAccel::kBoxSteps;
+    double lo[3] = {kSteps, kSteps, kSteps}, hi[3] = {0, 0, 0};
+    int k[3];
+    uint32_t c = child.firstCell;
+    for (k[2] = 0; k[2] < child.res[2]; ++k[2])
+        for (k[1] = 0; k[1] < child.res[1]; ++k[1])
+            for (k[0] = 0; k[0] < child.res[0]; ++k[0], ++c) {
+                const NestedGridAccel::CellRef& sub = cells[c];
+                if (sub.count == 0) continue;
+                // The sub-cell's box as a fraction of the parent cell, in steps.
+                for (int a = 0; a < 3; ++a) {
+                    lo[a] = std::min(lo[a], (k[a] + sub.box[a] / kSteps) / child.res[a] * kSteps);
+                    hi[a] = std::max(hi[a], (k[a] + sub.box[4 + a] / kSteps) / child.res[a] * kSteps);
+                }
+            }
+    for (int a = 0; a < 3; ++a) {
+        const double from = std::clamp(std::floor(lo[a]), 0.0, kSteps);
+        ref->box[a] = uint16_t(from);
+        ref->box[4 + a] = uint16_t(std::clamp(std::ceil(hi[a]), from, kSteps));
+    }
+}
+
+}  // namespace grid_detail
+
 // The queries' triangle filters (grid.cpp), of which the build picks one for this machine.
 using grid_detail::FilterBlocks4;
 using grid_detail::FilterBlocks8;
@@ -259,6 +302,7 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
         b.hi[a] = hi + pad;
     }
     box_ = b;
+    boxAbs_ = std::max(MaxComponent(Abs(b.lo)), MaxComponent(Abs(b.hi)));
 
     epsAbs_ = 2e-7f * extent + 2.5e-7f * maxAbs;
     Builder builder{tris, options_, double(epsAbs_)};
@@ -283,14 +327,14 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
         const size_t cells = level.start.size() - 1;
         size_t k = 0;  // next child, children are sorted by cell
         for (size_t c = 0; c < cells; ++c) {
-            CellRef ref{0, 0};
+            CellRef ref{0, 0, {}};
             if (k < level.children.size() && level.children[k].first == c) {
                 if (queue.size() >= kChildBit) ThrowError("the grid is too large (%zu sub-grids)", queue.size());
                 ref.count = kChildBit | uint32_t(queue.size());
                 queue.push_back(level.children[k].second.get());
                 ++k;
             } else if (const uint32_t n = level.start[c + 1] - level.start[c]; n > 0) {
-                ref = {uint32_t(laneCount), n};
+                ref = {uint32_t(laneCount), n, {}};
                 laneCount += n;
                 if (laneCount >= UINT32_MAX) ThrowError("the grid is too large (%llu triangle references)",
                                                         static_cast<unsigned long long>(laneCount));
@@ -326,12 +370,22 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
             last.id[lane] = 0;
         }
     }
+    // Each leaf cell's content box (CellRef) with it, from the vertices it copies.
     ForEachIndex(queue.size(), blockCount > 4096 ? 2 : SIZE_MAX, [&](size_t q) {
         const Builder::Level& level = *queue[q];
+        const Node& node = nodes_[q];
         const size_t cells = level.start.size() - 1;
+        int cell[3] = {0, 0, 0};  // c's x, y, z
         for (size_t c = 0; c < cells; ++c) {
-            const CellRef& ref = cells_[nodes_[q].firstCell + c];
+            if (c) {
+                if (++cell[0] == node.res[0]) {
+                    cell[0] = 0;
+                    if (++cell[1] == node.res[1]) cell[1] = 0, ++cell[2];
+                }
+            }
+            CellRef& ref = cells_[node.firstCell + c];
             if (ref.count == 0 || (ref.count & kChildBit)) continue;
+            float lo[3] = {Infinity, Infinity, Infinity}, hi[3] = {-Infinity, -Infinity, -Infinity};
             for (uint32_t i = 0; i < ref.count; ++i) {
                 const uint32_t id = level.prims[level.start[c] + i];
                 const float* v = Floats(tris[id]);
@@ -339,9 +393,26 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
                 TriBlock& block = blocks_[lane / 8];
                 for (int row = 0; row < 9; ++row) block.v[row][lane % 8] = v[row];
                 block.id[lane % 8] = id;
+                for (int a = 0; a < 3; ++a) {
+                    lo[a] = std::min({lo[a], v[a], v[3 + a], v[6 + a]});
+                    hi[a] = std::max({hi[a], v[a], v[3 + a], v[6 + a]});
+                }
             }
+            grid_detail::SetContentBox(node, cell, lo, hi, &ref);
         }
     });
+    // A cell holding a sub-grid gets the union of its sub-cells' boxes (every point of a
+    // triangle in the cell is in a sub-cell that holds the triangle), children before their
+    // parents (a sub-grid's node comes after its parent's in the queue): no second pass over
+    // the crowded cells' triangles, which are most of the references of a large scene.
+    for (size_t q = queue.size(); q-- > 0;) {
+        const Node& node = nodes_[q];
+        const size_t cells = size_t(node.res[0]) * node.res[1] * node.res[2];
+        for (size_t c = 0; c < cells; ++c) {
+            CellRef& ref = cells_[node.firstCell + c];
+            if (ref.count & kChildBit) grid_detail::SetBoxFromSubGrid(nodes_[ref.count & ~kChildBit], cells_.data(), &ref);
+        }
+    }
     simdWidth_ = options_.gridSimdWidth == 4 || !HasAvx2() ? 4 : 8;
     filter_ = simdWidth_ == 8 ? FilterBlocks8 : FilterBlocks4;
     nearestFilter_ = simdWidth_ == 8 ? grid_detail::FilterBlocks8Bary : grid_detail::FilterBlocks4Bary;

@@ -29,6 +29,22 @@ uint64_t FilterBlocks8Any(const NestedGridAccel::TriBlock* blocks, uint32_t coun
 /// Whether this CPU runs FilterBlocks8's AVX2 code.
 bool HasAvx2();
 
+/// CellRef's content box of `cell` (x, y, z) of `node`, whose triangles' vertices span
+/// [lo, hi], into ref->box: that box clipped to the cell, in kBoxSteps-ths of the cell rounded
+/// outwards (computed in double; the queries grow the box by rounding's reach, which covers
+/// the cell's corners computed in float there). A triangle that only touches the cell's
+/// growth clips to the face it lies beyond, where a point of it a rounding error inside the
+/// cell is.
+void SetContentBox(const NestedGridAccel::Node& node, const int cell[3], const float lo[3], const float hi[3],
+                   NestedGridAccel::CellRef* ref);
+
+/// The content box of a cell holding the sub-grid `child`, whose cells (cells[child.firstCell
+/// …]) have theirs: the union of the sub-cells' boxes, in the cell's steps rounded outwards.
+/// (A sub-grid's cells tile the cell exactly but for the float rounding of its node, which
+/// the queries' growth by rounding's reach covers.)
+void SetBoxFromSubGrid(const NestedGridAccel::Node& child, const NestedGridAccel::CellRef* cells,
+                       NestedGridAccel::CellRef* ref);
+
 /// The empty-space pass along one axis (NestedGridAccel::ComputeEmptyReach): the minimum over
 /// 0 <= j < n with |j − i| <= k of max(|j − i|, value(j)), and at most k, for value(j) >= 0.
 /// Searched outward from i: a cell at distance d gives at least d, so the search stops once

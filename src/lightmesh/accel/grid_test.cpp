@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -86,6 +87,83 @@ TEST(GridEmptySpace, OutwardSearchEqualsTheWholeWindow) {
         }
     }
     EXPECT_GT(belowK, checked / 4);  // the cases where the search stops early are many
+}
+
+// A cell's content box (CellRef) holds every triangle's bounds clipped to the cell, rounded
+// outwards by less than a step: a triangle on a face, one only in the cell's growth beyond
+// a face, one across the whole cell, and random ones.
+TEST(GridContentBox, HoldsTheClippedBoundsWithinAStep) {
+    NestedGridAccel::Node node{};
+    node.lo = Vec3(-3.0f, 0.5f, 10.0f);
+    node.cellSize = Vec3(0.25f, 1.0f / 3.0f, 2.0f);
+    for (int a = 0; a < 3; ++a) node.invCellSize[a] = 1.0f / node.cellSize[a];
+    node.res[0] = node.res[1] = node.res[2] = 8;
+    const int cell[3] = {2, 5, 1};
+    double cellLo[3], cellHi[3];
+    for (int a = 0; a < 3; ++a) {
+        cellLo[a] = double(node.lo[a]) + cell[a] * double(node.cellSize[a]);
+        cellHi[a] = cellLo[a] + node.cellSize[a];
+    }
+    auto at = [&](double fx, double fy, double fz) {  // a point by its fraction of the cell
+        const double f[3] = {fx, fy, fz};
+        Vec3 p;
+        for (int a = 0; a < 3; ++a) p[a] = float(cellLo[a] + f[a] * node.cellSize[a]);
+        return p;
+    };
+    std::vector<NestedGridAccel::Tri> tris = {
+        {at(0, 0.2, 0.3), at(0, 0.7, 0.3), at(0, 0.2, 0.9)},                 // on the low x face
+        {at(1.00001, 0.4, 0.4), at(1.00001, 0.5, 0.4), at(1.00001, 0.4, 0.5)},  // in the growth above x
+        {at(-2, -2, 0.5), at(3, -2, 0.5), at(-2, 3, 0.5)},                    // across the cell
+    };
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-0.5, 1.5);
+    for (int i = 0; i < 200; ++i) tris.push_back({at(u(rng), u(rng), u(rng)), at(u(rng), u(rng), u(rng)), at(u(rng), u(rng), u(rng))});
+    // The build's call: the box of the triangles' vertices.
+    auto SetBox = [&](const uint32_t* ids, uint32_t n, NestedGridAccel::CellRef* ref) {
+        float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (uint32_t i = 0; i < n; ++i)
+            for (const Vec3& p : {tris[ids[i]].p0, tris[ids[i]].p1, tris[ids[i]].p2})
+                for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+        grid_detail::SetContentBox(node, cell, lo, hi, ref);
+    };
+    constexpr double kSteps = NestedGridAccel::kBoxSteps;
+    int tight = 0;
+    for (uint32_t first = 0; first < tris.size(); ++first) {
+        // A cell's triangles: one, or a run of a few.
+        const uint32_t n = std::min<uint32_t>(first < 3 ? 1 : 1 + first % 4, uint32_t(tris.size()) - first);
+        std::vector<uint32_t> ids(n);
+        for (uint32_t i = 0; i < n; ++i) ids[i] = first + i;
+        NestedGridAccel::CellRef ref{};
+        SetBox(ids.data(), n, &ref);
+        for (int a = 0; a < 3; ++a) {
+            double lo = INFINITY, hi = -INFINITY;
+            for (uint32_t id : ids)
+                for (const Vec3& p : {tris[id].p0, tris[id].p1, tris[id].p2}) lo = std::min(lo, double(p[a])), hi = std::max(hi, double(p[a]));
+            // The bounds clipped to the cell (a triangle beyond a face clips to that face).
+            const double clo = std::clamp(lo, cellLo[a], cellHi[a]), chi = std::clamp(hi, cellLo[a], cellHi[a]);
+            const double step = node.cellSize[a] / kSteps;
+            const double boxLo = cellLo[a] + ref.box[a] * step, boxHi = cellLo[a] + ref.box[4 + a] * step;
+            ASSERT_LE(ref.box[a], ref.box[4 + a]) << "triangles " << first << "+" << n << " axis " << a;
+            ASSERT_LE(ref.box[4 + a], NestedGridAccel::kBoxSteps);
+            EXPECT_LE(boxLo, clo) << "triangles " << first << "+" << n << " axis " << a;
+            EXPECT_GE(boxHi, chi) << "triangles " << first << "+" << n << " axis " << a;
+            EXPECT_LT(clo - boxLo, 1.01 * step) << "triangles " << first << "+" << n << " axis " << a;
+            EXPECT_LT(boxHi - chi, 1.01 * step) << "triangles " << first << "+" << n << " axis " << a;
+            tight += ref.box[4 + a] - ref.box[a] < kSteps / 2;
+        }
+        EXPECT_EQ(ref.box[3], 0);
+        EXPECT_EQ(ref.box[7], 0);
+    }
+    // The first triangle is a sliver of box on the low x face, the second one on the high x face.
+    NestedGridAccel::CellRef face{};
+    const uint32_t one = 0, two = 1;
+    SetBox(&one, 1, &face);
+    EXPECT_EQ(face.box[0], 0);
+    EXPECT_LE(face.box[4], 1);
+    SetBox(&two, 1, &face);
+    EXPECT_EQ(face.box[4], NestedGridAccel::kBoxSteps);
+    EXPECT_GE(face.box[0], NestedGridAccel::kBoxSteps - 1);
+    EXPECT_GT(tight, 20);  // the check saw boxes much smaller than the cell
 }
 
 TEST(GridResolution, OptionOverridesLongestSide) {
