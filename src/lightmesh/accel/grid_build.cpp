@@ -39,19 +39,31 @@ void ForEachIndex(size_t n, size_t minParallel, const Body& body) {
 
 namespace grid_detail {
 
-void SetContentBox(const NestedGridAccel::Node& node, const int cell[3], const float lo[3], const float hi[3],
-                   NestedGridAccel::CellRef* ref) {
+namespace {
+// A content box given in (fractional) steps from the cell's low corner, rounded outwards and
+// clamped to the cell, into ref->box.
+void StoreBoxSteps(const double lo[3], const double hi[3], NestedGridAccel::CellRef* ref) {
     constexpr double kSteps = NestedGridAccel::kBoxSteps;
     for (int a = 0; a < 3; ++a) {
-        const double cellLo = double(node.lo[a]) + cell[a] * double(node.cellSize[a]);
-        const double scale = kSteps / double(node.cellSize[a]);
-        // [lo, hi] ∩ the cell, in steps from the cell's low face, rounded outwards (the
-        // cell's triangles are finite, and so is every value here).
-        const double from = std::clamp(std::floor((double(lo[a]) - cellLo) * scale), 0.0, kSteps);
-        const double to = std::clamp(std::ceil((double(hi[a]) - cellLo) * scale), from, kSteps);
+        const double from = std::clamp(std::floor(lo[a]), 0.0, kSteps);
         ref->box[a] = uint16_t(from);
-        ref->box[4 + a] = uint16_t(to);
+        ref->box[4 + a] = uint16_t(std::clamp(std::ceil(hi[a]), from, kSteps));
     }
+}
+}  // namespace
+
+void SetContentBox(const NestedGridAccel::Node& node, const int cell[3], const float lo[3], const float hi[3],
+                   NestedGridAccel::CellRef* ref) {
+    // [lo, hi] in steps from the cell's low face (the cell's triangles are finite, and so is
+    // every value here).
+    double from[3], to[3];
+    for (int a = 0; a < 3; ++a) {
+        const double cellLo = double(node.lo[a]) + cell[a] * double(node.cellSize[a]);
+        const double scale = NestedGridAccel::kBoxSteps / double(node.cellSize[a]);
+        from[a] = (double(lo[a]) - cellLo) * scale;
+        to[a] = (double(hi[a]) - cellLo) * scale;
+    }
+    StoreBoxSteps(from, to, ref);
 }
 
 void SetBoxFromSubGrid(const NestedGridAccel::Node& child, const NestedGridAccel::CellRef* cells,
@@ -71,11 +83,7 @@ void SetBoxFromSubGrid(const NestedGridAccel::Node& child, const NestedGridAccel
                     hi[a] = std::max(hi[a], (k[a] + sub.box[4 + a] / kSteps) / child.res[a] * kSteps);
                 }
             }
-    for (int a = 0; a < 3; ++a) {
-        const double from = std::clamp(std::floor(lo[a]), 0.0, kSteps);
-        ref->box[a] = uint16_t(from);
-        ref->box[4 + a] = uint16_t(std::clamp(std::ceil(hi[a]), from, kSteps));
-    }
+    StoreBoxSteps(lo, hi, ref);
 }
 
 }  // namespace grid_detail

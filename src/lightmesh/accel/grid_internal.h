@@ -41,7 +41,8 @@ void SetContentBox(const NestedGridAccel::Node& node, const int cell[3], const f
 /// The content box of a cell holding the sub-grid `child`, whose cells (cells[child.firstCell
 /// …]) have theirs: the union of the sub-cells' boxes, in the cell's steps rounded outwards.
 /// (A sub-grid's cells tile the cell exactly but for the float rounding of its node, which
-/// the queries' growth by rounding's reach covers.)
+/// the queries' growth by rounding's reach covers. A sub-grid with no non-empty cell gets a
+/// sliver on the high faces: its walk finds nothing anyway.)
 void SetBoxFromSubGrid(const NestedGridAccel::Node& child, const NestedGridAccel::CellRef* cells,
                        NestedGridAccel::CellRef* ref);
 
