@@ -24,6 +24,20 @@ bool IsFiniteTri(const NestedGridAccel::Tri& t) {
     return IsFinite(t.p0) && IsFinite(t.p1) && IsFinite(t.p2);
 }
 
+// floor(x) and ceil(x) of a finite x clamped to [lo, hi] (integers), in int arithmetic:
+// the baseline x86-64 has no rounding instruction, so std::floor is a libm call, and the
+// build rounds every triangle's bounds six times per level.
+inline int FloorWithin(double x, int lo, int hi) {
+    x = std::clamp(x, double(lo), double(hi));
+    const int i = int(x);  // toward zero
+    return i - int(double(i) > x);
+}
+inline int CeilWithin(double x, int lo, int hi) {
+    x = std::clamp(x, double(lo), double(hi));
+    const int i = int(x);
+    return i + int(double(i) < x);
+}
+
 // body(i) for i in [0, n): in parallel when there is enough work for the threads' start-up
 // to pay (a small scene's build is a fraction of a millisecond).
 template <typename Body>
@@ -45,9 +59,9 @@ namespace {
 void StoreBoxSteps(const double lo[3], const double hi[3], NestedGridAccel::CellRef* ref) {
     constexpr double kSteps = NestedGridAccel::kBoxSteps;
     for (int a = 0; a < 3; ++a) {
-        const double from = std::clamp(std::floor(lo[a]), 0.0, kSteps);
+        const int from = FloorWithin(lo[a], 0, int(kSteps));
         ref->box[a] = uint16_t(from);
-        ref->box[4 + a] = uint16_t(std::clamp(std::ceil(hi[a]), from, kSteps));
+        ref->box[4 + a] = uint16_t(CeilWithin(hi[a], from, int(kSteps)));
     }
 }
 }  // namespace
@@ -84,6 +98,59 @@ void SetBoxFromSubGrid(const NestedGridAccel::Node& child, const NestedGridAccel
                 }
             }
     StoreBoxSteps(lo, hi, ref);
+}
+
+void RasterizeTriangle(const NestedGridAccel::Node& node, const NestedGridAccel::Tri& t, double epsAbs, uint32_t id,
+                       std::vector<std::pair<uint32_t, uint32_t>>* out) {
+    double eps[3];
+    int lo[3], hi[3];
+    int spanning = 0, spanAxis = 0;  // the axes along which the triangle meets > 1 cell
+    bool clamped = false;            // the grown bounds reach beyond the node
+    for (int a = 0; a < 3; ++a) {
+        // Grow cells by a little: the DDA's plane crossings are computed in float, and
+        // a hit point rounded into the neighbouring cell must still find its triangle
+        // there. 1e-4 of a cell is far above float error at the scene's own scale.
+        eps[a] = std::max(1e-4 * node.cellSize[a], epsAbs);
+        const double bmin = std::min({t.p0[a], t.p1[a], t.p2[a]}) - eps[a];
+        const double bmax = std::max({t.p0[a], t.p1[a], t.p2[a]}) + eps[a];
+        const double inv = node.invCellSize[a];
+        const int top = node.res[a] - 1;
+        const int first = FloorWithin((bmin - node.lo[a]) * inv, -1, top + 1);
+        const int last = FloorWithin((bmax - node.lo[a]) * inv, -1, top + 1);
+        clamped |= first < 0 || last > top;
+        lo[a] = std::clamp(first, 0, top);
+        hi[a] = std::clamp(last, 0, top);
+        if (hi[a] > lo[a]) ++spanning, spanAxis = a;
+    }
+    const int nx = node.res[0], ny = node.res[1];
+    auto emit = [&](int x, int y, int z) { out->emplace_back(uint32_t((z * ny + y) * nx + x), id); };
+    if (spanning == 0) {
+        emit(lo[0], lo[1], lo[2]);
+        return;
+    }
+    if (spanning == 1 && !clamped) {
+        // A run of cells along one axis, the triangle's grown bounds inside one cell along
+        // the other two: the triangle is connected, so it has a point at every coordinate
+        // of the run's axis between its extremes, and that point lies in the run's cell
+        // there (the overlap test would accept each one).
+        int k[3] = {lo[0], lo[1], lo[2]};
+        for (k[spanAxis] = lo[spanAxis]; k[spanAxis] <= hi[spanAxis]; ++k[spanAxis])
+            emit(k[0], k[1], k[2]);
+        return;
+    }
+    double h[3], c[3];
+    for (int a = 0; a < 3; ++a) h[a] = 0.5 * node.cellSize[a] + eps[a];
+    const TriangleBoxOverlap overlap(t.p0, t.p1, t.p2, h);
+    for (int z = lo[2]; z <= hi[2]; ++z) {
+        c[2] = node.lo[2] + (z + 0.5) * double(node.cellSize[2]);
+        for (int y = lo[1]; y <= hi[1]; ++y) {
+            c[1] = node.lo[1] + (y + 0.5) * double(node.cellSize[1]);
+            for (int x = lo[0]; x <= hi[0]; ++x) {
+                c[0] = node.lo[0] + (x + 0.5) * double(node.cellSize[0]);
+                if (overlap.Overlaps(c)) emit(x, y, z);
+            }
+        }
+    }
 }
 
 }  // namespace grid_detail
@@ -149,44 +216,6 @@ struct NestedGridAccel::Builder {
     const AccelOptions& options;
     double epsAbs;  // the least a cell is grown by when assigning triangles
 
-    // Which cells of `node` the triangle overlaps, each reported once through emit(cell).
-    template <typename Emit>
-    void Rasterize(const Node& node, const Tri& t, Emit&& emit) const {
-        double eps[3];
-        int lo[3], hi[3];
-        for (int a = 0; a < 3; ++a) {
-            // Grow cells by a little: the DDA's plane crossings are computed in float, and
-            // a hit point rounded into the neighbouring cell must still find its triangle
-            // there. 1e-4 of a cell is far above float error at the scene's own scale.
-            eps[a] = std::max(1e-4 * node.cellSize[a], epsAbs);
-            const double bmin = std::min({t.p0[a], t.p1[a], t.p2[a]}) - eps[a];
-            const double bmax = std::max({t.p0[a], t.p1[a], t.p2[a]}) + eps[a];
-            const double inv = node.invCellSize[a];
-            lo[a] = static_cast<int>(
-                std::clamp(std::floor((bmin - node.lo[a]) * inv), 0.0, double(node.res[a] - 1)));
-            hi[a] = static_cast<int>(
-                std::clamp(std::floor((bmax - node.lo[a]) * inv), 0.0, double(node.res[a] - 1)));
-        }
-        const int nx = node.res[0], ny = node.res[1];
-        if (lo[0] == hi[0] && lo[1] == hi[1] && lo[2] == hi[2]) {
-            emit(uint32_t((lo[2] * ny + lo[1]) * nx + lo[0]));
-            return;
-        }
-        double h[3], c[3];
-        for (int a = 0; a < 3; ++a) h[a] = 0.5 * node.cellSize[a] + eps[a];
-        const TriangleBoxOverlap overlap(t.p0, t.p1, t.p2, h);
-        for (int z = lo[2]; z <= hi[2]; ++z) {
-            c[2] = node.lo[2] + (z + 0.5) * double(node.cellSize[2]);
-            for (int y = lo[1]; y <= hi[1]; ++y) {
-                c[1] = node.lo[1] + (y + 0.5) * double(node.cellSize[1]);
-                for (int x = lo[0]; x <= hi[0]; ++x) {
-                    c[0] = node.lo[0] + (x + 0.5) * double(node.cellSize[0]);
-                    if (overlap.Overlaps(c)) emit(uint32_t((z * ny + y) * nx + x));
-                }
-            }
-        }
-    }
-
     static Node MakeNode(const Vec3& lo, const Vec3& hi, const std::array<int, 3>& res) {
         Node n{};
         n.lo = lo;
@@ -214,7 +243,7 @@ struct NestedGridAccel::Builder {
             const size_t end = std::min(n, (b + 1) * kBlock);
             for (size_t i = b * kBlock; i < end; ++i) {
                 const uint32_t id = ids[i];
-                Rasterize(node, tris[id], [&](uint32_t cell) { out.emplace_back(cell, id); });
+                grid_detail::RasterizeTriangle(node, tris[id], epsAbs, id, &out);
             }
         };
         if (parallel && blocks > 1)
@@ -240,8 +269,12 @@ struct NestedGridAccel::Builder {
         if (level.depth >= options.gridMaxDepth) return;
         const size_t threshold = size_t(std::max(1, options.gridMaxTrianglesPerCell));
         std::vector<uint32_t> crowded;
+        size_t crowdedRefs = 0;  // the sub-grids' work, for the choice of threads
         for (uint32_t c = 0; c < cells; ++c)
-            if (level.start[c + 1] - level.start[c] > threshold) crowded.push_back(c);
+            if (const size_t count = level.start[c + 1] - level.start[c]; count > threshold) {
+                crowded.push_back(c);
+                crowdedRefs += count;
+            }
         level.children.resize(crowded.size());
         auto sub = [&](size_t k) {
             const uint32_t c = crowded[k];
@@ -258,7 +291,9 @@ struct NestedGridAccel::Builder {
             Fill(*child, level.prims.data() + level.start[c], count, false);
             level.children[k] = {c, std::move(child)};
         };
-        if (parallel && crowded.size() > 1)
+        // Threads only for enough triangles (a block's worth) that waking them pays: a small
+        // scene's sub-grids take a few microseconds each.
+        if (parallel && crowded.size() > 1 && crowdedRefs >= kBlock)
             ParallelFor(size_t(0), crowded.size(), sub);
         else
             for (size_t k = 0; k < crowded.size(); ++k) sub(k);
@@ -476,13 +511,19 @@ void NestedGridAccel::ComputeEmptyReach() {
         }
     });
     // min over |j| <= K of max(|j|, src(c + j·axis)), from src into dst along one axis.
+    // Row by row (one division a row, not three a cell): a cell's neighbours along y are
+    // nx apart, along z nx·ny.
     auto pass = [&](const std::vector<uint8_t>& src, std::vector<uint8_t>& dst, int axis) {
         const int n = axis == 1 ? ny : nz;
-        ForEachIndex(cells, minParallel, [&](size_t c) {
-            const int x = int(c % nx), y = int(c / nx % ny), z = int(c / (size_t(nx) * ny));
-            const int i = axis == 1 ? y : z;
-            auto value = [&](int j) { return int(src[axis == 1 ? at(x, j, z) : at(x, y, j)]); };
-            dst[c] = uint8_t(grid_detail::WindowMinOfMax(value, i, n, K));
+        const size_t stride = axis == 1 ? size_t(nx) : size_t(nx) * ny;
+        ForEachIndex(size_t(ny) * nz, cells < minParallel ? SIZE_MAX : 2, [&](size_t row) {
+            const int i = axis == 1 ? int(row % ny) : int(row / ny);
+            const size_t rowStart = row * nx;
+            for (int x = 0; x < nx; ++x) {
+                const uint8_t* line = src.data() + (rowStart + x - size_t(i) * stride);
+                auto value = [&](int j) { return int(line[size_t(j) * stride]); };
+                dst[rowStart + x] = uint8_t(grid_detail::WindowMinOfMax(value, i, n, K));
+            }
         });
     };
     pass(d, e, 1);

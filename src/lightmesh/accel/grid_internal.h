@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <utility>
+#include <vector>
 
 #include "lightmesh/accel/grid.h"
 
@@ -28,6 +30,14 @@ uint64_t FilterBlocks8Any(const NestedGridAccel::TriBlock* blocks, uint32_t coun
                           float* t, uint64_t* ties, float* bary);
 /// Whether this CPU runs FilterBlocks8's AVX2 code.
 bool HasAvx2();
+
+/// The cells of `node` that triangle `t` overlaps, each grown by max(1e-4 of a cell, epsAbs)
+/// on every side, appended to `out` as (cell index, id) pairs in x-fastest order: the cells
+/// of the triangle's grown bounds that the separating-axis test accepts (a single cell, or a
+/// run along one axis inside the node, needs no test). A triangle reaching beyond the node
+/// (a sub-grid's) is clamped to its border cells.
+void RasterizeTriangle(const NestedGridAccel::Node& node, const NestedGridAccel::Tri& t, double epsAbs, uint32_t id,
+                       std::vector<std::pair<uint32_t, uint32_t>>* out);
 
 /// CellRef's content box of `cell` (x, y, z) of `node`, whose triangles' vertices span
 /// [lo, hi], into ref->box: that box clipped to the cell, in kBoxSteps-ths of the cell rounded

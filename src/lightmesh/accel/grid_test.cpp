@@ -166,6 +166,91 @@ TEST(GridContentBox, HoldsTheClippedBoundsWithinAStep) {
     EXPECT_GT(tight, 20);  // the check saw boxes much smaller than the cell
 }
 
+// The build's rasterization lists a triangle in exactly the cells whose grown box the
+// separating-axis test accepts, whichever path it takes (one cell, a run along one axis, the
+// test per cell), and never fewer when the triangle reaches beyond the node (a sub-grid's).
+TEST(GridRasterize, ListsTheCellsTheOverlapTestAccepts) {
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::uniform_int_distribution<int> resolution(1, 9);
+    int runs = 0, tested = 0, beyond = 0;
+    for (int trial = 0; trial < 8000; ++trial) {
+        NestedGridAccel::Node node{};
+        node.lo = Vec3(float(-2 + 4 * u(rng)), float(-2 + 4 * u(rng)), float(-2 + 4 * u(rng)));
+        for (int a = 0; a < 3; ++a) {
+            node.res[a] = resolution(rng);
+            node.cellSize[a] = float(0.1 + u(rng));
+            node.invCellSize[a] = 1.0f / node.cellSize[a];
+        }
+        // A point of the node (a little beyond it now and then), and a triangle around it:
+        // a speck, a sliver along one axis, or a large one.
+        Vec3 centre, reach;
+        for (int a = 0; a < 3; ++a) centre[a] = float(node.lo[a] + (-0.1 + 1.2 * u(rng)) * node.res[a] * node.cellSize[a]);
+        const int kind = trial % 3, along = trial / 3 % 3;
+        for (int a = 0; a < 3; ++a) {
+            const double size = kind == 0 ? 0.3 : kind == 2 || a == along ? 3.0 : 0.2;
+            reach[a] = float(size * node.cellSize[a]);
+        }
+        auto vertex = [&] {
+            Vec3 p;
+            for (int a = 0; a < 3; ++a) p[a] = centre[a] + float(-1 + 2 * u(rng)) * reach[a];
+            return p;
+        };
+        const NestedGridAccel::Tri t{vertex(), vertex(), vertex()};
+        const double epsAbs = 1e-6;
+        std::vector<std::pair<uint32_t, uint32_t>> listed;
+        grid_detail::RasterizeTriangle(node, t, epsAbs, 7, &listed);
+        // The test on every cell of the node.
+        std::vector<uint32_t> accepted;
+        double h[3];
+        for (int a = 0; a < 3; ++a) h[a] = 0.5 * node.cellSize[a] + std::max(1e-4 * node.cellSize[a], epsAbs);
+        const TriangleBoxOverlap overlap(t.p0, t.p1, t.p2, h);
+        uint32_t index = 0;
+        int k[3];
+        for (k[2] = 0; k[2] < node.res[2]; ++k[2])
+            for (k[1] = 0; k[1] < node.res[1]; ++k[1])
+                for (k[0] = 0; k[0] < node.res[0]; ++k[0], ++index) {
+                    double c[3];
+                    for (int a = 0; a < 3; ++a) c[a] = node.lo[a] + (k[a] + 0.5) * double(node.cellSize[a]);
+                    if (overlap.Overlaps(c)) accepted.push_back(index);
+                }
+        std::vector<uint32_t> cells;
+        for (const auto& [cell, id] : listed) {
+            ASSERT_EQ(id, 7u);
+            cells.push_back(cell);
+        }
+        ASSERT_TRUE(std::is_sorted(cells.begin(), cells.end())) << "trial " << trial;
+        ASSERT_EQ(std::adjacent_find(cells.begin(), cells.end()), cells.end()) << "trial " << trial;
+        bool inside = true;  // the triangle's grown bounds within the node
+        for (int a = 0; a < 3; ++a) {
+            const float lo = std::min({t.p0[a], t.p1[a], t.p2[a]}), hi = std::max({t.p0[a], t.p1[a], t.p2[a]});
+            const double grow = 2 * (h[a] - 0.5 * node.cellSize[a]);
+            inside &= lo - grow > node.lo[a] && hi + grow < node.lo[a] + node.res[a] * node.cellSize[a];
+        }
+        if (inside) {
+            ASSERT_EQ(cells, accepted) << "trial " << trial;
+        } else {
+            ++beyond;
+            ASSERT_TRUE(std::includes(cells.begin(), cells.end(), accepted.begin(), accepted.end())) << "trial " << trial;
+        }
+        int spanning = 0;
+        for (int a = 0; a < 3; ++a) {
+            int first = INT32_MAX, last = -1;
+            for (uint32_t c : accepted) {
+                const int x[3] = {int(c % node.res[0]), int(c / node.res[0] % node.res[1]), int(c / (node.res[0] * node.res[1]))};
+                first = std::min(first, x[a]), last = std::max(last, x[a]);
+            }
+            spanning += last > first;
+        }
+        runs += inside && spanning == 1;
+        tested += inside && spanning > 1;
+    }
+    // Every path was taken.
+    EXPECT_GT(runs, 200);
+    EXPECT_GT(tested, 200);
+    EXPECT_GT(beyond, 200);
+}
+
 TEST(GridResolution, OptionOverridesLongestSide) {
     const TriangleMesh mesh = ts::Transformed(ts::Soup(2000, 5), 1.0f, Vec3(0));
     AccelOptions options;
