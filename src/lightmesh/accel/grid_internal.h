@@ -33,9 +33,10 @@ bool HasAvx2();
 
 /// The cells of `node` that triangle `t` overlaps, each grown by max(1e-4 of a cell, epsAbs)
 /// on every side, appended to `out` as (cell index, id) pairs in x-fastest order: the cells
-/// of the triangle's grown bounds that the separating-axis test accepts (a single cell, or a
-/// run along one axis inside the node, needs no test). A triangle reaching beyond the node
-/// (a sub-grid's) is clamped to its border cells.
+/// of the triangle's grown bounds that the separating-axis test accepts. Inside the node, a
+/// single cell or a run along one axis needs no test, and a triangle within one cell's slab
+/// gets the 2D test across the other two axes. A triangle reaching beyond the node (a
+/// sub-grid's) is clamped to its border cells.
 void RasterizeTriangle(const NestedGridAccel::Node& node, const NestedGridAccel::Tri& t, double epsAbs, uint32_t id,
                        std::vector<std::pair<uint32_t, uint32_t>>* out);
 

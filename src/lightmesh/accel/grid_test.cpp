@@ -168,12 +168,13 @@ TEST(GridContentBox, HoldsTheClippedBoundsWithinAStep) {
 
 // The build's rasterization lists a triangle in exactly the cells whose grown box the
 // separating-axis test accepts, whichever path it takes (one cell, a run along one axis, the
-// test per cell), and never fewer when the triangle reaches beyond the node (a sub-grid's).
+// 2D test inside one slab, the full test per cell), and never fewer when the triangle
+// reaches beyond the node (a sub-grid's).
 TEST(GridRasterize, ListsTheCellsTheOverlapTestAccepts) {
     std::mt19937 rng(23);
     std::uniform_real_distribution<double> u(0.0, 1.0);
     std::uniform_int_distribution<int> resolution(1, 9);
-    int runs = 0, tested = 0, beyond = 0;
+    int runs = 0, planar = 0, solid = 0, beyond = 0;
     for (int trial = 0; trial < 8000; ++trial) {
         NestedGridAccel::Node node{};
         node.lo = Vec3(float(-2 + 4 * u(rng)), float(-2 + 4 * u(rng)), float(-2 + 4 * u(rng)));
@@ -243,11 +244,13 @@ TEST(GridRasterize, ListsTheCellsTheOverlapTestAccepts) {
             spanning += last > first;
         }
         runs += inside && spanning == 1;
-        tested += inside && spanning > 1;
+        planar += inside && spanning == 2;
+        solid += inside && spanning == 3;
     }
     // Every path was taken.
     EXPECT_GT(runs, 200);
-    EXPECT_GT(tested, 200);
+    EXPECT_GT(planar, 200);
+    EXPECT_GT(solid, 50);
     EXPECT_GT(beyond, 200);
 }
 

@@ -11,9 +11,13 @@ namespace {
 constexpr size_t kHugePage = size_t(2) << 20;
 }  // namespace
 
+size_t LargeAllocationBytes(size_t bytes) {
+    return bytes >= kHugePage / 8 ? (bytes + kHugePage - 1) & ~(kHugePage - 1) : bytes;
+}
+
 void* AllocateLarge(size_t bytes, size_t align) {
     if (bytes >= kHugePage / 8) {
-        const size_t rounded = (bytes + kHugePage - 1) & ~(kHugePage - 1);
+        const size_t rounded = LargeAllocationBytes(bytes);
         void* p = std::aligned_alloc(kHugePage, rounded);
         if (!p) throw std::bad_alloc();
         // Advice only: where transparent huge pages are off (or "always") nothing changes.

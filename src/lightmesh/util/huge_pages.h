@@ -21,6 +21,10 @@ namespace lm {
 /// Free with std::free. Throws std::bad_alloc.
 void* AllocateLarge(size_t bytes, size_t align = alignof(std::max_align_t));
 
+/// What AllocateLarge(bytes) takes: `bytes`, rounded up to whole 2 MiB pages from 256 KiB
+/// up (where they all become resident on a first touch each). For figures of memory use.
+size_t LargeAllocationBytes(size_t bytes);
+
 /// Zero-filled memory whose pages are mapped on first touch (lazily, like calloc's): from
 /// 256 KiB to kZeroedHugeLimit an anonymous mapping, 2 MiB aligned and marked for huge pages;
 /// other sizes from calloc (beyond the limit a sparse use would make whole 2 MiB pages

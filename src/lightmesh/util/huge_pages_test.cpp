@@ -17,7 +17,12 @@ TEST(HugePages, LargeBuffersAreAlignedToHugePagesAndSmallOnesWork) {
         void* p = AllocateLarge(bytes);
         ASSERT_NE(p, nullptr) << bytes;
         std::memset(p, 0xAB, bytes);
-        if (bytes >= (size_t(1) << 18)) EXPECT_EQ(reinterpret_cast<uintptr_t>(p) % (size_t(2) << 20), 0u) << bytes;
+        if (bytes >= (size_t(1) << 18)) {
+            EXPECT_EQ(reinterpret_cast<uintptr_t>(p) % (size_t(2) << 20), 0u) << bytes;
+        }
+        // What it takes: whole huge pages from 256 KiB up.
+        const size_t expected = bytes < (size_t(1) << 18) ? bytes : bytes <= (size_t(2) << 20) ? size_t(2) << 20 : size_t(6) << 20;
+        EXPECT_EQ(LargeAllocationBytes(bytes), expected) << bytes;
         std::free(p);
     }
     struct alignas(64) Wide {
