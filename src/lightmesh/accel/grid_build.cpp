@@ -7,9 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <memory>
-#include <new>
 #include <utility>
 
 #include "lightmesh/geometry/triangle.h"
@@ -133,21 +131,38 @@ void RasterizeTriangle(const NestedGridAccel::Node& node, const NestedGridAccel:
     if (spanning == 1 && !clamped) {
         // A run of cells along one axis, the triangle's grown bounds inside one cell along
         // the other two: the triangle is connected, so it has a point at every coordinate
-        // of the run's axis between its extremes, and that point lies in the run's cell
-        // there (the overlap test would accept each one).
+        // of the run's axis between its extremes, and that point lies in the run's grown
+        // cell there (the overlap test would accept each one, but for rounding).
         int k[3] = {lo[0], lo[1], lo[2]};
         for (k[spanAxis] = lo[spanAxis]; k[spanAxis] <= hi[spanAxis]; ++k[spanAxis])
             emit(k[0], k[1], k[2]);
         return;
     }
-    double h[3], c[3];
+    double h[3];
     for (int a = 0; a < 3; ++a) h[a] = 0.5 * node.cellSize[a] + eps[a];
+    // Every cell of the bounds' range whose centre meets(c) accepts, x fastest.
+    auto emitWhere = [&](auto&& meets) {
+        double c[3];
+        for (int z = lo[2]; z <= hi[2]; ++z) {
+            c[2] = node.lo[2] + (z + 0.5) * double(node.cellSize[2]);
+            for (int y = lo[1]; y <= hi[1]; ++y) {
+                c[1] = node.lo[1] + (y + 0.5) * double(node.cellSize[1]);
+                for (int x = lo[0]; x <= hi[0]; ++x) {
+                    c[0] = node.lo[0] + (x + 0.5) * double(node.cellSize[0]);
+                    if (meets(c)) emit(x, y, z);
+                }
+            }
+        }
+    };
     if (spanning == 2 && !clamped) {
         // The grown bounds inside one cell along the third axis w: the triangle lies in that
         // slab, so a cell meets it exactly when the cell's rectangle across the other two
         // axes meets the triangle's projection there. That 2D test's axes are the full
         // test's three edge × w products, computed by the same operations (the w terms are
-        // zeros); the other ten axes cannot separate what it accepts.
+        // zeros; the build does not contract multiply-adds, -ffp-contract=off). The box
+        // normals across u and v are the cells' range; the triangle's normal and the other
+        // six edge products cannot separate what the 2D test accepts, so the cells are the
+        // full test's up to its rounding on those axes.
         const int w = hi[0] == lo[0] ? 0 : (hi[1] == lo[1] ? 1 : 2);
         const int u = w == 0 ? 1 : 0, v = w == 2 ? 1 : 2;
         const double pu[3] = {t.p0[u], t.p1[u], t.p2[u]}, pv[3] = {t.p0[v], t.p1[v], t.p2[v]};
@@ -164,34 +179,18 @@ void RasterizeTriangle(const NestedGridAccel::Node& node, const NestedGridAccel:
             phi[i] = std::max(std::max(q0, q1), q2);
             r[i] = h[u] * std::abs(nu[i]) + h[v] * std::abs(nv[i]);
         }
-        for (int z = lo[2]; z <= hi[2]; ++z) {
-            c[2] = node.lo[2] + (z + 0.5) * double(node.cellSize[2]);
-            for (int y = lo[1]; y <= hi[1]; ++y) {
-                c[1] = node.lo[1] + (y + 0.5) * double(node.cellSize[1]);
-                for (int x = lo[0]; x <= hi[0]; ++x) {
-                    c[0] = node.lo[0] + (x + 0.5) * double(node.cellSize[0]);
-                    bool meets = true;
-                    for (int i = 0; i < 3; ++i) {
-                        const double pc = nu[i] * c[u] + nv[i] * c[v];
-                        meets &= !(plo[i] - pc > r[i] || phi[i] - pc < -r[i]);
-                    }
-                    if (meets) emit(x, y, z);
-                }
+        emitWhere([&](const double c[3]) {
+            bool meets = true;
+            for (int i = 0; i < 3; ++i) {
+                const double pc = nu[i] * c[u] + nv[i] * c[v];
+                meets &= !(plo[i] - pc > r[i] || phi[i] - pc < -r[i]);
             }
-        }
+            return meets;
+        });
         return;
     }
     const TriangleBoxOverlap overlap(t.p0, t.p1, t.p2, h);
-    for (int z = lo[2]; z <= hi[2]; ++z) {
-        c[2] = node.lo[2] + (z + 0.5) * double(node.cellSize[2]);
-        for (int y = lo[1]; y <= hi[1]; ++y) {
-            c[1] = node.lo[1] + (y + 0.5) * double(node.cellSize[1]);
-            for (int x = lo[0]; x <= hi[0]; ++x) {
-                c[0] = node.lo[0] + (x + 0.5) * double(node.cellSize[0]);
-                if (overlap.Overlaps(c)) emit(x, y, z);
-            }
-        }
-    }
+    emitWhere([&](const double c[3]) { return overlap.Overlaps(c); });
 }
 
 }  // namespace grid_detail
@@ -459,16 +458,9 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
     // unused lanes are cleared here).
     const uint64_t blockCount = (laneCount + 7) / 8;
     blockCount_ = blockCount;
-    // From a whole huge page up in huge pages; below it, rounding up to 2 MiB would cost more
-    // memory than the faults it spares cost time (the gazebo's 0.4 MB: about 100 faults).
-    const size_t blockBytes = blockCount * sizeof(TriBlock);  // a multiple of the alignment
-    const bool hugeBlocks = blockBytes >= kHugeBlocks;
+    const size_t blockBytes = blockCount * sizeof(TriBlock);
     if (blockCount) {
-        void* memory = hugeBlocks ? AllocateLarge(blockBytes, alignof(TriBlock)) : std::aligned_alloc(alignof(TriBlock), blockBytes);
-        if (!memory) throw std::bad_alloc();
-        blocks_.reset(static_cast<TriBlock*>(memory));
-    }
-    if (blockCount) {
+        blocks_.reset(static_cast<TriBlock*>(AllocateLarge(blockBytes, alignof(TriBlock), kHugeArraysFrom)));
         TriBlock& last = blocks_[blockCount - 1];
         for (uint64_t lane = laneCount % 8; lane != 0 && lane < 8; ++lane) {
             for (int row = 0; row < 9; ++row) last.v[row][lane] = 0.0f;
@@ -523,9 +515,10 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
     nearestFilter_ = simdWidth_ == 8 ? grid_detail::FilterBlocks8Bary : grid_detail::FilterBlocks4Bary;
     anyFilter_ = simdWidth_ == 8 ? grid_detail::FilterBlocks8Any : grid_detail::FilterBlocks4Any;
 
-    // Arrays in huge pages count whole pages: they are resident.
-    stats_.bytes = nodes_.size() * sizeof(Node) + LargeAllocationBytes(cells_.size() * sizeof(CellRef)) +
-                   occupied_.size() * sizeof(uint64_t) + (hugeBlocks ? LargeAllocationBytes(blockBytes) : blockBytes) +
+    // The arrays in huge pages count as whole pages (resident where transparent huge pages
+    // are on).
+    stats_.bytes = nodes_.size() * sizeof(Node) + LargeAllocationBytes(cells_.capacity() * sizeof(CellRef), kHugeArraysFrom) +
+                   occupied_.size() * sizeof(uint64_t) + LargeAllocationBytes(blockBytes, kHugeArraysFrom) +
                    emptyReach_.size();
     stats_.buildMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - startTime)

@@ -33,7 +33,8 @@ bool HasAvx2();
 
 /// The cells of `node` that triangle `t` overlaps, each grown by max(1e-4 of a cell, epsAbs)
 /// on every side, appended to `out` as (cell index, id) pairs in x-fastest order: the cells
-/// of the triangle's grown bounds that the separating-axis test accepts. Inside the node, a
+/// of the triangle's grown bounds that the separating-axis test accepts (up to its rounding:
+/// the paths that skip some of its axes may list a cell more). Inside the node, a
 /// single cell or a run along one axis needs no test, and a triangle within one cell's slab
 /// gets the 2D test across the other two axes. A triangle reaching beyond the node (a
 /// sub-grid's) is clamped to its border cells.

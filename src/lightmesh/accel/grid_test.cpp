@@ -180,8 +180,10 @@ TEST(GridRasterize, ListsTheCellsTheOverlapTestAccepts) {
         node.lo = Vec3(float(-2 + 4 * u(rng)), float(-2 + 4 * u(rng)), float(-2 + 4 * u(rng)));
         for (int a = 0; a < 3; ++a) {
             node.res[a] = resolution(rng);
-            node.cellSize[a] = float(0.1 + u(rng));
-            node.invCellSize[a] = 1.0f / node.cellSize[a];
+            // As the build's nodes get them: the extent over the cells and back.
+            const float extent = float((0.1 + u(rng)) * node.res[a]);
+            node.cellSize[a] = extent / float(node.res[a]);
+            node.invCellSize[a] = float(node.res[a]) / extent;
         }
         // A point of the node (a little beyond it now and then), and a triangle around it:
         // a speck, a sliver along one axis, or a large one.
@@ -234,14 +236,13 @@ TEST(GridRasterize, ListsTheCellsTheOverlapTestAccepts) {
             ++beyond;
             ASSERT_TRUE(std::includes(cells.begin(), cells.end(), accepted.begin(), accepted.end())) << "trial " << trial;
         }
+        // The path: along how many axes the grown bounds span more than one cell (as the
+        // build counts them).
         int spanning = 0;
         for (int a = 0; a < 3; ++a) {
-            int first = INT32_MAX, last = -1;
-            for (uint32_t c : accepted) {
-                const int x[3] = {int(c % node.res[0]), int(c / node.res[0] % node.res[1]), int(c / (node.res[0] * node.res[1]))};
-                first = std::min(first, x[a]), last = std::max(last, x[a]);
-            }
-            spanning += last > first;
+            const double eps = h[a] - 0.5 * node.cellSize[a];
+            const double lo = std::min({t.p0[a], t.p1[a], t.p2[a]}) - eps, hi = std::max({t.p0[a], t.p1[a], t.p2[a]}) + eps;
+            spanning += std::floor((hi - node.lo[a]) * node.invCellSize[a]) > std::floor((lo - node.lo[a]) * node.invCellSize[a]);
         }
         runs += inside && spanning == 1;
         planar += inside && spanning == 2;

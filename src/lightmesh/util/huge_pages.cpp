@@ -9,15 +9,17 @@
 namespace lm {
 namespace {
 constexpr size_t kHugePage = size_t(2) << 20;
+
+size_t RoundToHugePages(size_t bytes) { return (bytes + kHugePage - 1) & ~(kHugePage - 1); }
 }  // namespace
 
-size_t LargeAllocationBytes(size_t bytes) {
-    return bytes >= kHugePage / 8 ? (bytes + kHugePage - 1) & ~(kHugePage - 1) : bytes;
+size_t LargeAllocationBytes(size_t bytes, size_t hugeFrom) {
+    return bytes >= hugeFrom ? RoundToHugePages(bytes) : bytes;
 }
 
-void* AllocateLarge(size_t bytes, size_t align) {
-    if (bytes >= kHugePage / 8) {
-        const size_t rounded = LargeAllocationBytes(bytes);
+void* AllocateLarge(size_t bytes, size_t align, size_t hugeFrom) {
+    if (bytes >= hugeFrom) {
+        const size_t rounded = RoundToHugePages(bytes);
         void* p = std::aligned_alloc(kHugePage, rounded);
         if (!p) throw std::bad_alloc();
         // Advice only: where transparent huge pages are off (or "always") nothing changes.
@@ -33,8 +35,8 @@ void* AllocateLarge(size_t bytes, size_t align) {
 
 void* AllocateZeroed(size_t bytes, ZeroedDeleter* deleter) {
     deleter->mapped = 0;
-    if (bytes >= kHugePage / 8 && bytes <= kZeroedHugeLimit) {
-        const size_t length = (bytes + kHugePage - 1) & ~(kHugePage - 1);
+    if (bytes >= kHugePagesFrom && bytes <= kZeroedHugeLimit) {
+        const size_t length = RoundToHugePages(bytes);
         // Map a huge page more than needed and unmap the slack on both sides of the 2 MiB
         // aligned part.
         void* raw = mmap(nullptr, length + kHugePage, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);

@@ -15,15 +15,19 @@
 
 namespace lm {
 
-/// Allocates `bytes` (any size; from 256 KiB up rounded up to whole 2 MiB pages, 2 MiB
-/// aligned and marked for huge pages: at most 1.75 MiB more, against 64 faults or more,
-/// 0.7 ms here, for 4 KiB pages); smaller ones aligned to `align` (a power of two).
-/// Free with std::free. Throws std::bad_alloc.
-void* AllocateLarge(size_t bytes, size_t align = alignof(std::max_align_t));
+/// From this size up, AllocateLarge uses huge pages unless told another threshold.
+constexpr size_t kHugePagesFrom = size_t(256) << 10;
 
-/// What AllocateLarge(bytes) takes: `bytes`, rounded up to whole 2 MiB pages from 256 KiB
-/// up (where they all become resident on a first touch each). For figures of memory use.
-size_t LargeAllocationBytes(size_t bytes);
+/// Allocates `bytes` (any size; from `hugeFrom` up rounded up to whole 2 MiB pages, 2 MiB
+/// aligned and marked for huge pages: less than 2 MiB more, at most 1.75 MiB for the default
+/// threshold, against 64 faults or more, 0.7 ms here, for 4 KiB pages); smaller ones aligned
+/// to `align` (a power of two). Free with std::free. Throws std::bad_alloc.
+void* AllocateLarge(size_t bytes, size_t align = alignof(std::max_align_t), size_t hugeFrom = kHugePagesFrom);
+
+/// What AllocateLarge(bytes, align, hugeFrom) takes: `bytes`, rounded up to whole 2 MiB pages
+/// from `hugeFrom` up (where transparent huge pages are on, each becomes resident on its
+/// first touch). For figures of memory use.
+size_t LargeAllocationBytes(size_t bytes, size_t hugeFrom = kHugePagesFrom);
 
 /// Zero-filled memory whose pages are mapped on first touch (lazily, like calloc's): from
 /// 256 KiB to kZeroedHugeLimit an anonymous mapping, 2 MiB aligned and marked for huge pages;
@@ -38,20 +42,24 @@ void* AllocateZeroed(size_t bytes, ZeroedDeleter* deleter);
 
 /// std::allocator's interface over AllocateLarge, for std::vector of big buffers (images,
 /// the light mesh's per-triangle tables). Values are default-initialised by the vector as
-/// usual; only where the pages come from changes.
-template <typename T>
+/// usual; only where the pages come from changes. `HugeFrom`: AllocateLarge's threshold.
+template <typename T, size_t HugeFrom = kHugePagesFrom>
 struct HugePageAllocator {
     using value_type = T;
+    template <typename U>
+    struct rebind {
+        using other = HugePageAllocator<U, HugeFrom>;
+    };
     HugePageAllocator() noexcept = default;
     template <typename U>
-    HugePageAllocator(const HugePageAllocator<U>&) noexcept {}
+    HugePageAllocator(const HugePageAllocator<U, HugeFrom>&) noexcept {}
     T* allocate(size_t n) {
         if (n > static_cast<size_t>(-1) / sizeof(T)) throw std::bad_alloc();
-        return static_cast<T*>(AllocateLarge(n * sizeof(T), alignof(T)));
+        return static_cast<T*>(AllocateLarge(n * sizeof(T), alignof(T), HugeFrom));
     }
     void deallocate(T* p, size_t) noexcept { std::free(p); }
     template <typename U>
-    bool operator==(const HugePageAllocator<U>&) const noexcept { return true; }
+    bool operator==(const HugePageAllocator<U, HugeFrom>&) const noexcept { return true; }
 };
 
 }  // namespace lm

@@ -32,6 +32,12 @@ TEST(HugePages, LargeBuffersAreAlignedToHugePagesAndSmallOnesWork) {
         std::vector<Wide, HugePageAllocator<Wide>> w(n);
         EXPECT_EQ(reinterpret_cast<uintptr_t>(w.data()) % 64, 0u) << n;
     }
+    // Another threshold: below it plain memory, from it whole huge pages.
+    EXPECT_EQ(LargeAllocationBytes(size_t(1) << 20, size_t(2) << 20), size_t(1) << 20);
+    EXPECT_EQ(LargeAllocationBytes((size_t(2) << 20) + 1, size_t(2) << 20), size_t(4) << 20);
+    std::vector<Wide, HugePageAllocator<Wide, size_t(2) << 20>> big((size_t(3) << 20) / sizeof(Wide)), small(1000);
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(big.data()) % (size_t(2) << 20), 0u);
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(small.data()) % 64, 0u);
     std::vector<int, HugePageAllocator<int>> a(1 << 20, 7), b(1 << 20, 7);
     EXPECT_EQ(a, b);
     a.push_back(8);
