@@ -202,10 +202,7 @@ class NestedGridAccel final : public Accelerator {
     std::vector<CellRef, HugePageAllocator<CellRef, kHugeArraysFrom>> cells_;  // all cells of all nodes, node by node
     std::vector<uint64_t> occupied_;   // one bit per cell: not empty
     // The leaf cells' triangles, each cell's in id order, cell after cell, 8 lanes per block.
-    struct FreeBlocks {
-        void operator()(TriBlock* p) const noexcept { std::free(p); }
-    };
-    std::unique_ptr<TriBlock[], FreeBlocks> blocks_;
+    std::unique_ptr<TriBlock[], FreeDeleter> blocks_;  // AllocateLarge's
     size_t blockCount_ = 0;
     // Per top-level cell: how many cells around it are empty (ComputeEmptyReach).
     std::vector<uint8_t> emptyReach_;

@@ -541,7 +541,9 @@ void NestedGridAccel::ComputeEmptyReach() {
     std::vector<uint8_t> d(cells), e(cells);
     auto at = [&](int x, int y, int z) { return (size_t(z) * ny + y) * nx + x; };
     const size_t minParallel = 1 << 15;  // cells
-    ForEachIndex(size_t(ny) * nz, cells < minParallel ? SIZE_MAX : 2, [&](size_t row) {
+    // Both passes go row by row, in parallel from minParallel cells.
+    const size_t rowsMinParallel = cells < minParallel ? SIZE_MAX : 2;
+    ForEachIndex(size_t(ny) * nz, rowsMinParallel, [&](size_t row) {
         const int y = int(row % ny), z = int(row / ny);
         int last = -K - 1;
         for (int x = 0; x < nx; ++x) {
@@ -560,7 +562,7 @@ void NestedGridAccel::ComputeEmptyReach() {
     auto pass = [&](const std::vector<uint8_t>& src, std::vector<uint8_t>& dst, int axis) {
         const int n = axis == 1 ? ny : nz;
         const size_t stride = axis == 1 ? size_t(nx) : size_t(nx) * ny;
-        ForEachIndex(size_t(ny) * nz, cells < minParallel ? SIZE_MAX : 2, [&](size_t row) {
+        ForEachIndex(size_t(ny) * nz, rowsMinParallel, [&](size_t row) {
             const int i = axis == 1 ? int(row % ny) : int(row / ny);
             const size_t rowStart = row * nx;
             for (int x = 0; x < nx; ++x) {

@@ -80,11 +80,6 @@ class Scratch {
     T* data_ = local_;
 };
 
-// For the arenas' chunks (AllocateLarge).
-struct FreeDeleter {
-    void operator()(void* p) const { std::free(p); }
-};
-
 // The most triangles a cell's reach list keeps (more: every segment of its points goes to
 // the back-end). Measured: 1024 instead made the castle no faster and the playground 17 %
 // slower (its thin bars fill the reach lists; building a point's front list scans them),

@@ -24,6 +24,11 @@ constexpr size_t kHugePagesFrom = size_t(256) << 10;
 /// to `align` (a power of two). Free with std::free. Throws std::bad_alloc.
 void* AllocateLarge(size_t bytes, size_t align = alignof(std::max_align_t), size_t hugeFrom = kHugePagesFrom);
 
+/// std::unique_ptr's deleter for AllocateLarge's memory.
+struct FreeDeleter {
+    void operator()(void* p) const noexcept { std::free(p); }
+};
+
 /// What AllocateLarge(bytes, align, hugeFrom) takes: `bytes`, rounded up to whole 2 MiB pages
 /// from `hugeFrom` up (where transparent huge pages are on, each becomes resident on its
 /// first touch). For figures of memory use.
