@@ -515,8 +515,11 @@ bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD,
         return !(lo > hi);
     };
     const uint64_t* occupied = occupied_.data();
-    // Empty space (top level): an empty cell knows how far the empty cells around it reach.
-    const uint8_t* empty = nodeIndex == 0 && !emptyReach_.empty() ? emptyReach_.data() : nullptr;
+    // Empty space (top level): an empty cell knows how far the empty cells ahead of the ray
+    // reach, by the cubes of the ray's octant where they were computed, else the centred
+    // boxes (either way value - 1 cells ahead along each axis are empty); nullptr without.
+    const uint8_t* empty =
+        nodeIndex == 0 ? jumpReach_ + size_t((sx < 0) | (sy < 0) << 1 | (sz < 0) << 2) * jumpReachStride_ : nullptr;
     for (;;) {
         const float tNext = std::min(tx, std::min(ty, tz));
         const float tCellExit = std::min(tNext, tExit);
@@ -533,8 +536,10 @@ bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD,
                 if (query.Cell(span)) return true;
             }
         } else if (empty && empty[idx] > 2) {
-            // Every cell within empty[idx] - 1 steps of this one on each axis is empty: go
-            // to where the ray leaves that box and start there as at the entry. The cell of
+            // Every cell within empty[idx] - 1 steps of this one on each axis, towards the
+            // ray's octant, is empty: go to where the ray leaves that box (the box's far
+            // planes; the ray started in this cell, so it is inside the box until then) and
+            // start there as at the entry. The cell of
             // that point is rounded like the entry's, which the cells' growth covers; t
             // only increases, so the walk ends. A re-entry costs about what three or four
             // steps do (the three cells and crossings recomputed), so a box one cell deep
@@ -637,6 +642,9 @@ struct NestedGridAccel::PacketLanes {
     float pad = 0;           // world units: how far rounding may put a computed point
     float slope = 0;         // top-level cells a ray moves sideways (U or V) per slice, at most
     uint64_t live = 0;       // lanes still walking the top level
+    // What the top level's slices are skipped by: the empty cubes of the rays' octant when
+    // they share one (octantReach_), else the centred boxes (emptyReach_), or nullptr.
+    const uint8_t* skipReach = nullptr;
     alignas(32) float oK[kMax], oU[kMax], oV[kMax], dK[kMax], dU[kMax], dV[kMax], invK[kMax];
     alignas(32) float t0[kMax], t1[kMax];  // each ray's range clipped to the box
     alignas(32) float cap[kMax];           // Query::Cap(): hits beyond it cannot win
@@ -788,6 +796,17 @@ void NestedGridAccel::TraceMany(const Ray* rays, size_t count, Query* q) const {
     }
     // A little more for rounding, so that the empty-space skip stays conservative.
     p.slope = p.slope * 1.001f + 1e-3f;
+    // A ray that moves sideways only into the octant's side (or not at all) stays in the
+    // cube of the octant at its cell (the skip's bound below is the centred box's).
+    bool uPos = false, uNeg = false, vPos = false, vNeg = false;
+    for (uint64_t m = p.live; m; m &= m - 1) {
+        const int i = __builtin_ctzll(m);
+        uPos |= p.dU[i] > 0, uNeg |= p.dU[i] < 0, vPos |= p.dV[i] > 0, vNeg |= p.dV[i] < 0;
+    }
+    if ((uPos && uNeg) || (vPos && vNeg))
+        p.skipReach = emptyReach_.empty() ? nullptr : emptyReach_.data();
+    else
+        p.skipReach = jumpReach_ + size_t((p.s < 0) << K | int(uNeg) << p.U | int(vNeg) << p.V) * jumpReachStride_;
     // Rounding of o + d·t and of the planes' t is a few ulps of the coordinates
     // involved; the cells' growth (epsAbs_) covers the walk's own rounding.
     p.pad = RoundingReach(originAbs);

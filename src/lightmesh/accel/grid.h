@@ -35,6 +35,9 @@ class NestedGridAccel final : public Accelerator {
     /// 2^31 triangles or more.
     NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& options = {});
     ~NestedGridAccel() override;
+    // Not copied: jumpReach_ points into the grid's own arrays.
+    NestedGridAccel(const NestedGridAccel&) = delete;
+    NestedGridAccel& operator=(const NestedGridAccel&) = delete;
 
     std::string_view Name() const override { return "grid"; }
     bool Intersect(const Ray& ray, Hit* hit) const override;
@@ -209,6 +212,22 @@ class NestedGridAccel final : public Accelerator {
     static constexpr int kMaxEmptyReach = 8;
     static constexpr size_t kMaxEmptyReachCells = size_t(1) << 24;
     void ComputeEmptyReach();
+    // Per top-level cell and octant of directions (bit a set: the negative side along axis
+    // a), the side in cells of the largest all-empty cube of top cells with this cell at its
+    // corner, reaching into that octant (ComputeOctantReach): octant o's cells are
+    // octantReach_[o · top cells ...]. A ray only moves into its own octant, so the single
+    // walk jumps across this cube, not the centred one of emptyReach_, which a floor or wall
+    // behind the ray or beside it keeps small (a packet skips by it when its rays share an
+    // octant, else by emptyReach_). Eight bytes a top cell, so only up to
+    // kMaxOctantReachCells of them.
+    std::vector<uint8_t> octantReach_;
+    static constexpr int kMaxOctantReach = 255;
+    static constexpr size_t kMaxOctantReachCells = size_t(1) << 21;
+    void ComputeOctantReach();
+    // What the single walk jumps by: octant o's array at jumpReach_ + o · jumpReachStride_
+    // (octantReach_, or emptyReach_ with stride 0, or nullptr without either).
+    const uint8_t* jumpReach_ = nullptr;
+    size_t jumpReachStride_ = 0;
     // How far rounding may put a point computed along a ray whose origin's largest coordinate
     // is `originAbs` (o + d·t, a plane's t) from where it belongs, in world units: the
     // packets' rectangles and the cells' content boxes (CellRef) are grown by it.

@@ -452,6 +452,11 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
     cells_.shrink_to_fit();
 
     ComputeEmptyReach();
+    ComputeOctantReach();
+    if (!octantReach_.empty())
+        jumpReach_ = octantReach_.data(), jumpReachStride_ = octantReach_.size() / 8;
+    else if (!emptyReach_.empty())
+        jumpReach_ = emptyReach_.data(), jumpReachStride_ = 0;
 
     // The blocks, node by node in parallel (each leaf cell writes its own lanes; the storage
     // is not cleared first, a pass over memory the size of the grid, so the last block's
@@ -519,7 +524,7 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
     // are on).
     stats_.bytes = nodes_.size() * sizeof(Node) + LargeAllocationBytes(cells_.capacity() * sizeof(CellRef), kHugeArraysFrom) +
                    occupied_.size() * sizeof(uint64_t) + LargeAllocationBytes(blockBytes, kHugeArraysFrom) +
-                   emptyReach_.size();
+                   emptyReach_.size() + octantReach_.size();
     stats_.buildMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - startTime)
             .count();
@@ -575,6 +580,21 @@ void NestedGridAccel::ComputeEmptyReach() {
     pass(d, e, 1);
     pass(e, d, 2);
     emptyReach_ = std::move(d);
+}
+
+// The single walk's empty cubes, octant by octant (grid_detail::OctantEmptyCubes). The cap
+// only shrinks a cube, so every in-grid cell of the cube of side octantReach_ is empty.
+void NestedGridAccel::ComputeOctantReach() {
+    const Node& top = nodes_[0];
+    const size_t cells = size_t(top.res[0]) * top.res[1] * top.res[2];
+    if (cells > kMaxOctantReachCells) return;
+    octantReach_.resize(8 * cells);
+    // On threads from a few thousand cells (the sub-grids of such a scene already woke them).
+    ForEachIndex(8, cells < 4096 ? SIZE_MAX : 2, [&](size_t octant) {
+        grid_detail::OctantEmptyCubes(
+            top.res, int(octant), kMaxOctantReach, [&](size_t c) { c += top.firstCell; return (occupied_[c >> 6] >> (c & 63)) & 1; },
+            octantReach_.data() + octant * cells);
+    });
 }
 
 AccelFigures NestedGridAccel::Figures() const {

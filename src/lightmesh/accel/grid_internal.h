@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -71,6 +72,51 @@ int WindowMinOfMax(Value&& value, int i, int n, int k) {
         if (i + d < n) best = std::min(best, std::max(d, value(i + d)));
     }
     return best;
+}
+
+/// The single walk's empty cubes for one octant (NestedGridAccel::ComputeOctantReach): for
+/// every cell c of an n[0] × n[1] × n[2] grid (x fastest), into out[c], the side of the
+/// largest cube of cells with c at its corner, reaching into `octant` (bit a set: towards
+/// lower indices along axis a), whose cells inside the grid are all empty (nonEmpty(c)
+/// false), at most `cap`; 0 for a non-empty cell. With g the octant's step along each axis,
+/// R(c) = 1 + the least R of the seven cells c + g·(i, j, k), (i, j, k) in {0, 1}³ but
+/// (0, 0, 0): their cubes of that side cover the cube of side R(c) at c but c itself (the
+/// largest-square recurrence in 3D). A neighbour outside the grid counts as `cap`: the cube
+/// may reach past the grid, where a ray has left it.
+template <typename NonEmpty>
+void OctantEmptyCubes(const int n[3], int octant, int cap, NonEmpty&& nonEmpty, uint8_t* out) {
+    int g[3];
+    for (int a = 0; a < 3; ++a) g[a] = (octant >> a) & 1 ? -1 : 1;
+    const size_t nx = size_t(n[0]), ny = size_t(n[1]);
+    const std::vector<uint8_t> outside(nx, uint8_t(cap));  // a row of neighbours outside the grid
+    std::vector<uint8_t> across(nx), ahead(nx);
+    auto first = [&](int a) { return g[a] > 0 ? n[a] - 1 : 0; };
+    // Row by row in the order that has each cell's seven neighbours done first: the rows one
+    // step along y, along z and along both (at x and x + g), then the cell's own row (x + g).
+    for (int z = first(2), zi = 0; zi < n[2]; ++zi, z -= g[2])
+        for (int y = first(1), yi = 0; yi < n[1]; ++yi, y -= g[1]) {
+            const bool inY = unsigned(y + g[1]) < unsigned(n[1]), inZ = unsigned(z + g[2]) < unsigned(n[2]);
+            const size_t start = nx * (size_t(y) + ny * size_t(z));
+            uint8_t* row = out + start;
+            const uint8_t* rowY = inY ? out + nx * (size_t(y + g[1]) + ny * size_t(z)) : outside.data();
+            const uint8_t* rowZ = inZ ? out + nx * (size_t(y) + ny * size_t(z + g[2])) : outside.data();
+            const uint8_t* rowYZ = inY && inZ ? out + nx * (size_t(y + g[1]) + ny * size_t(z + g[2])) : outside.data();
+            // The other rows' six neighbours first (loops the compiler vectorises), then the
+            // row's own chain along x.
+            for (size_t x = 0; x < nx; ++x) across[x] = std::min({rowY[x], rowZ[x], rowYZ[x]});
+            if (g[0] > 0) {
+                for (size_t x = 0; x + 1 < nx; ++x) ahead[x] = std::min(across[x], across[x + 1]);
+                ahead[nx - 1] = across[nx - 1];  // x + 1 is outside
+            } else {
+                for (size_t x = 1; x < nx; ++x) ahead[x] = std::min(across[x], across[x - 1]);
+                ahead[0] = across[0];
+            }
+            int next = cap;  // the row's value at x + g (outside the grid: cap)
+            for (int x = first(0), xi = 0; xi < n[0]; ++xi, x -= g[0]) {
+                next = nonEmpty(start + size_t(x)) ? 0 : std::min(cap, 1 + std::min(next, int(ahead[x])));
+                row[x] = uint8_t(next);
+            }
+        }
 }
 
 }  // namespace lm::grid_detail

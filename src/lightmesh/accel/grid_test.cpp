@@ -89,6 +89,58 @@ TEST(GridEmptySpace, OutwardSearchEqualsTheWholeWindow) {
     EXPECT_GT(belowK, checked / 4);  // the cases where the search stops early are many
 }
 
+// The single walk's empty cubes (OctantEmptyCubes), against counting: in every octant, a
+// cell's cube of side R has no non-empty cell inside the grid, and (unless R is the cap)
+// the cube of side R + 1 has one, on grids with axes of one cell and at two densities.
+TEST(GridEmptySpace, OctantCubesAreTheLargestEmptyOnes) {
+    std::mt19937 rng(11);
+    const int sizes[][3] = {{1, 1, 1}, {7, 1, 5}, {1, 9, 1}, {6, 4, 3}, {9, 9, 9}, {12, 3, 10}};
+    int checked = 0, interior = 0;
+    for (const auto& n : sizes)
+        for (const int percent : {3, 30})
+            for (const int cap : {2, 255}) {
+                const size_t cells = size_t(n[0]) * n[1] * n[2];
+                std::vector<uint8_t> full(cells);
+                for (uint8_t& f : full) f = rng() % 100 < unsigned(percent);
+                auto nonEmptyAt = [&](int x, int y, int z) {
+                    return x >= 0 && y >= 0 && z >= 0 && x < n[0] && y < n[1] && z < n[2] &&
+                           full[size_t(x) + size_t(n[0]) * (size_t(y) + size_t(n[1]) * size_t(z))];
+                };
+                for (int octant = 0; octant < 8; ++octant) {
+                    std::vector<uint8_t> side(cells, 77);
+                    grid_detail::OctantEmptyCubes(n, octant, cap, [&](size_t c) { return full[c] != 0; }, side.data());
+                    const int gx = octant & 1 ? -1 : 1, gy = octant & 2 ? -1 : 1, gz = octant & 4 ? -1 : 1;
+                    // Whether the cube of side r at (x, y, z) holds a non-empty cell in the grid.
+                    auto holds = [&](int x, int y, int z, int r) {
+                        for (int k = 0; k < r; ++k)
+                            for (int j = 0; j < r; ++j)
+                                for (int i = 0; i < r; ++i)
+                                    if (nonEmptyAt(x + gx * i, y + gy * j, z + gz * k)) return true;
+                        return false;
+                    };
+                    for (int z = 0; z < n[2]; ++z)
+                        for (int y = 0; y < n[1]; ++y)
+                            for (int x = 0; x < n[0]; ++x) {
+                                const int r = side[size_t(x) + size_t(n[0]) * (size_t(y) + size_t(n[1]) * size_t(z))];
+                                SCOPED_TRACE(testing::Message() << n[0] << "x" << n[1] << "x" << n[2] << " octant "
+                                                                << octant << " cap " << cap << " cell " << x << ","
+                                                                << y << "," << z);
+                                ASSERT_LE(r, cap);
+                                ASSERT_EQ(r == 0, nonEmptyAt(x, y, z));
+                                // Past the grid's extent every larger cube holds the same cells.
+                                const int span = std::max({n[0], n[1], n[2]}) + 1;
+                                ASSERT_FALSE(holds(x, y, z, std::min(r, span)));
+                                if (r > 0 && r < cap) {
+                                    ASSERT_TRUE(holds(x, y, z, r + 1));
+                                }
+                                ++checked;
+                                interior += r > 1 && r < cap;
+                            }
+                }
+            }
+    EXPECT_GT(interior, checked / 20);  // cubes larger than one cell and below the cap
+}
+
 // A cell's content box (CellRef) holds every triangle's bounds clipped to the cell, rounded
 // outwards by less than a step: a triangle on a face, one only in the cell's growth beyond
 // a face, one across the whole cell, and random ones.

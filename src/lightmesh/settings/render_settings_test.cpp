@@ -30,7 +30,9 @@ TEST(RenderSettings, RowsAreWellFormed) {
         EXPECT_TRUE(flags.insert(s.flag).second) << "duplicate flag";
         EXPECT_EQ(std::string(s.flag).rfind("--", 0), 0u);
         EXPECT_FALSE(s.help.empty());
-        if (s.kind == RenderSetting::Kind::Int || s.kind == RenderSetting::Kind::Float) EXPECT_LE(s.lo, s.hi);
+        if (s.kind == RenderSetting::Kind::Int || s.kind == RenderSetting::Kind::Float) {
+            EXPECT_LE(s.lo, s.hi);
+        }
         EXPECT_EQ(s.kind == RenderSetting::Kind::Choice, !s.choices.empty());
     }
 }
