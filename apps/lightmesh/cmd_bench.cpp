@@ -32,6 +32,20 @@ std::string BenchRepoDir(const std::string& argv0) {
 int RunBench(BenchCommand& cmd) {
     lm::SetLogLevel(cmd.quiet ? lm::LogLevel::Error : lm::LogLevel::Warning);
     lm::InstallInterruptCleanup();
+    // An empty list, or an empty name in it, is refused like the other empty values
+    // (`--variants ""` ran the default variant).
+    if (cmd.variantsOption && cmd.variantsOption->count()) {
+        const auto& v = cmd.matrix.variants;
+        if (v.empty() || std::any_of(v.begin(), v.end(), [](const std::string& s) { return s.empty(); }))
+            lm::ThrowError("--variants: %s (list LMM variants, comma-separated, or leave the option out for the "
+                           "default)",
+                           v.size() > 1 ? "an empty name in the list" : "must not be empty");
+    }
+    // Where CC and kI came from, for the light mesh's messages (a CC too large for memory).
+    if (cmd.ccOption && cmd.ccOption->count())
+        cmd.matrix.ccOrigins.assign(cmd.matrix.cc.size(), lm::SourceLoc::Option("--cc"));
+    if (cmd.kiOption && cmd.kiOption->count())
+        cmd.matrix.kiOrigins.assign(cmd.matrix.ki.size(), lm::SourceLoc::Option("--ki"));
     if (!cmd.sizes.empty()) {
         cmd.matrix.sizes.clear();
         for (const std::string& s : cmd.sizes) {
@@ -56,13 +70,22 @@ int RunBench(BenchCommand& cmd) {
         preset.imageDir = given.imageDir;
         preset.quality = given.quality;
         preset.refSamples = given.refSamples;
+        preset.lightRadius = given.lightRadius;
+        if (cmd.table) {
+            const lm::SourceLoc table = lm::SourceLoc::Option(lm::StringPrintf("bench --table %d", cmd.table));
+            preset.ccOrigins.assign(preset.cc.size(), table);
+            preset.kiOrigins.assign(preset.ki.size(), table);
+        }
         cmd.matrix = preset;
     } else if (cmd.quick) {
         for (auto& s : cmd.matrix.sizes) s = {std::max(1, s.first / 4), std::max(1, s.second / 4)};
         if (!cmd.repeatOption->count()) cmd.matrix.repeat = 1;
     }
     cmd.matrix.noShadows = !cmd.noNone;
-    for (const std::string& path : {cmd.csv, cmd.markdown, cmd.html})
+    cmd.matrix.maxSeconds = cmd.force ? 0 : lm::kBenchLimitSeconds;
+    if (cmd.matrix.lightRadius && !cmd.matrix.quality)
+        lm::LogWarning("bench: --light-radius is ignored without --quality (it sizes the competitors' table)");
+    for (const std::string& path : {cmd.csv, cmd.markdown, cmd.html, cmd.json})
         if (!path.empty()) lm::CheckWritableFolder(path);
     if (!cmd.html.empty() && cmd.matrix.imageDir.empty()) {
         // The report embeds the images: render them next to it.
@@ -87,9 +110,9 @@ int RunBench(BenchCommand& cmd) {
         [&](double seconds) {
             if (cmd.quiet) return;
             std::fprintf(stderr,
-                         "bench: rough estimate %.0f s (%.1f min) in all (one RT render per scene timed, "
-                         "extrapolated by pixels and method)%s\n",
-                         seconds, seconds / 60, cmd.matrix.quality ? ", quality references included" : "");
+                         "bench: estimated %s in all (sampled tiles of RT and LMM renders timed per scene, "
+                         "extrapolated by pixels, CC, kI and method)%s\n",
+                         lm::FormatDuration(seconds).c_str(), cmd.matrix.quality ? ", quality references included" : "");
         });
     std::string md = lm::BenchMarkdown(report.results);
     if (!report.quality.empty()) md += lm::BenchQualityMarkdown(report);
@@ -103,6 +126,7 @@ int RunBench(BenchCommand& cmd) {
     };
     if (!cmd.csv.empty()) write(cmd.csv, lm::BenchCsv(report.results));
     if (!cmd.markdown.empty()) write(cmd.markdown, md);
+    if (!cmd.json.empty()) write(cmd.json, lm::BenchJson(report));
     if (!cmd.html.empty()) {
         write(cmd.html, lm::BenchHtml(report, cmd.table ? lm::StringPrintf("lightmesh bench: the paper's table %d%s",
                                                                            cmd.table, cmd.quick ? " (quick)" : "")

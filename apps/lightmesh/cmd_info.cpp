@@ -24,12 +24,18 @@ int RunInfo(const CommonOptions& common, const std::string& accelName, int grid)
                 Count(edges.open).c_str(), Count(edges.nonManifold).c_str(),
                 edges.Closed() ? "every object is a closed solid"
                                : "not all objects are closed solids (the inside-object test is unreliable there)");
-    std::printf("lights     %zu\n", scene.lights.size());
+    // The scene file's "render": {"light_radius"} replaces every light's own radius when rendering.
+    const std::optional<float>& radiusOverride = scene.render.areaLight.radius;
+    std::printf("lights     %zu%s\n", scene.lights.size(),
+                radiusOverride ? lm::StringPrintf(" (rendered with every radius %g: the scene's \"light_radius\")",
+                                                  static_cast<double>(*radiusOverride)).c_str()
+                               : "");
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         const lm::PointLight& l = scene.lights[i];
-        std::printf("  light %zu  at [%g %g %g], intensity [%g %g %g], falloff %s\n", i, l.position.x,
+        std::printf("  light %zu  at [%g %g %g], intensity [%g %g %g], falloff %s, radius %g%s\n", i, l.position.x,
                     l.position.y, l.position.z, l.intensity.r, l.intensity.g, l.intensity.b,
-                    l.falloff == lm::Falloff::None ? "none" : "inverse_square");
+                    l.falloff == lm::Falloff::None ? "none" : "inverse_square", l.radius,
+                    l.radius == 0 ? " (a point)" : "");
     }
     std::vector<size_t> uses(scene.materials.size());
     for (uint32_t m : scene.mesh.materialIds) ++uses[m];

@@ -50,7 +50,7 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
     if (cmd.shadows) options.shadows = *cmd.shadows;
     if (cmd.accel) options.accel = *cmd.accel;
     if (cmd.grid) options.accelOptions.gridResolution = *cmd.grid;
-    if (cmd.cc) options.lightMesh.cc = *cmd.cc;
+    if (cmd.cc) options.lightMesh.cc = options.soft.cc = *cmd.cc;
     if (cmd.ki) options.lightMesh.ki = *cmd.ki;
     if (cmd.variant) options.lightMesh.variant = *cmd.variant;
     if (cmd.ns) options.lightMesh.ns = *cmd.ns;
@@ -59,6 +59,7 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
     if (cmd.lightRadius) options.areaLight.radius = *cmd.lightRadius;
     if (cmd.thinCheck) options.lightMesh.thinCheck = *cmd.thinCheck;
     if (cmd.samples) options.areaLight.samples = *cmd.samples;
+    if (cmd.softSamples) options.soft.samples = *cmd.softSamples;
 
     if (cmd.variant && cmd.variant->empty())
         lm::ThrowError("--variant: must not be empty (leave it out for the default)");
@@ -82,6 +83,7 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
         {"light_radius", cmd.lightRadius.has_value()},
         {"thin_check", cmd.thinCheck.has_value()},
         {"samples", cmd.samples.has_value()},
+        {"soft_samples", cmd.softSamples.has_value()},
         {"grid", cmd.grid.has_value()},
     };
     for (const auto& [key, isGiven] : given) {
@@ -97,12 +99,17 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
         if (options.shadows == "lmm") lm::ParseLightMeshVariant(options.lightMesh.variant);
         if (options.shadows == "area" || cmd.lightRadius || cmd.samples) lm::ValidateAreaLightOptions(options.areaLight);
     });
-    if (cmd.thinCheck && options.shadows == "lmm" && !(options.areaLight.radius > 0))
+    if (cmd.thinCheck && options.shadows == "lmm" && !(options.areaLight.radius.value_or(0.0f) > 0))
         lm::LogWarning("--thin-check is used only with a light radius (--light-radius > 0); ignored");
     if (options.shadows == "area") {
-        if (options.areaLight.radius == 0)
-            lm::LogWarning("--shadows area with light radius 0: point lights, the same image as --shadows rt "
-                           "(set --light-radius)");
+        // Only when no light has a size left: the lights' own radii, unless overridden.
+        const std::vector<float> radii = lm::LightRadii(scene, options);
+        if (std::all_of(radii.begin(), radii.end(), [](float r) { return r == 0; }))
+            lm::LogWarning(options.areaLight.radius
+                               ? "--shadows area with light radius 0: point lights, the same image as --shadows rt "
+                                 "(set --light-radius > 0)"
+                               : "--shadows area with every light's radius 0: point lights, the same image as "
+                                 "--shadows rt (give the lights a \"radius\" or set --light-radius)");
     }
     // Check everything about the output before spending time on the render.
     std::string& output = prepared->output;
@@ -124,6 +131,20 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
 
     prepared->job = std::make_unique<lm::RenderJob>(scene, options);
     return prepared;
+}
+
+// A render whose first tiles say it will take longer than this says so (issue 45: 16384 x
+// 16384 at aa 16, 68.7 G camera rays, ran for hours without a word).
+constexpr double kAnnouncedRenderSeconds = 60;
+
+// What a render has to do, for that line: "68,719,476,736 camera rays (16384x16384 at aa
+// 16), shadows lmm".
+std::string RenderWork(const lm::RenderOptions& o) {
+    const uint64_t rays = static_cast<uint64_t>(o.width) * static_cast<uint64_t>(o.height) *
+                          static_cast<uint64_t>(o.aa) * static_cast<uint64_t>(o.aa);
+    return lm::StringPrintf("%s camera rays (%dx%d at aa %d), shadows %s; Ctrl-C stops it and leaves the output as "
+                            "it was",
+                            Count(rays).c_str(), o.width, o.height, o.aa, o.shadows.c_str());
 }
 
 // The summary line, and with --stats the figures (per rank under MPI).
@@ -174,6 +195,7 @@ int RunRender(const RenderCommand& cmd) {
     {
         lm::ProgressReporter progress(p->job->Renderer().TileCount(), "Rendering",
                                       !cmd.common.quiet && lm::ProgressReporter::StderrIsTerminal());
+        if (!cmd.common.quiet) progress.AnnounceIfLong(kAnnouncedRenderSeconds, RenderWork(p->job->Options()));
         result = p->job->Render(&progress);
     }
     const auto t3 = Clock::now();
@@ -220,6 +242,7 @@ int RunRenderMpi(const RenderCommand& cmd, const lm::MpiSession& session) {
     {
         lm::ProgressReporter progress(p->job->Renderer().TileCount(), "Rendering",
                                       root && !cmd.common.quiet && lm::ProgressReporter::StderrIsTerminal());
+        if (root && !cmd.common.quiet) progress.AnnounceIfLong(kAnnouncedRenderSeconds, RenderWork(p->job->Options()));
         d = lm::RenderDistributed(session, p->job->Renderer(), nodes, root ? &progress : nullptr);
     }
     if (d.errorRank >= 0) return fail(d.error, d.errorRank);

@@ -54,14 +54,19 @@ void ApplyLogLevel(const CommonOptions& o);
 
 // The range of a numeric knob of the settings table, as CLI11 checks it.
 CLI::Range SettingRange(const char* key);
+// A single-precision option's text that reads as a finite float (>= 0 if `nonNegative`):
+// the message shows the text as given ("got 1e39", where the float it becomes said "inf").
+CLI::Validator FiniteFloat(bool nonNegative);
 // A `render` option from the settings table: its flag, help text and range or choices.
 template <typename T>
 CLI::Option* AddSetting(CLI::App* cmd, const char* key, T* value) {
     const lm::RenderSetting& s = lm::RenderSettingFor(key);
     CLI::Option* option = cmd->add_option(s.flag, *value, s.help);
     using K = lm::RenderSetting::Kind;
-    // (A range without an upper end, light_radius's, is checked where the value is used.)
+    // (A range without an upper end, light_radius's, is checked where the value is used;
+    // beyond float it is refused here, as given.)
     if ((s.kind == K::Int || s.kind == K::Float) && std::isfinite(s.hi)) option->check(SettingRange(key));
+    if (s.kind == K::Float && !std::isfinite(s.hi)) option->check(FiniteFloat(s.lo >= 0));
     if (s.kind == K::Choice) option->check(CLI::IsMember(s.choices));
     return option;
 }
@@ -75,6 +80,7 @@ struct RenderCommand {
     std::optional<int> width, height, aa, maxDepth, grid, cc, ns;
     std::optional<float> ki, lightRadius;
     std::optional<int> samples;
+    std::optional<int> softSamples;
     std::optional<std::string> shadows, accel, variant, templateDir, cellSummaries, thinCheck;
     bool stats = false;
 };
@@ -91,13 +97,17 @@ int RunTemplates(int ns, float ki, const std::string& dir, bool measure);
 struct BenchCommand {
     lm::BenchMatrix matrix;
     std::vector<std::string> sizes;
-    std::string csv, markdown, html, matrixFile;
+    std::string csv, markdown, html, matrixFile, json;
     int table = 0;
     bool quick = false;
     bool quiet = false;
     bool noNone = false;
+    bool force = false;  ///< run a matrix estimated above kBenchLimitSeconds
     CLI::Option* repeatOption = nullptr;
     CLI::Option* accelsOption = nullptr;
+    CLI::Option* variantsOption = nullptr;
+    CLI::Option* ccOption = nullptr;
+    CLI::Option* kiOption = nullptr;
     std::string argv0;
 };
 int RunBench(BenchCommand& cmd);

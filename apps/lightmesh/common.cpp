@@ -1,6 +1,10 @@
 // common.cpp -- what the commands share: scene loading, options, figures.
 #include "commands.h"
 
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+
 #include "lightmesh/scene/scene_file.h"
 #include "lightmesh/util/log.h"
 
@@ -42,6 +46,21 @@ CLI::Range SettingRange(const char* key) {
     const lm::RenderSetting& s = lm::RenderSettingFor(key);
     if (s.kind == lm::RenderSetting::Kind::Int) return CLI::Range(static_cast<int>(s.lo), static_cast<int>(s.hi));
     return CLI::Range(static_cast<float>(s.lo), static_cast<float>(s.hi));
+}
+
+CLI::Validator FiniteFloat(bool nonNegative) {
+    return CLI::Validator(
+        [nonNegative](std::string& text) -> std::string {
+            char* end = nullptr;
+            const double v = std::strtod(text.c_str(), &end);
+            const bool number = end != text.c_str() && *end == 0;
+            if (!number || !std::isfinite(v) || std::abs(v) > std::numeric_limits<float>::max() ||
+                (nonNegative && !(v >= 0)))
+                return std::string("must be a finite number") + (nonNegative ? " >= 0" : "") +
+                       " within single precision (3.4e38), got " + text;
+            return "";
+        },
+        nonNegative ? "FLOAT >= 0" : "FLOAT");
 }
 
 void PrintFigures(const char* title, const std::vector<std::pair<std::string, std::string>>& figures) {

@@ -22,7 +22,8 @@ int main(int argc, char** argv) {
     app.set_version_flag("--version", "lightmesh 0.1.0");
     // Command-line mistakes read like every other error ("lightmesh: error: ...").
     app.failure_message([](const CLI::App*, const CLI::Error& e) {
-        return std::string("lightmesh: error: ") + e.what() + "\nRun with --help for more information.\n";
+        // Printable: an argument with a newline must not split the one-line error.
+        return std::string("lightmesh: error: ") + lm::Printable(e.what()) + "\nRun with --help for more information.\n";
     });
 
     RenderCommand render;
@@ -49,6 +50,7 @@ int main(int argc, char** argv) {
     AddSetting(renderCmd, "light_radius", &render.lightRadius);
     AddSetting(renderCmd, "thin_check", &render.thinCheck);
     AddSetting(renderCmd, "samples", &render.samples);
+    AddSetting(renderCmd, "soft_samples", &render.softSamples);
     renderCmd->add_flag("--stats", render.stats, "Print rays by kind, time by phase, back-end figures, peak memory");
 
     CommonOptions info;
@@ -82,7 +84,8 @@ int main(int argc, char** argv) {
     compareCmd->add_option("--mask", compare.mask, "Compare only where this image (same size) is not black");
     compareCmd->add_option("--diff", compare.diff, "Write a false-colour (Turbo) image of |A - B| here");
     compareCmd->add_option("--diff-scale", compare.diffScale,
-                           "Difference shown as the top colour (display units, 0..1; default 0: the largest)");
+                           "Difference shown as the top colour (display units, 0..1; default 0: the largest)")
+        ->check(FiniteFloat(true));
     compareCmd->add_flag("--json", compare.json, "Print one JSON line (psnr is null for identical images)");
     compareCmd->add_option("--threshold-psnr", compare.thresholdPsnr, "Exit with 3 if the PSNR (dB) is lower");
 
@@ -112,8 +115,14 @@ int main(int argc, char** argv) {
                          "Reproduce the paper's table 1, 2, 3 or 4 on scenes/real (replaces --scene --size --cc --ki --variants)")
         ->check(CLI::Range(1, 4));
     CLI::Option* benchMatrixFile = benchCmd->add_option("--matrix", bench.matrixFile,
-                         "Read the matrix from JSON: {\"scenes\", \"sizes\": [[w,h]], \"cc\", \"ki\", \"variants\", \"accels\", \"repeat\"}")
-        ->check(CLI::ExistingFile);
+                         "Read the matrix from JSON: {\"scenes\", \"sizes\": [[w,h]], \"cc\", \"ki\", \"variants\", \"accels\", \"repeat\"}");
+    // (Not CLI::ExistingFile: LoadBenchMatrix says why a file cannot be read; CLI11 called
+    // a symlink loop "File does not exist".)
+    bench.variantsOption = benchVariants;
+    bench.ccOption = benchCc;
+    bench.kiOption = benchKi;
+    benchCmd->add_flag("--force", bench.force,
+                       "Run a matrix estimated to take more than an hour (refused otherwise, also with -q)");
     for (CLI::Option* o : {benchScene, benchSize, benchCc, benchKi, benchVariants}) {
         o->excludes(benchTable);
         o->excludes(benchMatrixFile);
@@ -125,9 +134,19 @@ int main(int argc, char** argv) {
                          "renders the images next to it unless --images is given");
     benchCmd->add_flag("--quality", bench.matrix.quality,
                        "Also judge every cell against a converged area-light reference: PSNR/SSIM, reference "
-                       "radius sweep, naive soft shadows (N = 1, 2, 4, 16, 64) vs LMM, contact-hardening penumbrae (lmm with the reference's light radius), leak count");
-    benchCmd->add_option("--ref-samples", bench.matrix.refSamples, "Samples of the --quality reference; default 256")
+                       "radius sweep, naive soft shadows (N = 1, 2, 4, 16, 64) vs LMM, contact-hardening penumbrae (lmm with the reference's light radius), leak count; "
+                       "and the default (soft) against RT, LMM and area N = 1, 2, 4, 8, 16 at the lights' own radii: "
+                       "time, PSNR, shadow total, area's N and time at soft's PSNR");
+    benchCmd->add_option("--ref-samples", bench.matrix.refSamples,
+                         "Rays per light of the --quality references (the paper's radius sweep and the competitors' "
+                         "table); default 256")
         ->check(CLI::Range(1, 4096));
+    benchCmd->add_option("--light-radius", bench.matrix.lightRadius,
+                         "With --quality, the competitors' table (soft, area and its reference) gives every light this "
+                         "radius instead of its own; the paper's tables keep R = kI·h")
+        ->check(SettingRange("light_radius"))
+        ->check(FiniteFloat(true));
+    benchCmd->add_option("--json", bench.json, "Also write every cell and the --quality tables as JSON");
     bench.accelsOption = benchCmd->add_option("--accels", bench.matrix.accels,
                          std::string("Ray-query back-ends for RT (the first also serves no shadows and LMM), comma-separated; default ") +
                              lm::kDefaultAccelerator + " (grid for --table, the paper's)")
@@ -145,6 +164,18 @@ int main(int argc, char** argv) {
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
+        // A missing scene whose name was taken for an option (`render -scene.json`): the
+        // option is what went wrong, not the scene ("scene is required" pre-empted it).
+        if (dynamic_cast<const CLI::RequiredError*>(&e))
+            for (const CLI::App* sub : app.get_subcommands())
+                for (const std::string& arg : sub->remaining())
+                    if (arg.size() > 1 && arg[0] == '-') {
+                        std::fprintf(stderr,
+                                     "lightmesh: error: %s: not an option of `%s`; a file whose name starts with '-' "
+                                     "is given as ./%s (or after --)\nRun with --help for more information.\n",
+                                     lm::Printable(arg).c_str(), sub->get_name().c_str(), lm::Printable(arg).c_str());
+                        return 1;
+                    }
         // --help and --version exit 0; a command-line mistake exits 1 like any bad input
         // (CLI11's own codes are 100 and up).
         return app.exit(e) == 0 ? 0 : 1;

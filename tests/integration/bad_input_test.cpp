@@ -164,6 +164,32 @@ const char* kPlayground =
     "v -1 0 -1\nv 1 0 -1\nv 1 2 -1\nv -1 2 -1\nv -1 0 1\nv 1 0 1\nv 1 2 1\nv -1 2 1\n"
     "f 5 8 7 6\nf 9 10 11 12\nf 5 6 10 9\nf 8 12 11 7\nf 5 9 12 8\nf 6 7 11 10\n";
 
+/// Issue 45: `levels` objects {"a": ...} (or arrays [...]) nested around a 1.
+std::string Nested(size_t levels, bool arrays) {
+    std::string s;
+    s.reserve(levels * 6 + 1);
+    for (size_t i = 0; i < levels; ++i) s += arrays ? "[" : "{\"a\": ";
+    s += "1";
+    for (size_t i = 0; i < levels; ++i) s += arrays ? "]" : "}";
+    return s;
+}
+
+/// "[item, item, ...]" with n items.
+std::string Repeated(const std::string& item, int n) {
+    std::string s = "[";
+    for (int i = 0; i < n; ++i) s += (i ? ", " : "") + item;
+    return s + "]";
+}
+
+/// An OBJ of n objects ("o" lines) of one triangle each.
+std::string ObjObjects(int n) {
+    std::string s;
+    for (int i = 0; i < n; ++i)
+        s += "o ob" + std::to_string(i) + "\nv " + std::to_string(i) + " 0 0\nv " + std::to_string(i) + " 1 0\nv " +
+             std::to_string(i) + " 0 1\nf -3 -2 -1\n";
+    return s;
+}
+
 std::string ManyKeys(int n) {
     std::string s = "{";
     for (int i = 0; i < n; ++i) s += (i ? ", \"k" : "\"k") + std::to_string(i) + "\": 1";
@@ -551,25 +577,25 @@ std::vector<Case> Corpus() {
          .expected = "lightmesh: error: $D/scene.json /render/variant: unknown light-mesh variant \"fastest\"",
          .files = {{"scene.json", WithExtra(R"(, "render": {"variant": "fastest"})")}}},
         {.name = "shadows_unknown",
-         .args = "render builtin:gazebo --shadows soft -o $OUT",
-         .expected = "--shadows: soft not in {none,rt,lmm"},
+         .args = "render builtin:gazebo --shadows hard -o $OUT",
+         .expected = "--shadows: hard not in {soft,none,rt,lmm"},
         // --- Memory: refused with the figure, before allocating -----------------------------
         {.name = "light_mesh_too_big_for_the_machine",
          .args = "render builtin:gazebo --shadows lmm --cc 4096 -o $OUT",
          .expected = "of node storage, more than half of this machine's"},
         {.name = "light_mesh_too_big_for_the_limit",
          .args = "render $D/scene.json --shadows lmm --cc 1000 -o $OUT",
-         .expected = "lightmesh: error: light mesh 1006x350x1006 (CC 1000, kI 2) needs 337.8 "
+         .expected = "lightmesh: error: --cc: light mesh 1006x350x1006 (CC 1000, kI 2) needs 337.8 "
                      "MiB of node storage, more than half of this machine's 64.0 MiB: lower "
-                     "--cc\n",
+                     "CC\n",
          .files = {{"scene.json", good}},
          .env = "LIGHTMESH_MEMORY_LIMIT=64M"},
         {.name = "light_mesh_with_blocker_distances_too_big_for_the_limit",
          // 1 + 2 bytes per node with one light: three times the plain mesh's 337.8 MiB.
          .args = "render $D/scene.json --shadows lmm --cc 1000 --light-radius 0.1 -o $OUT",
-         .expected = "lightmesh: error: light mesh 1006x350x1006 (CC 1000, kI 2) needs 1013.4 "
+         .expected = "lightmesh: error: --cc: light mesh 1006x350x1006 (CC 1000, kI 2) needs 1013.4 "
                      "MiB of node storage (3 bytes per node with the blocker distances of the light "
-                     "radius), more than half of this machine's 64.0 MiB: lower --cc\n",
+                     "radius), more than half of this machine's 64.0 MiB: lower CC\n",
          .files = {{"scene.json", good}},
          .env = "LIGHTMESH_MEMORY_LIMIT=64M"},
         {.name = "image_too_big_for_the_limit",
@@ -741,7 +767,7 @@ std::vector<Case> Corpus() {
         {.name = "unused_option_warns",
          .args = kRender + " --shadows rt --light-radius 0.5",
          .expected = "lightmesh: warning: --light-radius is not used by --shadows rt (only by "
-                     "area and lmm); ignored\n",
+                     "soft, area and lmm); ignored\n",
          .files = {{"scene.json", good}},
          .exitCode = 0},
         {.name = "thin_check_without_a_light_radius_warns",
@@ -749,6 +775,16 @@ std::vector<Case> Corpus() {
          .expected = "lightmesh: warning: --thin-check is used only with a light radius (--light-radius > 0); ignored\n",
          .files = {{"scene.json", good}},
          .exitCode = 0},
+        {.name = "area_with_point_lights_warns",
+         .args = kRender + " --shadows area",
+         .expected = "lightmesh: warning: --shadows area with every light's radius 0: point lights, the same image "
+                     "as --shadows rt (give the lights a \"radius\" or set --light-radius)\n",
+         .files = {{"scene.json", WithLights(R"([{"position": [3, 6, 4], "intensity": 40, "radius": 0}])")}},
+         .exitCode = 0},
+        {.name = "light_radius_negative",
+         .args = kRender + " --shadows area",
+         .expected = "lightmesh: error: $D/scene.json /lights/1/radius: must not be negative, got -0.2\n",
+         .files = {{"scene.json", WithLights(R"([{"position": [3, 6, 4]}, {"position": [-3, 6, 4], "radius": -0.2}])")}}},
         {.name = "thin_check_unknown",
          .args = kRender + " --shadows lmm --light-radius 0.5 --thin-check on",
          .expected = "--thin-check: on not in {off,lit,all}",
@@ -807,6 +843,135 @@ std::vector<Case> Corpus() {
                      "of its footprint faces up there)\n",
          .files = {{"playground.obj", kPlayground}},
          .exitCode = 0},
+        // --- Issue 45 (robustness, round three) -------------------------------------------------
+        // Deep JSON: refused at 256 levels, at once (100,000 levels did not finish).
+        {.name = "json_nested_100000_levels",
+         .args = kRender,
+         .expected = "lightmesh: error: $D/scene.json: nesting deeper than 256 levels at "
+                     "/junk/a/a/a/...(250 levels).../a/a (the most a JSON file may nest)\n",
+         .files = {{"scene.json", WithExtra(", \"junk\": " + Nested(100000, false))}}},
+        {.name = "json_arrays_nested_1000000_levels_in_a_matrix",
+         .args = "bench --matrix $D/m.json --csv $OUT",
+         .expected = "lightmesh: error: $D/m.json: nesting deeper than 256 levels at "
+                     "/scenes/0/0/0/...(250 levels).../0/0 (the most a JSON file may nest)\n",
+         .files = {{"m.json", "{\"scenes\": " + Nested(1000000, true) + "}"}},
+         .output = "$D/out/bench.csv"},
+        // Budgets: refused with the estimate, before the work.
+        {.name = "templates_beyond_their_index",
+         .args = "templates --ns 64 --ki 16 --template-dir $D/out",
+         .expected = "lightmesh: error: templates ns 64, kI 16: about 4,",
+         .output = "$D/out/sphere-ns64-ki16.lmt"},
+        {.name = "templates_beyond_the_memory_budget",
+         .args = "templates --ns 32 --ki 16 --template-dir $D/out",
+         .expected = "lightmesh: error: templates ns 32, kI 16 would need about 1.7 GiB (6",
+         .output = "$D/out/sphere-ns32-ki16.lmt",
+         .env = "LIGHTMESH_MEMORY_LIMIT=256M"},
+        {.name = "templates_beyond_the_memory_budget_say_what_fits",
+         .args = "templates --ns 32 --ki 16 --template-dir $D/out",
+         .expected = "entries, 3 bytes each), more than half of this machine's 256.0 MiB (LIGHTMESH_MEMORY_LIMIT); "
+                     "with kI 16, ns up to 12 fits; with ns 32, kI up to 6.6\n",
+         .output = "$D/out/sphere-ns32-ki16.lmt",
+         .env = "LIGHTMESH_MEMORY_LIMIT=256M"},
+        {.name = "light_mesh_templates_beyond_the_memory_budget",
+         .args = "render builtin:gazebo --shadows lmm --variant templates --ns 32 --ki 16 --cc 8 --template-dir $D/out "
+                 "-o $OUT",
+         .expected = "lightmesh: error: light mesh: sphere templates ns 32, kI 16 would need about 6.",
+         .env = "LIGHTMESH_MEMORY_LIMIT=256M"},
+        {.name = "bench_estimated_beyond_the_limit",
+         .args = "bench --size 16384x16384 --repeat 100 -q --csv $OUT",
+         .expected = "more than the limit of 1 h 0 min (measured on sampled tiles of RT and LMM renders at "
+                     "16384x16384); make it smaller, or --force runs it anyway\n",
+         .output = "$D/out/bench.csv"},
+        {.name = "bench_matrix_of_ten_billion_cells",
+         .args = "bench --matrix $D/m.json --csv $OUT",
+         .expected = "lightmesh: error: bench: the matrix has 10,000,020,000 cells, more than the 100,000,000 one run "
+                     "may hold (scenes x sizes x CC x kI x variants, plus RT and no shadows)\n",
+         .files = {{"m.json", "{\"scenes\": " + Repeated("\"builtin:gazebo\"", 100) + ", \"sizes\": " +
+                                  Repeated("[8, 6]", 100) + ", \"cc\": " + Repeated("10", 100) + ", \"ki\": " +
+                                  Repeated("2", 100) + ", \"variants\": " + Repeated("\"grid\"", 100) + "}"}},
+         .output = "$D/out/bench.csv"},
+        {.name = "bench_variants_empty",
+         .args = "bench --variants \"\" --csv $OUT",
+         .expected = "lightmesh: error: --variants: must not be empty (list LMM variants, comma-separated, or leave "
+                     "the option out for the default)\n",
+         .output = "$D/out/bench.csv"},
+        {.name = "bench_matrix_variant_empty",
+         .args = "bench --matrix $D/m.json --csv $OUT",
+         .expected = "lightmesh: error: $D/m.json /variants/1: must not be empty (leave the key out for the default)\n",
+         .files = {{"m.json", R"({"variants": ["grid", ""]})"}},
+         .output = "$D/out/bench.csv"},
+        // Import: a file of zeros refused at once; an OBJ whose objects would outlast the
+        // deadline in Assimp's quadratic lookup refused with the estimate.
+        {.name = "mesh_of_zeros",
+         .args = "render $D/zeros.obj -o $OUT",
+         .expected = "lightmesh: error: $D/zeros.obj: its first 4,096 bytes are all zero (NUL): not a mesh file (a "
+                     "zeroed or sparse file?)\n",
+         .files = {{"zeros.obj", std::string(100000, '\0')}}},
+        {.name = "obj_objects_beyond_the_deadline",
+         .args = "render $D/objects.obj -o $OUT",
+         .expected = "lightmesh: error: $D/objects.obj: 60,000 objects (`o` lines): Assimp's OBJ reader takes time "
+                     "growing with the square of their number, about 3.6 s here, more than the import deadline of "
+                     "2.0 s (LIGHTMESH_IMPORT_TIMEOUT raises it); merge the objects, or convert the file to glTF\n",
+         .files = {{"objects.obj", ObjObjects(60000)}},
+         .env = "LIGHTMESH_IMPORT_TIMEOUT=2"},
+        // Messages that pointed the wrong way.
+        {.name = "json_cc_too_large_for_memory",
+         .args = kRender + " --shadows lmm",
+         .expected = "lightmesh: error: $D/scene.json /render/cc: light mesh 1006x1006x1006 (CC 1000, kI 2) needs "
+                     "970.9 MiB of node storage, more than half of this machine's 64.0 MiB: lower CC\n",
+         .files = {{"scene.json", WithExtra(R"(, "render": {"cc": 1000})")}},
+         .env = "LIGHTMESH_MEMORY_LIMIT=64M"},
+        {.name = "bench_matrix_cc_too_large_for_memory",
+         .args = "bench --matrix $D/m.json --csv $OUT",
+         .expected = "lightmesh: error: $D/m.json /cc/1: light mesh ",
+         .files = {{"m.json", R"({"sizes": [[16, 12]], "cc": [10, 3000], "variants": ["grid"]})"}},
+         .output = "$D/out/bench.csv",
+         .env = "LIGHTMESH_MEMORY_LIMIT=64M"},
+        {.name = "bench_matrix_unknown_back_end",
+         .args = "bench --matrix $D/m.json --csv $OUT",
+         .expected = "lightmesh: error: $D/m.json /accels/1: unknown ray-query back-end \"embre\" (choose ",
+         .files = {{"m.json", R"({"accels": ["grid", "embre"]})"}},
+         .output = "$D/out/bench.csv"},
+        {.name = "json_ki_just_above_the_range",
+         .args = kRender,
+         .expected = "lightmesh: error: $D/scene.json /render/ki: must be between 0.01 and 16, got 16.000001\n",
+         .files = {{"scene.json", WithExtra(R"(, "render": {"ki": 16.000001})")}}},
+        {.name = "light_radius_beyond_float",
+         .args = kRender + " --shadows area --light-radius 1e39",
+         .expected = "lightmesh: error: --light-radius: must be a finite number >= 0 within single precision "
+                     "(3.4e38), got 1e39\n"},
+        {.name = "bench_matrix_variant_with_a_nul_byte",
+         .args = "bench --matrix $D/m.json --csv $OUT",
+         .expected = "lightmesh: error: $D/m.json /variants/0: unknown light-mesh variant \"gr<U+0000>id\" (choose",
+         .files = {{"m.json", R"({"variants": ["gr\u0000id"]})"}},
+         .output = "$D/out/bench.csv"},
+        {.name = "scene_at_1e-17_scale_loads_and_is_refused_for_rendering_by_its_span",
+         .args = kRender,
+         .expected = "lightmesh: error: $D/scene.json: the scene (meshes, ground, camera and lights) spans 1.1e-16, "
+                     "less than the 1e-06 that single-precision ray queries resolve with --accel embree (scale the "
+                     "model up)\n",
+         .files = {{"scene.json", SceneJson({.camera = R"({"position": [0, 2e-17, 8e-17], "look_at": [0, 0, 0]})",
+                                             .lights = R"([{"position": [3e-17, 6e-17, 4e-17]}])",
+                                             .meshes = R"([{"file": "box.obj", "transform": {"scale": 1e-17}}])"})}}},
+        {.name = "scene_at_1e-10_scale_renders_on_the_grid",
+         .args = kRender + " --accel grid",
+         .expected = "out.png: 16x12",
+         .files = {{"scene.json", SceneJson({.camera = R"({"position": [0, 2e-10, 8e-10], "look_at": [0, 0, 0]})",
+                                             .lights = R"([{"position": [3e-10, 6e-10, 4e-10], "falloff": "none"}])",
+                                             .meshes = R"([{"file": "box.obj", "transform": {"scale": 1e-10}}])"})}},
+         .exitCode = 0},
+        {.name = "file_name_with_a_newline",
+         .args = "render \"$D/new\nline.json\" -o $OUT",
+         .expected = "lightmesh: error: $D/new<U+000A>line.json: no such file\n"},
+        {.name = "scene_name_taken_for_an_option",
+         .args = "render -scene.json -o $OUT",
+         .expected = "lightmesh: error: -scene.json: not an option of `render`; a file whose name starts with '-' is "
+                     "given as ./-scene.json (or after --)\n"},
+        {.name = "bench_matrix_symlink_loop",
+         .args = "bench --matrix $D/loop.json --csv $OUT",
+         .expected = "lightmesh: error: $D/loop.json: cannot open: Too many levels of symbolic links\n",
+         .files = {{"symlink loop.json", "loop2.json"}, {"symlink loop2.json", "loop.json"}},
+         .output = "$D/out/bench.csv"},
         // --- Output paths -------------------------------------------------------------------
         {.name = "output_folder_missing",
          .args = "render $D/scene.json -o $OUT",

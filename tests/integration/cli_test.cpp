@@ -71,6 +71,30 @@ TEST(Cli, InfoDescribesTheScene) {
     EXPECT_NE(r.output.find("accel      grid"), std::string::npos) << r.output;
 }
 
+// Lights have sizes: info lists them; --shadows area samples them without a warning;
+// --light-radius 0 overrides them all to points, which is RT's image byte for byte, and
+// says so.
+TEST(Cli, LightRadiiInInfoAndTheAreaReference) {
+    const CliRun info = Lightmesh("info builtin:gazebo");
+    ASSERT_EQ(info.exitCode, 0) << info.output;
+    EXPECT_NE(info.output.find("falloff inverse_square, radius 0.173\n"), std::string::npos) << info.output;
+    EXPECT_NE(info.output.find("falloff inverse_square, radius 0.164\n"), std::string::npos) << info.output;
+
+    const std::string common = "render builtin:gazebo --width 40 --height 30 --samples 4 ";
+    const CliRun sized = Lightmesh(common + "--shadows area -o " + Temp("area-own.png"));
+    ASSERT_EQ(sized.exitCode, 0) << sized.output;
+    EXPECT_EQ(sized.output.find("warning"), std::string::npos) << sized.output;
+    const CliRun points = Lightmesh(common + "--shadows area --light-radius 0 -o " + Temp("area-points.png"));
+    ASSERT_EQ(points.exitCode, 0) << points.output;
+    EXPECT_NE(points.output.find("lightmesh: warning: --shadows area with light radius 0: point lights, the same "
+                                 "image as --shadows rt"),
+              std::string::npos)
+        << points.output;
+    ASSERT_EQ(Lightmesh(common + "--shadows rt -q -o " + Temp("area-rt.png")).exitCode, 0);
+    EXPECT_EQ(Bytes(Temp("area-points.png")), Bytes(Temp("area-rt.png")));
+    EXPECT_NE(Bytes(Temp("area-own.png")), Bytes(Temp("area-rt.png")));  // the lights' own radii soften
+}
+
 TEST(Cli, BadInputIsAClearErrorAndWritesNothing) {
     const std::string out = Temp("bad.png");
     fs::remove(out);
@@ -82,7 +106,7 @@ TEST(Cli, BadInputIsAClearErrorAndWritesNothing) {
         {"render " + Temp("missing.json") + " -o " + out, "missing.json"},
         {"render builtin:gazebo -o " + Temp("x.jpg"), "unknown image extension"},
         {"render builtin:gazebo -o /no/such/folder/x.png", "does not exist"},
-        {"render builtin:gazebo --shadows soft -o " + out, "--shadows"},
+        {"render builtin:gazebo --shadows hard -o " + out, "--shadows"},
         {"render builtin:gazebo --width 0 -o " + out, "--width"},
         {"render builtin:gazebo --shadows lmm --cc 0 -o " + out, "--cc"},
         {"render builtin:gazebo --shadows lmm --ki -1 -o " + out, "--ki"},

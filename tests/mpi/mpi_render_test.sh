@@ -16,7 +16,8 @@ case "$case_name" in
 identical)
     # Every shadow method and light-mesh variant (and the penumbra mode): 1, 2, 3 ranks x 1, 2 threads give the
     # bytes of a single-process render.
-    methods=("--shadows rt" "--shadows area --light-radius 0.15 --samples 4")
+    methods=("--shadows soft" "--shadows soft --light-radius 0.4 --soft-samples 16" "--shadows rt"
+             "--shadows area --light-radius 0.15 --samples 4")
     for v in grid templates reduced none inside object consensus; do methods+=("--shadows lmm --variant $v"); done
     methods+=("--shadows lmm --light-radius 0.3")  # contact-hardening penumbrae
     for m in "${methods[@]}"; do

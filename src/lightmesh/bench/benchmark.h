@@ -3,6 +3,8 @@
 #pragma once
 
 #include <functional>
+#include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -41,13 +43,33 @@ struct BenchMatrix {
     /// The penumbra cells' thin-occluder check (LightMeshOptions::thinCheck): "all" (the
     /// render default), "lit" or "off".
     std::string thinCheck = "all";
+    /// With --quality, per scene and size also the default shadow method against its
+    /// competitors (BenchCompetitors): RT, "soft", the paper's LMM (the default variant,
+    /// CC 100, kI 2) and naive area sampling with these N per light, all on the renderer's
+    /// default back-end and timed round-robin with the matrix's cells, judged against an
+    /// "area" reference of `refSamples` samples with the same light radii.
+    std::vector<int> competitorSamples{1, 2, 4, 8, 16};
+    /// The competitors table's light radii: unset, each light's own (the scene's, as
+    /// `render` uses them); set (bench --light-radius), every light this radius. The
+    /// paper's-table rows (QualityRadius) are not affected.
+    std::optional<float> lightRadius;
+    /// Where each CC and kI value came from ("--cc", "m.json /cc/2", "bench --table 1"),
+    /// by index into cc and ki, so a value the light mesh refuses (too large for memory) is
+    /// named where it was given; empty: the defaults.
+    std::vector<SourceLoc> ccOrigins, kiOrigins;
+    /// Refuse a matrix estimated to take longer than this many seconds (0: no limit; the
+    /// CLI's default is kBenchLimitSeconds, --force lifts it).
+    double maxSeconds = 0;
 };
+
+/// `bench` refuses a matrix estimated above this (one hour) unless --force is given.
+inline constexpr double kBenchLimitSeconds = 3600;
 
 /// One cell of the matrix, measured.
 struct BenchResult {
     std::string scene;
     int width = 0, height = 0;
-    std::string method;   ///< "none", "rt", "lmm" or "penumbra" (lmm with a light radius)
+    std::string method;   ///< "none", "rt", "lmm", "penumbra" (lmm with a light radius), "soft" or "area"
     std::string variant;  ///< LMM variant name ("" otherwise)
     std::string paperName;  ///< "RT", "Grid", "Ш", … ("none" for no shadows)
     std::string accel;
@@ -62,7 +84,75 @@ struct BenchResult {
     uint64_t nodesEvaluated = 0;  ///< LMM only
     uint64_t peakMemoryBytes = 0; ///< of the process, after the cell
     std::string image;            ///< the PNG written, if any
+    int samples = 0;              ///< "area" only: shadow rays per light and point
+    /// "" for a cell of the matrix; "competitor": a cell added for the default-vs-competitors
+    /// table only (the matrix's tables leave it out); "reference": that table's area-light
+    /// reference (rendered once after the round-robin, one run). Matrix cells the table
+    /// reuses (RT, the LMM default at CC 100, kI 2) stay "".
+    std::string role;
+    /// A row of the default-vs-competitors table (BenchCompetitors): its PSNR (dB; 99 for
+    /// an image equal to the reference), SSIM and shadow total against that table's
+    /// reference; NaN for the other cells.
+    double refPsnr = std::numeric_limits<double>::quiet_NaN();
+    double refSsim = std::numeric_limits<double>::quiet_NaN();
+    double shadowRatio = std::numeric_limits<double>::quiet_NaN();
 };
+
+/// One row of the default-vs-competitors table.
+struct CompetitorRow {
+    std::string label;   ///< "RT", "soft (default)", "LMM consensus CC 100 kI 2", "area N=4", "reference area N=256"
+    std::string method;  ///< "rt", "soft", "lmm", "area"
+    int samples = 0;     ///< "area": rays per light
+    bool reference = false;  ///< the reference itself (one run, not in the round-robin)
+    double seconds = 0;  ///< median render time of the interleaved runs (the reference: its one run)
+    size_t runs = 0;     ///< timed runs behind `seconds`
+    double setupSeconds = 0;  ///< the shadow method's set-up (not in `seconds`)
+    double psnr = 0;     ///< dB against the reference (99: equal)
+    double ssim = 0;
+    /// Shadow total against the reference's: Σ over the image of (no shadows − this image)
+    /// in linear luminance (Rec. 709), over the same sum for the reference; 1 is right,
+    /// below 1 too little shadow, above too much. NaN when the reference casts none.
+    double shadowRatio = 0;
+    std::string image;   ///< PNG, when the cells' images are written
+};
+
+/// Where naive area sampling reaches the default's PSNR: N read off the area rows' PSNR,
+/// linear in log2(N) between the two measured N around the default's PSNR; past the
+/// largest N extrapolated from the last two points (the same line), below the smallest N
+/// the smallest N itself (`atMost`: area needs at most that). Area's time at that N is
+/// interpolated the same way (linear in log2 N), or extrapolated linearly in N.
+struct EqualQuality {
+    bool valid = false;         ///< false: no area rows, or PSNR not rising where it must be extrapolated
+    double targetPsnr = 0;      ///< the default's PSNR
+    double samples = 0;         ///< N (not an integer in general)
+    bool extrapolated = false;  ///< beyond the largest N measured
+    bool atMost = false;        ///< the smallest N measured already reaches it
+    double areaSeconds = 0;     ///< area's render time at that N
+    double softSeconds = 0;     ///< the default's
+    double speedup = 0;         ///< areaSeconds / softSeconds: "soft is X× faster"
+};
+
+/// The default-vs-competitors table of one (scene, size) (--quality; BenchMatrix::
+/// competitorSamples). The lights keep their own radii (`lightRadii`) unless the bench's
+/// --light-radius overrides them; the reference is "area" with `refSamples` rays per light
+/// at those radii. Every row runs on `accel`, the renderer's default back-end.
+struct BenchCompetitors {
+    std::string accel;
+    std::vector<float> lightRadii;  ///< per light, as every row and the reference use them
+    bool radiusOverride = false;    ///< the radii come from --light-radius
+    int refSamples = 0;
+    int repeat = 0;                 ///< interleaved timed runs per row
+    std::vector<CompetitorRow> rows;  ///< RT, soft, LMM, area N…, then the reference
+    EqualQuality equal;
+};
+
+/// EqualQuality from area rows (N, PSNR dB, seconds; any order) and the default's PSNR and
+/// seconds.
+struct AreaPoint {
+    int samples = 0;
+    double psnr = 0, seconds = 0;
+};
+EqualQuality EqualQualityFrom(std::vector<AreaPoint> area, double targetPsnr, double softSeconds);
 
 /// One image judged against the area-light references of its (scene, size).
 struct QualityRow {
@@ -101,6 +191,7 @@ struct BenchQuality {
     size_t mainRadius = 0;
     std::string refImage;  ///< the main reference as PNG, when the cells' images are written
     std::vector<QualityRow> rows;
+    BenchCompetitors competitors;  ///< the default against its competitors (lights' own radii)
 };
 
 /// Everything one run measured.
@@ -111,11 +202,23 @@ struct BenchReport {
 };
 
 /// Runs the matrix; `progress` is called after each cell with (done, total, result).
-/// `estimate` (if given) is called once before the matrix runs with a rough estimate of
-/// the total seconds: one RT render per scene at the first size is timed and every cell
-/// extrapolated from it by its pixels and a cost model of the method (LMM ≈ 0.5·kI²×RT,
-/// area with N samples ≈ (0.5 + 0.5·N)×RT). Scenes are all loaded first, so a missing
+/// `estimate` (if given) is called once before the matrix runs with an estimate of the
+/// total seconds, and a matrix estimated above `maxSeconds` (> 0) is refused with an Error
+/// (issue 45: a 10^10-cell matrix ran on, and CC was left out: a subset estimated at 1 s
+/// took 15 s). Measured per scene at the first size, on sampled tiles
+/// (WhittedRenderer::EstimateSeconds): an RT render, and LMM renders with the first variant
+/// at the smallest and the largest CC (largest kI) and at the largest CC with the smallest
+/// kI, their shadow set-up (which grows with CC³) timed; every cell is extrapolated from
+/// them by its pixels, its CC (set-up by node count, render by log CC between the two), its
+/// kI (by kI² between the two), its runs (repeat + 1), and for the other methods by a cost
+/// model (none ≈ 0.5×RT, area with N samples ≈ (0.5 + 0.5·N)×RT, soft ≈ 3×RT), the
+/// competitors' cells and references included. Scenes are all loaded first, so a missing
 /// model fails before any work.
+///
+/// With --quality, the competitors' cells (BenchCompetitors: RT and the LMM default unless
+/// the matrix has them on the default back-end, soft, area N…) run round-robin with the
+/// matrix's cells and are in `results` (role "competitor"), and so is their reference
+/// (role "reference", after the round-robin).
 BenchReport RunBenchmarkReport(const BenchMatrix& matrix,
                                const std::function<void(int, int, const BenchResult&)>& progress = nullptr,
                                const std::function<void(double)>& estimate = nullptr);
@@ -148,8 +251,17 @@ std::string BenchHtml(const BenchReport& report, const std::string& title = "lig
 /// variants in seconds; then the ratios variant/RT, Ш/Grid, У/Ш, СТ/ОТ, СТ/Нет.
 std::string BenchMarkdown(const std::vector<BenchResult>& results);
 
-/// One line per cell with every measured figure.
+/// One line per cell with every measured figure (the competitors' cells and reference with
+/// their samples, role, PSNR, SSIM and shadow total against that table's reference).
 std::string BenchCsv(const std::vector<BenchResult>& results);
+
+/// The default-vs-competitors tables as Markdown (part of BenchQualityMarkdown).
+std::string BenchCompetitorsMarkdown(const BenchQuality& q);
+
+/// Every cell and the --quality tables as one JSON document (bench --json): {"repeat",
+/// "cells": [...], "quality": [{"scene", "width", "height", ..., "competitors": {"accel",
+/// "light_radii", "rows": [...], "equal_quality": {...}}}]}; NaN and infinities are null.
+std::string BenchJson(const BenchReport& report);
 
 /// Median of a non-empty list.
 double Median(std::vector<double> values);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -70,6 +71,70 @@ TEST(LoadBenchMatrix, ErrorsNameTheJsonPath) {
     EXPECT_THROW(LoadBenchMatrix("/nonexistent/m.json"), Error);
 }
 
+// Issue 45: the matrix file names its values' places for later messages, and the keys it
+// checks itself (an unknown back-end, an empty variant).
+TEST(LoadBenchMatrix, OriginsAndChecksOfIssue45) {
+    const fs::path p = WriteTemp("origins.json", R"({"cc": [50, 100], "ki": [1.5, 3]})");
+    const BenchMatrix m = LoadBenchMatrix(p.string());
+    ASSERT_EQ(m.ccOrigins.size(), 2u);
+    EXPECT_EQ(m.ccOrigins[1].Format(), p.string() + " /cc/1");
+    ASSERT_EQ(m.kiOrigins.size(), 2u);
+    EXPECT_EQ(m.kiOrigins[0].Format(), p.string() + " /ki/0");
+    EXPECT_NE(ErrorOf(R"({"accels": ["grid", "embre"]})").find("/accels/1: unknown ray-query back-end \"embre\" (choose"),
+              std::string::npos);
+    EXPECT_NE(ErrorOf(R"({"variants": [""]})").find("/variants/0: must not be empty"), std::string::npos);
+    EXPECT_NE(ErrorOf(R"({"ki": [16.000001]})").find("/ki/0: must be between 0.01 and 16, got 16.000001"),
+              std::string::npos);
+}
+
+// Issue 45: the estimate comes before any cell, counts CC (at 256 x 192 an LMM render at CC
+// 1200 takes about 9 times one at CC 20: each pixel needs nodes of its own), and a matrix
+// above maxSeconds is refused, also without an estimate callback (-q); a CC too large for
+// memory names where it was given.
+TEST(RunBenchmark, EstimateCountsCcAndTheLimitRefuses) {
+    BenchMatrix m;
+    m.scenes = {"builtin:gazebo"};
+    m.sizes = {{256, 192}};
+    m.variants = {"templates"};
+    m.repeat = 1;
+    m.noShadows = false;
+    auto estimateOf = [&](std::vector<int> cc) {
+        BenchMatrix e = m;
+        e.cc = std::move(cc);
+        e.maxSeconds = 1e-9;  // refused right after the estimate: nothing runs
+        double seconds = -1;
+        EXPECT_THROW(RunBenchmarkReport(e, nullptr, [&](double s) { seconds = s; }), Error);
+        return seconds;
+    };
+    const double small = estimateOf({20}), large = estimateOf({1200});
+    EXPECT_GT(small, 0);
+    EXPECT_GT(large, 2 * small);  // about 6 times, with RT's cell in both; margin for a busy machine
+    m.sizes = {{64, 48}};
+    m.cc = {20};
+    m.maxSeconds = 1e-9;
+    try {
+        RunBenchmarkReport(m);
+        ADD_FAILURE() << "no error";
+    } catch (const Error& e) {
+        const std::string what = e.what();
+        EXPECT_EQ(what.rfind("bench: the matrix (2 cells, 2 runs each) is estimated at ", 0), 0u) << what;
+        EXPECT_NE(what.find("; make it smaller, or --force runs it anyway"), std::string::npos) << what;
+    }
+    m.maxSeconds = 0;
+    EXPECT_EQ(RunBenchmarkReport(m).results.size(), 2u);
+    // A CC too large for the memory budget, named by where it came from.
+    setenv("LIGHTMESH_MEMORY_LIMIT", "64M", 1);
+    m.cc = {20, 3000};
+    m.ccOrigins = {SourceLoc("m.json", 0, 0, "/cc/0"), SourceLoc("m.json", 0, 0, "/cc/1")};
+    try {
+        RunBenchmarkReport(m, nullptr, [](double) {});
+        ADD_FAILURE() << "no error";
+    } catch (const Error& e) {
+        EXPECT_EQ(std::string(e.what()).rfind("m.json /cc/1: light mesh ", 0), 0u) << e.what();
+    }
+    unsetenv("LIGHTMESH_MEMORY_LIMIT");
+}
+
 TEST(BenchTablePreset, QuickDividesSizes) {
     EXPECT_THROW(BenchTablePreset(5, false, "/"), Error);
     EXPECT_THROW(BenchTablePreset(3, false, "/nonexistent"), Error);  // names the missing scene
@@ -128,12 +193,21 @@ TEST(RunBenchmark, QuickHtmlReport) {
     int calls = 0;
     double estimate = -1;
     const BenchReport report = RunBenchmarkReport(
-        m, [&](int done, int total, const BenchResult&) { EXPECT_EQ(done, ++calls); EXPECT_EQ(total, 8); },
+        m, [&](int done, int total, const BenchResult&) { EXPECT_EQ(done, ++calls); EXPECT_EQ(total, 16); },
         [&](double s) { estimate = s; });
-    EXPECT_EQ(calls, 8);
+    EXPECT_EQ(calls, 16);
     EXPECT_GE(estimate, 0);
-    // none, RT, 2 variants × 2 kI, and with --quality the penumbra mode per kI.
-    ASSERT_EQ(report.results.size(), 8u);
+    // none, RT, 2 variants × 2 kI, and with --quality the penumbra mode per kI; then the
+    // competitors' cells: soft, the LMM default (the matrix has no consensus), area N = 1,
+    // 2, 4, 8, 16 (RT is the matrix's, on the default back-end) and their reference.
+    ASSERT_EQ(report.results.size(), 16u);
+    int competitors = 0, references = 0;
+    for (const BenchResult& r : report.results) {
+        competitors += r.role == "competitor";
+        references += r.role == "reference";
+    }
+    EXPECT_EQ(competitors, 7);
+    EXPECT_EQ(references, 1);
     int penumbrae = 0;
     for (const BenchResult& r : report.results)
         if (r.method == "penumbra") {
@@ -165,7 +239,144 @@ TEST(RunBenchmark, QuickHtmlReport) {
     EXPECT_NE(html.find("light radius"), std::string::npos);  // the penumbra image's caption
     EXPECT_NE(html.find("area-light reference, R ="), std::string::npos);  // beside the reference
     EXPECT_TRUE(fs::exists(report.quality[0].refImage));
+    // The competitors' rows, their images' captions and their reference's.
+    EXPECT_EQ(report.quality[0].competitors.rows.size(), 1u + 1u + 1u + 5u + 1u);
+    EXPECT_NE(html.find("competitors' soft (default)"), std::string::npos);
+    EXPECT_NE(html.find("competitors' area N = 16"), std::string::npos);
+    EXPECT_NE(html.find("competitors' reference: area N = 8"), std::string::npos);
+    EXPECT_NE(html.find("The default (soft) against its competitors"), std::string::npos);
+    EXPECT_NE(html.find("soft is "), std::string::npos);  // the equal-quality verdict
+    // The matrix's tables leave the competitors' cells out.
+    EXPECT_EQ(BenchMarkdown(report.results).find("soft"), std::string::npos);
+    EXPECT_NE(BenchCsv(report.results).find(",competitor,"), std::string::npos);
+    EXPECT_NE(BenchJson(report).find("\"equal_quality\""), std::string::npos);
     fs::remove_all(dir);
+}
+
+// The default against its competitors on the builtin gazebo (its lights' own radii,
+// penumbrae a few pixels wide at 96×72): every row, the reference's shadow total is its
+// own, area's PSNR rises with N, and the equal-quality point is filled in.
+TEST(RunBenchmark, DefaultAgainstCompetitors) {
+    BenchMatrix m;
+    m.scenes = {"builtin:gazebo"};
+    m.sizes = {{96, 72}};
+    m.variants = {"consensus"};
+    m.noShadows = false;
+    m.penumbrae = false;
+    m.repeat = 1;
+    m.quality = true;
+    m.refSamples = 64;
+    m.areaSamples = {1};
+    const BenchReport report = RunBenchmarkReport(m, nullptr, nullptr);
+    ASSERT_EQ(report.quality.size(), 1u);
+    const BenchCompetitors& c = report.quality[0].competitors;
+    EXPECT_EQ(c.accel, kDefaultAccelerator);
+    EXPECT_FALSE(c.radiusOverride);
+    ASSERT_EQ(c.lightRadii.size(), 2u);
+    EXPECT_GT(c.lightRadii[0], 0.0f);  // the lights' own radii, not R = kI·h
+    EXPECT_NE(c.lightRadii[0], report.quality[0].radius);
+    // RT and the LMM default are the matrix's own cells (same back-end): not run twice.
+    int rt = 0, lmm = 0;
+    for (const BenchResult& r : report.results) {
+        rt += r.method == "rt";
+        lmm += r.method == "lmm";
+    }
+    EXPECT_EQ(rt, 1);
+    EXPECT_EQ(lmm, 1);
+    ASSERT_EQ(c.rows.size(), 9u);
+    const std::vector<std::string> methods{"rt", "soft", "lmm", "area", "area", "area", "area", "area", "area"};
+    const std::vector<int> samples{0, 0, 0, 1, 2, 4, 8, 16, 64};
+    for (size_t i = 0; i < c.rows.size(); ++i) {
+        const CompetitorRow& row = c.rows[i];
+        EXPECT_EQ(row.method, methods[i]) << i;
+        EXPECT_EQ(row.samples, samples[i]) << i;
+        EXPECT_EQ(row.reference, i + 1 == c.rows.size()) << i;
+        EXPECT_GT(row.seconds, 0) << row.label;
+        EXPECT_TRUE(std::isfinite(row.shadowRatio)) << row.label;
+        EXPECT_GT(row.psnr, 20) << row.label;
+    }
+    const CompetitorRow& ref = c.rows.back();
+    EXPECT_DOUBLE_EQ(ref.shadowRatio, 1.0);
+    EXPECT_EQ(ref.psnr, 99.0);  // equal to itself
+    // Area sampling converges: more rays per light, a higher PSNR (strictly, on a scene
+    // with penumbrae; the noise halves its power with each doubling, about +3 dB or more).
+    for (size_t i = 4; i < 8; ++i) EXPECT_GT(c.rows[i].psnr, c.rows[i - 1].psnr) << c.rows[i].label;
+    // The shadow totals of soft and of area are near the reference's, RT's too (a hard
+    // shadow takes about the light a soft one does).
+    for (size_t i : {0, 1, 3, 7}) EXPECT_NEAR(c.rows[i].shadowRatio, 1.0, 0.05) << c.rows[i].label;
+    const EqualQuality& e = c.equal;
+    EXPECT_TRUE(e.valid);
+    EXPECT_DOUBLE_EQ(e.targetPsnr, c.rows[1].psnr);
+    EXPECT_TRUE(std::isfinite(e.samples));
+    EXPECT_GE(e.samples, 1.0);
+    EXPECT_TRUE(std::isfinite(e.areaSeconds));
+    EXPECT_GT(e.areaSeconds, 0);
+    EXPECT_DOUBLE_EQ(e.softSeconds, c.rows[1].seconds);
+    EXPECT_TRUE(std::isfinite(e.speedup));
+    EXPECT_GT(e.speedup, 0);
+    EXPECT_DOUBLE_EQ(e.speedup, e.areaSeconds / e.softSeconds);
+    // The table, its reference row and the verdict; the CSV's and JSON's figures.
+    const std::string md = BenchQualityMarkdown(report);
+    EXPECT_NE(md.find("the lights' own radii"), std::string::npos) << md;
+    EXPECT_NE(md.find("| reference: area N=64 |"), std::string::npos) << md;
+    EXPECT_NE(md.find("| soft (default) |"), std::string::npos) << md;
+    EXPECT_NE(md.find("| area N=16 |"), std::string::npos) << md;
+    EXPECT_NE(md.find("than area sampling at equal PSNR"), std::string::npos) << md;
+    EXPECT_NE(md.find("every light of radius R = kI·h"), std::string::npos) << md;  // the old tables say theirs
+    const std::string csv = BenchCsv(report.results);
+    EXPECT_NE(csv.find("samples,role,ref_psnr,ref_ssim,shadow_total_ratio"), std::string::npos);
+    EXPECT_NE(csv.find(",64,reference,99.000,1.00000,1.0000"), std::string::npos) << csv;
+    const std::string json = BenchJson(report);
+    EXPECT_NE(json.find("\"speedup\""), std::string::npos);
+    EXPECT_NE(json.find("\"shadow_total_ratio\": 1.0"), std::string::npos) << json;
+
+    // --light-radius: every row and the reference at that radius.
+    m.lightRadius = 0.3f;
+    m.competitorSamples = {1, 4};
+    const BenchReport over = RunBenchmarkReport(m, nullptr, nullptr);
+    const BenchCompetitors& o = over.quality[0].competitors;
+    EXPECT_TRUE(o.radiusOverride);
+    EXPECT_EQ(o.lightRadii, (std::vector<float>{0.3f, 0.3f}));
+    EXPECT_EQ(o.rows.size(), 6u);
+    EXPECT_NE(BenchQualityMarkdown(over).find("every light of radius 0.3 (--light-radius)"), std::string::npos);
+}
+
+// The equal-quality point: interpolated in log2 N, extrapolated past the largest N (time
+// linear in N), at most the smallest N, or none when PSNR stops rising.
+TEST(BenchEqualQuality, InterpolatesInLog2N) {
+    const std::vector<AreaPoint> area{{1, 30, 1.0}, {2, 33, 2.0}, {4, 36, 4.0}, {16, 42, 16.0}};
+    // Between N = 2 and 4, a third of the way in PSNR: N = 2^(1 + 1/3), time 2 + 2/3.
+    EqualQuality e = EqualQualityFrom(area, 34, 0.5);
+    EXPECT_TRUE(e.valid);
+    EXPECT_FALSE(e.extrapolated);
+    EXPECT_NEAR(e.samples, std::exp2(1.0 + 1.0 / 3), 1e-9);
+    EXPECT_NEAR(e.areaSeconds, 2.0 + 2.0 / 3, 1e-9);
+    EXPECT_NEAR(e.speedup, (2.0 + 2.0 / 3) / 0.5, 1e-9);
+    // Exactly at a measured N.
+    e = EqualQualityFrom(area, 36, 1.0);
+    EXPECT_NEAR(e.samples, 4, 1e-9);
+    EXPECT_NEAR(e.areaSeconds, 4, 1e-9);
+    // Past N = 16: the line through N = 4 and 16 (+6 dB over 2 octaves) reaches 45 dB one
+    // octave on, N = 32; time linear in N through (4, 4 s) and (16, 16 s): 32 s.
+    e = EqualQualityFrom(area, 45, 2.0);
+    EXPECT_TRUE(e.valid);
+    EXPECT_TRUE(e.extrapolated);
+    EXPECT_NEAR(e.samples, 32, 1e-9);
+    EXPECT_NEAR(e.areaSeconds, 32, 1e-9);
+    EXPECT_NEAR(e.speedup, 16, 1e-9);
+    // Already at N = 1.
+    e = EqualQualityFrom(area, 25, 0.5);
+    EXPECT_TRUE(e.valid);
+    EXPECT_TRUE(e.atMost);
+    EXPECT_EQ(e.samples, 1);
+    EXPECT_EQ(e.areaSeconds, 1.0);
+    // PSNR falling at the end: no line to extrapolate along.
+    e = EqualQualityFrom({{1, 30, 1.0}, {2, 33, 2.0}, {4, 32, 4.0}}, 40, 1.0);
+    EXPECT_FALSE(e.valid);
+    EXPECT_TRUE(e.extrapolated);
+    // The order of the points does not matter.
+    e = EqualQualityFrom({{16, 42, 16.0}, {1, 30, 1.0}, {4, 36, 4.0}, {2, 33, 2.0}}, 34, 0.5);
+    EXPECT_NEAR(e.samples, std::exp2(1.0 + 1.0 / 3), 1e-9);
 }
 
 // --thin-check off: the penumbra cells trace no checking rays (the default's do, above).

@@ -190,7 +190,9 @@ std::string BenchHtml(const BenchReport& report, const std::string& title) {
                     "</style></head><body>\n<h1>" + HtmlEscape(title) + "</h1>\n";
     o += StringPrintf("<p>Seconds are the median of %d timed run(s) after a warm-up. Charts: render time and the LMM/RT "
                       "ratio against kI per variant (dashed: RT). Images: every cell, with a zoomed crop (magenta "
-                      "window) where the LMM images differ most from RT.</p>\n", report.repeat);
+                      "window) where the LMM and soft images differ most from RT; with --quality also the default "
+                      "(soft) against its competitors, captioned \"competitors'\", and their reference.</p>\n",
+                      report.repeat);
     const std::vector<const BenchResult*> groups = SceneSizeGroups(rs);
     for (const BenchResult* g : groups) {
         std::vector<BenchResult> group;
@@ -203,13 +205,13 @@ std::string BenchHtml(const BenchReport& report, const std::string& title) {
         // Charts.
         const BenchResult* rt = nullptr;
         for (const BenchResult& r : group)
-            if (r.method == "rt" && !rt) rt = &r;
+            if (r.method == "rt" && !rt && r.role.empty()) rt = &r;
         std::vector<Series> secs, ratios;
         std::set<int> ccs;
         for (const BenchResult& r : group)
-            if (r.method == "lmm") ccs.insert(r.cc);
+            if (r.method == "lmm" && r.role.empty()) ccs.insert(r.cc);
         for (const BenchResult& r : group) {
-            if (r.method != "lmm") continue;
+            if (r.method != "lmm" || !r.role.empty()) continue;  // the matrix's cells only
             const std::string name = r.paperName + " " + r.variant + (ccs.size() > 1 ? StringPrintf(" CC%d", r.cc) : "");
             auto it = std::find_if(secs.begin(), secs.end(), [&](const Series& s) { return s.name == name; });
             if (it == secs.end()) secs.push_back({name, {}}), ratios.push_back({name, {}}), it = secs.end() - 1;
@@ -227,7 +229,8 @@ std::string BenchHtml(const BenchReport& report, const std::string& title) {
             const Image rtImage = ReadImage(rt->image);
             std::vector<Image> lmm;
             for (const BenchResult& r : group)
-                if ((r.method == "lmm" || r.method == "penumbra") && !r.image.empty()) lmm.push_back(ReadImage(r.image));
+                if ((r.method == "lmm" || r.method == "penumbra" || r.method == "soft") && !r.image.empty())
+                    lmm.push_back(ReadImage(r.image));
             const Window win = MostDifferent(rtImage, lmm);
             const double fullH = 240.0 * g->height / g->width;
             const double zoom = 240.0 / win.w;  // crop width 240 px
@@ -251,17 +254,31 @@ std::string BenchHtml(const BenchReport& report, const std::string& title) {
                 if (q.scene == g->scene && q.width == g->width && q.height == g->height && !q.refImage.empty())
                     figure(q.refImage, StringPrintf("area-light reference, R = %.3g, N = %d, %.2f s", q.radii[q.mainRadius],
                                                     q.refSamples, q.refSeconds[q.mainRadius]));
+            auto radiiText = [&](const std::string& scene, int width, int height) {
+                for (const BenchQuality& q : report.quality)
+                    if (q.scene == scene && q.width == width && q.height == height) return RadiiText(q.competitors);
+                return std::string("the lights' own radii");
+            };
             for (const BenchResult& r : group) {
                 if (r.image.empty()) continue;
+                // The competitors' cells say so; the reference is the competitors' (the
+                // lights' own radii, or --light-radius).
+                const std::string competitor = r.role == "competitor" ? "competitors' " : "";
                 const std::string caption =
-                    r.method == "penumbra"
+                    r.role == "reference" ? StringPrintf("competitors' reference: area N = %d, %s, %.2f s", r.samples,
+                                                         radiiText(g->scene, g->width, g->height).c_str(), r.median)
+                    : r.method == "soft"  ? StringPrintf("soft (default), %s, %s, %.3f s", r.accel.c_str(),
+                                                        radiiText(g->scene, g->width, g->height).c_str(), r.median)
+                    : r.method == "area"  ? StringPrintf("area N = %d, %s, %s, %.3f s", r.samples, r.accel.c_str(),
+                                                        radiiText(g->scene, g->width, g->height).c_str(), r.median)
+                    : r.method == "penumbra"
                         ? StringPrintf("%s (%s) CC %d kI %g, light radius %.3g, %.3f s", r.paperName.c_str(),
                                        r.variant.c_str(), r.cc, r.ki, r.lightRadius, r.median)
                     : r.method == "lmm" ? StringPrintf("%s (%s) CC %d kI %g, %.3f s", r.paperName.c_str(), r.variant.c_str(), r.cc,
                                                      r.ki, r.median)
                                       : StringPrintf("%s (%s), %.3f s", r.method == "rt" ? "RT" : "no shadows",
                                                      r.accel.c_str(), r.median);
-                figure(r.image, caption);
+                figure(r.image, competitor + caption);
             }
             o += "</div>\n";
         }

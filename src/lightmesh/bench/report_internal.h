@@ -16,4 +16,8 @@ inline float Luma(const Color& c) { return 0.2126f * c.r + 0.7152f * c.g + 0.072
 /// and the report's sections.
 std::vector<const BenchResult*> SceneSizeGroups(const std::vector<BenchResult>& rs);
 
+/// The competitors table's light radii in words: "the lights' own radii 0.173, 0.164" (the
+/// range past 6 lights), or "every light of radius R (--light-radius)".
+std::string RadiiText(const BenchCompetitors& c);
+
 }  // namespace lm

@@ -4,6 +4,8 @@
 #include "lightmesh/bench/benchmark.h"
 #include "lightmesh/bench/report_internal.h"
 
+#include <tbb/global_control.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -11,6 +13,7 @@
 #include <map>
 #include <memory>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 
@@ -24,6 +27,7 @@
 #include "lightmesh/render/whitted.h"
 #include "lightmesh/scene/scene_file.h"
 #include "lightmesh/shadow/light_mesh.h"
+#include "lightmesh/shadow/shadow.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/system.h"
 
@@ -95,6 +99,15 @@ long long CountLeaks(const Image& rt, const Image& none, const Image& img, float
     return leaks;
 }
 
+/// Σ over the image of (no shadows − img) in linear luminance: the light the image's
+/// shadows take away (the competitors table's shadow total).
+double ShadowTotal(const Image& none, const Image& img) {
+    double sum = 0;
+    for (size_t i = 0; i < img.pixels.size() && i < none.pixels.size(); ++i)
+        sum += static_cast<double>(Luma(none.pixels[i])) - static_cast<double>(Luma(img.pixels[i]));
+    return sum;
+}
+
 struct LoadedScene {
     Scene scene;
     std::map<std::string, std::unique_ptr<Accelerator>> accels;
@@ -102,9 +115,137 @@ struct LoadedScene {
 
 }  // namespace
 
+EqualQuality EqualQualityFrom(std::vector<AreaPoint> area, double targetPsnr, double softSeconds) {
+    EqualQuality e;
+    e.targetPsnr = targetPsnr;
+    e.softSeconds = softSeconds;
+    area.erase(std::remove_if(area.begin(), area.end(), [](const AreaPoint& p) { return p.samples < 1; }), area.end());
+    std::sort(area.begin(), area.end(), [](const AreaPoint& a, const AreaPoint& b) { return a.samples < b.samples; });
+    if (area.empty() || !std::isfinite(targetPsnr)) return e;
+    auto finish = [&](double samples, double seconds) {
+        e.samples = samples;
+        e.areaSeconds = seconds;
+        e.speedup = softSeconds > 0 ? seconds / softSeconds : 0;
+        e.valid = std::isfinite(samples) && samples > 0 && std::isfinite(seconds) && seconds > 0 && softSeconds > 0;
+        return e;
+    };
+    if (area.front().psnr >= targetPsnr) {  // the fewest samples already do
+        e.atMost = true;
+        return finish(area.front().samples, area.front().seconds);
+    }
+    // The first pair a.psnr < target <= b.psnr: linear in log2 N, the time likewise.
+    for (size_t i = 1; i < area.size(); ++i) {
+        const AreaPoint &a = area[i - 1], &b = area[i];
+        if (b.psnr < targetPsnr) continue;
+        const double f = (targetPsnr - a.psnr) / (b.psnr - a.psnr);
+        const double la = std::log2(a.samples), lb = std::log2(b.samples);
+        return finish(std::exp2(la + f * (lb - la)), a.seconds + f * (b.seconds - a.seconds));
+    }
+    // Past the largest N: the line through the last two points (PSNR in log2 N), and the
+    // time linear in N.
+    e.extrapolated = true;
+    if (area.size() < 2) return e;
+    const AreaPoint &a = area[area.size() - 2], &b = area.back();
+    if (!(b.psnr > a.psnr)) return e;  // not rising: no line to follow
+    const double f = (targetPsnr - a.psnr) / (b.psnr - a.psnr);
+    const double la = std::log2(a.samples), lb = std::log2(b.samples);
+    const double n = std::exp2(la + f * (lb - la));
+    return finish(n, b.seconds + (n - b.samples) * (b.seconds - a.seconds) / (b.samples - a.samples));
+}
+
 /// The light radius of --quality's main reference and of the penumbra cells: R = r = kI·h of
 /// the matrix's first (CC, kI), so that R follows the scene's size (about 2 % of its longest
 /// side at CC 100, kI 2).
+static float QualityRadius(const Scene& scene, const BenchMatrix& m);
+
+namespace {
+
+/// Tiles a probe renders (WhittedRenderer::EstimateSeconds): enough for every thread to
+/// have several, few enough to take a fraction of a second.
+int ProbeTiles() {
+    return std::max(64, 8 * static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)));
+}
+
+/// Where m.cc[i] / m.ki[i] came from, for the light mesh's messages ("--cc", "m.json
+/// /cc/2"): set in `options` when known.
+void NameOrigins(const BenchMatrix& m, int cc, float ki, RenderOptions* options) {
+    const auto ci = std::find(m.cc.begin(), m.cc.end(), cc) - m.cc.begin();
+    const auto ki_ = std::find(m.ki.begin(), m.ki.end(), ki) - m.ki.begin();
+    if (static_cast<size_t>(ci) < m.ccOrigins.size()) options->origins["cc"] = m.ccOrigins[static_cast<size_t>(ci)];
+    if (static_cast<size_t>(ki_) < m.kiOrigins.size()) options->origins["ki"] = m.kiOrigins[static_cast<size_t>(ki_)];
+}
+
+/// The bench's estimate of one scene's LMM cells (issue 45), measured on sampled tiles at
+/// the first size with the first variant: set-up and render seconds at the smallest and
+/// the largest CC (at the largest kI), and at the largest CC with the smallest kI.
+class LmmCost {
+  public:
+    LmmCost(const Scene& scene, const Accelerator& accel, const BenchMatrix& m, RenderOptions base) {
+        if (m.cc.empty() || m.ki.empty() || m.variants.empty()) return;
+        bounds_ = scene.mesh.Bounds();
+        ccLo_ = *std::min_element(m.cc.begin(), m.cc.end());
+        ccHi_ = *std::max_element(m.cc.begin(), m.cc.end());
+        kiLo_ = *std::min_element(m.ki.begin(), m.ki.end());
+        kiHi_ = *std::max_element(m.ki.begin(), m.ki.end());
+        base.shadows = "lmm";
+        base.lightMesh.variant = m.variants.front();
+        base.lightMesh.cellSummaries = m.cellSummaries;
+        auto probe = [&](int cc, float ki, double* setup, double* render) {
+            RenderOptions o = base;
+            o.lightMesh.cc = cc;
+            o.lightMesh.ki = ki;
+            NameOrigins(m, cc, ki, &o);
+            const RenderJob job(scene, o, &accel);
+            *setup = job.ShadowSetupSeconds();
+            *render = job.Renderer().EstimateSeconds(ProbeTiles());
+        };
+        probe(ccHi_, kiHi_, &setupHi_, &renderHi_);
+        setupLo_ = setupHi_;
+        renderLo_ = renderHi_;
+        if (ccLo_ != ccHi_) probe(ccLo_, kiHi_, &setupLo_, &renderLo_);
+        kiRatio_ = 1;
+        if (kiLo_ != kiHi_) {
+            double setup = 0, render = 0;
+            probe(ccHi_, kiLo_, &setup, &render);
+            kiRatio_ = renderHi_ > 0 ? std::clamp(render / renderHi_, 0.05, 1.0) : 1.0;
+        }
+        nodesLo_ = Nodes(ccLo_);
+        nodesHi_ = Nodes(ccHi_);
+        active_ = true;
+    }
+    /// Seconds of one run of every (cc, ki) pair of the lists, at `pixelRatio` times the
+    /// first size's pixels: set-up by CC, render by CC times a factor of kI (O(|cc| + |ki|),
+    /// for matrices of thousands of values).
+    double SumSeconds(const std::vector<int>& ccs, const std::vector<float>& kis, double pixelRatio) const {
+        if (!active_) return 0;
+        double setup = 0, render = 0, kiFactors = 0;
+        for (int cc : ccs) {
+            const double t = ccHi_ > ccLo_ ? (std::log(double(cc)) - std::log(double(ccLo_))) /
+                                                 (std::log(double(ccHi_)) - std::log(double(ccLo_)))
+                                           : 1.0;
+            render += std::max(0.0, renderLo_ + t * (renderHi_ - renderLo_));
+            const double n = Nodes(cc);
+            setup += std::max(0.0, nodesHi_ > nodesLo_
+                                       ? setupLo_ + (setupHi_ - setupLo_) * (n - nodesLo_) / (nodesHi_ - nodesLo_)
+                                       : setupHi_);
+        }
+        const double lo2 = double(kiLo_) * kiLo_, hi2 = double(kiHi_) * kiHi_;
+        for (float ki : kis)
+            kiFactors += hi2 > lo2 ? kiRatio_ + (1 - kiRatio_) * (double(ki) * ki - lo2) / (hi2 - lo2) : 1.0;
+        return setup * static_cast<double>(kis.size()) + render * kiFactors * pixelRatio;
+    }
+
+  private:
+    double Nodes(int cc) const { return static_cast<double>(LightMeshLattice::Make(bounds_, cc, kiHi_).NodeCount()); }
+    bool active_ = false;
+    Bounds3 bounds_;
+    int ccLo_ = 0, ccHi_ = 0;
+    float kiLo_ = 0, kiHi_ = 0;
+    double setupLo_ = 0, setupHi_ = 0, renderLo_ = 0, renderHi_ = 0, kiRatio_ = 1, nodesLo_ = 0, nodesHi_ = 0;
+};
+
+}  // namespace
+
 static float QualityRadius(const Scene& scene, const BenchMatrix& m) {
     return m.ki.front() * scene.mesh.Bounds().MaxExtent() / static_cast<float>(m.cc.front());
 }
@@ -118,9 +259,38 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
     if (m.quality && (m.cc.empty() || m.ki.empty())) ThrowError("bench: --quality needs a CC and a kI");
     for (const std::string& v : m.variants) ParseLightMeshVariant(v);  // fail before any work
     if (!m.imageDir.empty()) CheckWritableFolder((std::filesystem::path(m.imageDir) / "x.png").string());
+    for (int n : m.competitorSamples)
+        if (n < 1 || n > 4096) ThrowError("bench: area samples per light must be 1 to 4096, got %d", n);
+    if (m.lightRadius && !(*m.lightRadius >= 0 && std::isfinite(*m.lightRadius)))
+        ThrowError("bench: --light-radius must be finite and >= 0");
+    // The default-vs-competitors cells (--quality): on the renderer's default back-end; RT
+    // and the paper's LMM at CC 100, kI 2 are the matrix's own cells when it has them there.
+    const std::string compAccel = kDefaultAccelerator;
+    const LightMeshOptions lmmDefaults;
+    const bool compRtInMatrix = std::find(m.accels.begin(), m.accels.end(), compAccel) != m.accels.end();
+    const bool compLmmInMatrix =
+        m.accels.front() == compAccel &&
+        std::any_of(m.variants.begin(), m.variants.end(),
+                    [](const std::string& v) { return ParseLightMeshVariant(v).name == kDefaultLightMeshVariant; }) &&
+        std::find(m.cc.begin(), m.cc.end(), lmmDefaults.cc) != m.cc.end() &&
+        std::find(m.ki.begin(), m.ki.end(), lmmDefaults.ki) != m.ki.end();
+    const int competitorCells = m.quality ? (compRtInMatrix ? 0 : 1) + 1 + (compLmmInMatrix ? 0 : 1) +
+                                                static_cast<int>(m.competitorSamples.size()) + 1  // + the reference
+                                          : 0;
     const int perSize = (m.noShadows ? 1 : 0) + static_cast<int>(m.accels.size()) +
                         static_cast<int>(m.cc.size() * m.ki.size() *
-                                         (m.variants.size() + (m.quality && m.penumbrae ? 1 : 0)));
+                                         (m.variants.size() + (m.quality && m.penumbrae ? 1 : 0))) +
+                        competitorCells;
+    // Counted wide: a matrix file's lists multiply (10^10 cells overflowed an int).
+    const double cellCount = static_cast<double>(m.scenes.size()) * static_cast<double>(m.sizes.size()) *
+                             ((m.noShadows ? 1.0 : 0.0) + static_cast<double>(m.accels.size()) +
+                              static_cast<double>(m.cc.size()) * static_cast<double>(m.ki.size()) *
+                                  static_cast<double>(m.variants.size() + (m.quality && m.penumbrae ? 1 : 0)) +
+                              competitorCells);
+    if (cellCount > 1e8)
+        ThrowError("bench: the matrix has %s cells, more than the 100,000,000 one run may hold (scenes x sizes x CC x "
+                   "kI x variants, plus RT and no shadows)",
+                   FormatCount(static_cast<uint64_t>(std::min(cellCount, 1.8e19))).c_str());
     const int total = static_cast<int>(m.scenes.size() * m.sizes.size()) * perSize;
     int done = 0;
     BenchReport report;
@@ -136,6 +306,8 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
         ls->scene = LoadScene(spec, load, &warnings);
         for (const std::string& a : m.accels)
             ls->accels[a] = CreateAccelerator(a, ls->scene.mesh, ls->scene.render.accelOptions);
+        if (m.quality && !ls->accels.count(compAccel))
+            ls->accels[compAccel] = CreateAccelerator(compAccel, ls->scene.mesh, ls->scene.render.accelOptions);
         loaded.push_back(std::move(ls));
     }
 
@@ -147,7 +319,17 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
         return (*job)->Render();
     };
 
-    if (estimate) {
+    // A matrix over the limit is refused before its first cell; `partial`: the scenes
+    // measured so far already exceed it.
+    auto refuse = [&](double seconds, bool partial) {
+        ThrowError("bench: the matrix (%s cells, %d runs each) is estimated at %s%s, more than the limit of %s "
+                   "(measured on sampled tiles of RT and LMM renders at %dx%d); make it smaller, or --force runs it "
+                   "anyway",
+                   FormatCount(static_cast<uint64_t>(cellCount)).c_str(), m.repeat + 1,
+                   partial ? "at least " : "", FormatDuration(seconds).c_str(), FormatDuration(m.maxSeconds).c_str(),
+                   m.sizes.front().first, m.sizes.front().second);
+    };
+    if (estimate || m.maxSeconds > 0) {
         double seconds = 0;
         for (size_t si = 0; si < loaded.size(); ++si) {
             const Scene& scene = loaded[si]->scene;
@@ -155,25 +337,37 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
             o.width = m.sizes.front().first;
             o.height = m.sizes.front().second;
             o.shadows = "rt";
-            std::unique_ptr<RenderJob> keep;
-            const double rt = render(scene, *loaded[si]->accels[m.accels.front()], o, nullptr, &keep).seconds;
+            // Sampled tiles, not a whole render: a 16384 x 16384 matrix is estimated in
+            // about a second.
+            const Accelerator& probeAccel = *loaded[si]->accels[m.accels.front()];
+            const double rt = RenderJob(scene, o, &probeAccel).Renderer().EstimateSeconds(ProbeTiles());
+            const LmmCost lmm(scene, probeAccel, m, o);
             const double px0 = static_cast<double>(o.width) * o.height;
             for (const auto& size : m.sizes) {
-                const double unit = rt * (static_cast<double>(size.first) * size.second / px0) * (m.repeat + 1);
+                const double pixelRatio = static_cast<double>(size.first) * size.second / px0;
+                const double unit = rt * pixelRatio * (m.repeat + 1);
                 double cells = (m.noShadows ? 0.5 : 0.0) + static_cast<double>(m.accels.size());
                 const double lmmCells = static_cast<double>(m.variants.size()) + (m.quality && m.penumbrae ? 1.0 : 0.0);
-                for (size_t c = 0; c < m.cc.size(); ++c)
-                    for (float ki : m.ki) cells += lmmCells * 0.5 * ki * ki;
+                seconds += lmmCells * (m.repeat + 1) * lmm.SumSeconds(m.cc, m.ki, pixelRatio);
                 seconds += unit * cells;
                 if (m.quality) {
                     const double once = unit / (m.repeat + 1);
                     seconds += once * m.radiusFactors.size() * (0.5 + 0.5 * m.refSamples);
                     for (int n : m.areaSamples) seconds += once * (0.5 + 0.5 * n);
                     if (!m.noShadows) seconds += once * 0.5;
+                    // The competitors' cells, round-robin like the matrix's, and their
+                    // reference (once). soft ≈ 3×RT: measured 3–7× on the gazebo (its
+                    // lazily built cell lists weigh more in small images).
+                    double comp = 3.0 + (compRtInMatrix ? 0.0 : 1.0) +
+                                  (compLmmInMatrix ? 0.0 : 0.5 * lmmDefaults.ki * lmmDefaults.ki);
+                    for (int n : m.competitorSamples) comp += 0.5 + 0.5 * n;
+                    seconds += unit * comp + once * (0.5 + 0.5 * m.refSamples);
                 }
             }
+            if (m.maxSeconds > 0 && seconds > m.maxSeconds && si + 1 < loaded.size()) refuse(seconds, true);
         }
-        estimate(seconds);
+        if (estimate) estimate(seconds);
+        if (m.maxSeconds > 0 && seconds > m.maxSeconds) refuse(seconds, false);
     }
 
     for (size_t si = 0; si < loaded.size(); ++si) {
@@ -221,7 +415,8 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                 add(r, *accels[a], base);
             }
             // An LMM cell: a variant at (CC, kI), with a light radius for the penumbra mode.
-            auto addLmm = [&](const char* method, const std::string& name, int cc, float ki, float lightRadius) {
+            auto addLmm = [&](const char* method, const std::string& name, int cc, float ki, float lightRadius,
+                              const Accelerator& accel, const char* role) {
                 const LightMeshVariant variant = ParseLightMeshVariant(name);
                 BenchResult r;
                 r.method = method;
@@ -233,22 +428,58 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                 RenderOptions options = base;
                 options.lightMesh.cc = cc;
                 options.lightMesh.ki = ki;
+                NameOrigins(m, cc, ki, &options);
                 options.lightMesh.variant = name;
                 options.lightMesh.cellSummaries = m.cellSummaries;
-                options.areaLight.radius = lightRadius;
+                options.areaLight.radius = lightRadius;  // explicit: 0 keeps the paper's fixed radius
                 if (lightRadius > 0) {
                     options.lightMesh.thinCheck = m.thinCheck;
                     r.thinCheck = m.thinCheck;
                 }
-                add(r, lmmAccel, options);
+                r.role = role;
+                add(r, accel, options);
             };
             for (int cc : m.cc)
                 for (float ki : m.ki)
-                    for (const std::string& v : m.variants) addLmm("lmm", v, cc, ki, 0.0f);
+                    for (const std::string& v : m.variants) addLmm("lmm", v, cc, ki, 0.0f, lmmAccel, "");
             // Contact-hardening penumbrae: the light radius of the main quality reference.
             if (m.quality && m.penumbrae)
                 for (int cc : m.cc)
-                    for (float ki : m.ki) addLmm("penumbra", kDefaultLightMeshVariant, cc, ki, QualityRadius(scene, m));
+                    for (float ki : m.ki)
+                        addLmm("penumbra", kDefaultLightMeshVariant, cc, ki, QualityRadius(scene, m), lmmAccel, "");
+            // The default against its competitors, on the renderer's default back-end, with
+            // the lights' own radii (or the bench's --light-radius): soft and area N…, and
+            // RT and the paper's LMM unless the matrix has them there. Timed round-robin
+            // with the matrix's cells.
+            const Accelerator& compAcc = m.quality ? *accels.at(compAccel) : lmmAccel;  // loaded with --quality
+            RenderOptions compBase = base;
+            if (m.lightRadius) compBase.areaLight.radius = *m.lightRadius;
+            if (m.quality) {
+                if (!compRtInMatrix) {
+                    BenchResult r;
+                    r.method = "rt";
+                    r.paperName = "RT";
+                    r.role = "competitor";
+                    add(r, compAcc, base);
+                }
+                BenchResult soft;
+                soft.method = "soft";
+                soft.paperName = "soft";
+                soft.role = "competitor";
+                add(soft, compAcc, compBase);
+                if (!compLmmInMatrix)
+                    addLmm("lmm", kDefaultLightMeshVariant, lmmDefaults.cc, lmmDefaults.ki, 0.0f, compAcc, "competitor");
+                for (int n : m.competitorSamples) {
+                    BenchResult r;
+                    r.method = "area";
+                    r.paperName = StringPrintf("area N=%d", n);
+                    r.samples = n;
+                    r.role = "competitor";
+                    RenderOptions o = compBase;
+                    o.areaLight.samples = n;
+                    add(r, compAcc, o);
+                }
+            }
             for (int i = -1; i < m.repeat; ++i) {  // i = -1: the warm-up pass
                 for (size_t c = 0; c < cells.size(); ++c) {
                     BenchResult& r = cells[c].r;
@@ -272,7 +503,11 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                                             : r.method == "penumbra" ? StringPrintf("cc%d-ki%g-%s-R%g-thin-%s", r.cc, r.ki,
                                                                                     r.variant.c_str(), r.lightRadius,
                                                                                     r.thinCheck.c_str())
-                                                                     : r.method + "-" + r.accel) + ".png";
+                                            : r.method == "area" ? StringPrintf("area-N%d-%s", r.samples, r.accel.c_str())
+                                                                 : r.method + "-" + r.accel) +
+                                           // the competitors' LMM beside the matrix's on another back-end
+                                           (r.method == "lmm" && !r.role.empty() ? "-" + r.accel : std::string()) +
+                                           ".png";
                         r.image = (std::filesystem::path(m.imageDir) / name).string();
                         WriteImage(r.image, rr.image);
                     }
@@ -299,7 +534,7 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
             const Image* rtImage = nullptr;
             const Image* noneImage = nullptr;
             for (size_t i = first; i < results.size(); ++i) {
-                if (results[i].method == "rt" && !rtImage) rtImage = &images[i];
+                if (results[i].method == "rt" && !rtImage && results[i].role.empty()) rtImage = &images[i];
                 if (results[i].method == "none") noneImage = &images[i];
             }
             Image noneOwned;
@@ -314,7 +549,7 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
             for (float f : m.radiusFactors) {
                 RenderOptions o = base;
                 o.shadows = "area";
-                o.areaLight.radius = q.radius * f;
+                o.areaLight.radius = q.radius * f;  // the override: every light this size
                 o.areaLight.samples = m.refSamples;
                 std::unique_ptr<RenderJob> keep;
                 RenderResult rr = render(scene, lmmAccel, o, nullptr, &keep);
@@ -323,12 +558,12 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                     if (!m.imageDir.empty()) {
                         q.refImage = (std::filesystem::path(m.imageDir) /
                                       (SceneStem(spec) + StringPrintf("-%dx%d-area-R%g-N%d.png", width, height,
-                                                                      o.areaLight.radius, m.refSamples)))
+                                                                      *o.areaLight.radius, m.refSamples)))
                                          .string();
                         WriteImage(q.refImage, rr.image);
                     }
                 }
-                q.radii.push_back(o.areaLight.radius);
+                q.radii.push_back(*o.areaLight.radius);
                 q.refSeconds.push_back(rr.seconds);
                 refs.push_back(std::move(rr.image));
             }
@@ -343,7 +578,7 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
             };
             for (size_t i = first; i < results.size(); ++i) {
                 const BenchResult& r = results[i];
-                if (r.method == "none") continue;
+                if (r.method == "none" || !r.role.empty()) continue;  // the competitors' cells: below
                 QualityRow row;
                 row.method = r.method;
                 row.variant = r.variant;
@@ -372,6 +607,116 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                 row.label = StringPrintf("area N=%d R=%.3g", n, q.radius);
                 judge(row, rr.image);
             }
+
+            // The default against its competitors: every row on the default back-end, the
+            // lights' own radii (or --light-radius), one reference of those radii.
+            BenchCompetitors& comp = q.competitors;
+            comp.accel = compAccel;
+            comp.lightRadii = LightRadii(scene, compBase);
+            comp.radiusOverride = compBase.areaLight.radius.has_value();
+            comp.refSamples = m.refSamples;
+            comp.repeat = m.repeat;
+            // The competitors' rows, as indices into `results`: RT, soft, LMM, area N…
+            std::vector<size_t> compCells;
+            auto findCell = [&](auto&& match) {
+                for (size_t i = first; i < results.size(); ++i)
+                    if (results[i].accel == compAccel && match(results[i])) return compCells.push_back(i);
+                ThrowError("bench: internal error: a competitors' cell is missing");
+            };
+            findCell([](const BenchResult& r) { return r.method == "rt"; });
+            findCell([](const BenchResult& r) { return r.method == "soft"; });
+            findCell([&](const BenchResult& r) {
+                return r.method == "lmm" && r.variant == kDefaultLightMeshVariant && r.cc == lmmDefaults.cc &&
+                       r.ki == lmmDefaults.ki;
+            });
+            for (int n : m.competitorSamples)
+                findCell([&](const BenchResult& r) { return r.method == "area" && r.samples == n; });
+            // No shadows on the same back-end: the shadow totals' zero.
+            const Image* compNone = nullptr;
+            for (size_t i = first; i < results.size(); ++i)
+                if (results[i].method == "none" && results[i].accel == compAccel) compNone = &images[i];
+            Image compNoneOwned;
+            if (!compNone) {
+                if (std::string(lmmAccel.Name()) == compAccel) {
+                    compNone = noneImage;
+                } else {
+                    RenderOptions o = base;
+                    o.shadows = "none";
+                    std::unique_ptr<RenderJob> keep;
+                    compNoneOwned = render(scene, compAcc, o, nullptr, &keep).image;
+                    compNone = &compNoneOwned;
+                }
+            }
+            // The reference: area with refSamples rays per light at the same radii; one run,
+            // after the round-robin.
+            BenchResult ref;
+            ref.scene = spec;
+            ref.width = width;
+            ref.height = height;
+            ref.method = "area";
+            ref.paperName = StringPrintf("reference area N=%d", m.refSamples);
+            ref.accel = compAccel;
+            ref.samples = m.refSamples;
+            ref.role = "reference";
+            Image refImage;
+            {
+                RenderOptions o = compBase;
+                o.shadows = "area";
+                o.areaLight.samples = m.refSamples;
+                std::unique_ptr<RenderJob> keep;
+                RenderResult rr = render(scene, compAcc, o, &ref.setupSeconds, &keep);
+                ref.seconds = {rr.seconds};
+                ref.median = rr.seconds;
+                ref.counters = rr.counters;
+                ref.peakMemoryBytes = PeakMemoryBytes();
+                if (!m.imageDir.empty()) {
+                    ref.image = (std::filesystem::path(m.imageDir) /
+                                 (SceneStem(spec) + StringPrintf("-%dx%d-reference-area-N%d-%s%s.png", width, height,
+                                                                 m.refSamples, compAccel.c_str(),
+                                                                 compBase.areaLight.radius
+                                                                     ? StringPrintf("-R%g", *compBase.areaLight.radius).c_str()
+                                                                     : "")))
+                                    .string();
+                    WriteImage(ref.image, rr.image);
+                }
+                refImage = std::move(rr.image);
+            }
+            const double refShadow = ShadowTotal(*compNone, refImage);
+            auto judgeCompetitor = [&](BenchResult& r, const Image& img) {
+                const ImageMetrics im = CompareImages(refImage, img);
+                r.refPsnr = std::isinf(im.psnr) ? 99.0 : im.psnr;
+                r.refSsim = im.ssim;
+                r.shadowRatio = refShadow > 0 ? ShadowTotal(*compNone, img) / refShadow
+                                              : std::numeric_limits<double>::quiet_NaN();
+                CompetitorRow row;
+                row.method = r.method;
+                row.samples = r.samples;
+                row.reference = r.role == "reference";
+                row.seconds = r.median;
+                row.runs = r.seconds.size();
+                row.setupSeconds = r.setupSeconds;
+                row.psnr = r.refPsnr;
+                row.ssim = r.refSsim;
+                row.shadowRatio = r.shadowRatio;
+                row.image = r.image;
+                row.label = row.reference      ? StringPrintf("reference: area N=%d", r.samples)
+                            : r.method == "rt"   ? "RT"
+                            : r.method == "soft" ? "soft (default)"
+                            : r.method == "lmm"  ? StringPrintf("LMM %s CC %d kI %g", r.variant.c_str(), r.cc, r.ki)
+                                                 : StringPrintf("area N=%d", r.samples);
+                comp.rows.push_back(std::move(row));
+            };
+            for (size_t i : compCells) judgeCompetitor(results[i], images[i]);
+            judgeCompetitor(ref, refImage);
+            std::vector<AreaPoint> area;
+            const CompetitorRow* softRow = nullptr;
+            for (const CompetitorRow& row : comp.rows) {
+                if (row.method == "area" && !row.reference) area.push_back({row.samples, row.psnr, row.seconds});
+                if (row.method == "soft") softRow = &row;
+            }
+            comp.equal = EqualQualityFrom(area, softRow->psnr, softRow->seconds);
+            results.push_back(std::move(ref));
+            if (progress) progress(++done, total, results.back());
             report.quality.push_back(std::move(q));
         }
     }
@@ -458,6 +803,8 @@ BenchMatrix LoadBenchMatrix(const std::string& path) {
         if (s.rfind("builtin:", 0) != 0 && std::filesystem::path(s).is_relative()) s = (folder / s).string();
     strings("variants", &m.variants);
     for (size_t i = 0; i < m.variants.size(); ++i) {
+        // "" would be the default variant: refused like --variants "".
+        if (m.variants[i].empty()) r.Fail(json::Index("/variants", i), "must not be empty (leave the key out for the default)");
         try {
             ParseLightMeshVariant(m.variants[i]);
         } catch (const Error& e) {
@@ -465,6 +812,11 @@ BenchMatrix LoadBenchMatrix(const std::string& path) {
         }
     }
     strings("accels", &m.accels);
+    const std::vector<std::string> accelNames = AcceleratorNames();
+    for (size_t i = 0; i < m.accels.size(); ++i)
+        if (std::find(accelNames.begin(), accelNames.end(), m.accels[i]) == accelNames.end())
+            r.Fail(json::Index("/accels", i), "unknown ray-query back-end " + json::Quoted(m.accels[i]) + " (choose " +
+                                                  json::JoinQuoted(accelNames) + ")");
     if (const Json* l = list("sizes")) {
         m.sizes.clear();
         for (size_t i = 0; i < l->size(); ++i) {
@@ -477,13 +829,17 @@ BenchMatrix LoadBenchMatrix(const std::string& path) {
     }
     if (const Json* l = list("cc")) {
         m.cc.clear();
-        for (size_t i = 0; i < l->size(); ++i)
+        for (size_t i = 0; i < l->size(); ++i) {
             m.cc.push_back(json::SettingInt(r, (*l)[i], json::Index("/cc", i), RenderSettingFor("cc")));
+            m.ccOrigins.push_back(SourceLoc(path, 0, 0, json::Index("/cc", i)));
+        }
     }
     if (const Json* l = list("ki")) {
         m.ki.clear();
-        for (size_t i = 0; i < l->size(); ++i)
+        for (size_t i = 0; i < l->size(); ++i) {
             m.ki.push_back(json::SettingFloat(r, (*l)[i], json::Index("/ki", i), RenderSettingFor("ki")));
+            m.kiOrigins.push_back(SourceLoc(path, 0, 0, json::Index("/ki", i)));
+        }
     }
     if (const Json* v = o.Find("repeat")) m.repeat = json::Int(r, *v, "/repeat", 1, 100);
     if (const Json* v = o.Find("thin_check"))

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "lightmesh/shadow/light_mesh.h"
 #include "lightmesh/shadow/light_mesh_counters.h"
 #include "lightmesh/util/error.h"
@@ -20,7 +22,7 @@ const BenchResult* Find(const std::vector<BenchResult>& rs, const BenchResult& l
                         int cc, float ki) {
     for (const BenchResult& r : rs)
         if (r.scene == like.scene && r.width == like.width && r.height == like.height && r.method == "lmm" &&
-            r.variant == variant && r.cc == cc && r.ki == ki)
+            r.variant == variant && r.cc == cc && r.ki == ki && r.role.empty())
             return &r;
     return nullptr;
 }
@@ -52,6 +54,7 @@ std::string BenchMarkdown(const std::vector<BenchResult>& rs) {
         std::string rtLine;
         for (const BenchResult& r : rs) {
             if (r.scene != g->scene || r.width != g->width || r.height != g->height) continue;
+            if (!r.role.empty()) continue;  // the competitors' cells: their own table (--quality)
             if (r.method == "none") none = &r;
             if (r.method == "rt") {
                 if (!rt) rt = &r;
@@ -120,7 +123,9 @@ std::string BenchCsv(const std::vector<BenchResult>& rs) {
         "scene,width,height,method,variant,paper_name,accel,cc,ki,median_s,runs_s,setup_s,camera_rays,shadow_rays,"
         "reflection_rays,local_segments,interpolations,mean_m,fallbacks,nodes_evaluated,peak_memory_bytes,image,"
         "uniform_cell_points,culled_segments,light_radius,penumbra_lights,patch_segments,thin_check,thin_checks,"
-        "thin_found\n";
+        "thin_found,samples,role,ref_psnr,ref_ssim,shadow_total_ratio\n";
+    // The competitors table's figures (NaN: not a row of it) as empty fields.
+    const auto figure = [](double v, const char* format) { return std::isnan(v) ? std::string() : StringPrintf(format, v); };
     for (const BenchResult& r : rs) {
         std::string runs;
         for (double s : r.seconds) runs += StringPrintf("%s%.4f", runs.empty() ? "" : " ", s);
@@ -130,7 +135,7 @@ std::string BenchCsv(const std::vector<BenchResult>& rs) {
         const bool lightMesh = r.method == "lmm" || r.method == "penumbra";
         const auto lmm = [&](LightMeshCount k) -> unsigned long long { return lightMesh ? Count(c, k) : 0; };
         const uint64_t interpolations = lmm(LightMeshCount::kInterpolations);
-        out += StringPrintf("%s,%d,%d,%s,%s,%s,%s,%d,%g,%.4f,%s,%.4f,%llu,%llu,%llu,%llu,%llu,%.2f,%llu,%llu,%llu,%s,%llu,%llu,%g,%llu,%llu,%s,%llu,%llu\n",
+        out += StringPrintf("%s,%d,%d,%s,%s,%s,%s,%d,%g,%.4f,%s,%.4f,%llu,%llu,%llu,%llu,%llu,%.2f,%llu,%llu,%llu,%s,%llu,%llu,%g,%llu,%llu,%s,%llu,%llu",
                             r.scene.c_str(), r.width, r.height, r.method.c_str(), r.variant.c_str(),
                             r.paperName.c_str(), r.accel.c_str(), r.cc, r.ki, r.median, runs.c_str(), r.setupSeconds,
                             static_cast<unsigned long long>(c.cameraRays), static_cast<unsigned long long>(c.shadowRays),
@@ -145,6 +150,8 @@ std::string BenchCsv(const std::vector<BenchResult>& rs) {
                             r.lightRadius,
                             lmm(LightMeshCount::kPenumbraLights), lmm(LightMeshCount::kPatchSegments),
                             r.thinCheck.c_str(), lmm(LightMeshCount::kThinChecks), lmm(LightMeshCount::kThinFound));
+        out += StringPrintf(",%d,%s,%s,%s,%s\n", r.samples, r.role.c_str(), figure(r.refPsnr, "%.3f").c_str(),
+                            figure(r.refSsim, "%.5f").c_str(), figure(r.shadowRatio, "%.4f").c_str());
     }
     return out;
 }
@@ -218,15 +225,90 @@ std::string PenumbraQualityMarkdown(const BenchQuality& q) {
 
 }  // namespace
 
+std::string RadiiText(const BenchCompetitors& c) {
+    if (c.lightRadii.empty()) return "no lights";
+    const auto [lo, hi] = std::minmax_element(c.lightRadii.begin(), c.lightRadii.end());
+    if (c.radiusOverride) return StringPrintf("every light of radius %.4g (--light-radius)", *lo);
+    std::string s = c.lightRadii.size() == 1 ? "the light's own radius " : "the lights' own radii ";
+    if (c.lightRadii.size() <= 6) {
+        for (size_t i = 0; i < c.lightRadii.size(); ++i) s += StringPrintf("%s%.4g", i ? ", " : "", c.lightRadii[i]);
+    } else {
+        s += StringPrintf("%.4g–%.4g (%zu lights)", *lo, *hi, c.lightRadii.size());
+    }
+    return s;
+}
+
+std::string BenchCompetitorsMarkdown(const BenchQuality& q) {
+    const BenchCompetitors& c = q.competitors;
+    if (c.rows.empty()) return "";
+    const CompetitorRow* soft = nullptr;
+    for (const CompetitorRow& row : c.rows)
+        if (row.method == "soft") soft = &row;
+    std::string out = StringPrintf("### The default (soft) against its competitors, %s: %s, %dx%d\n\n",
+                                   RadiiText(c).c_str(), q.scene.c_str(), q.width, q.height);
+    out += StringPrintf(
+        "Every row on %s with the same light radii; seconds: render phase, median of %d interleaved run(s) after a "
+        "warm-up, in the same run (the reference: one run). Reference: \"area\" with %d rays per light at these radii. "
+        "Shadow total: Σ over the image of (no shadows − image) in linear luminance, over the reference's (1.00 is "
+        "right; below 1 too little shadow).\n\n",
+        c.accel.c_str(), c.repeat, c.refSamples);
+    out += "| Method | s | × soft | PSNR dB | SSIM | shadow total / ref |\n|---|---|---|---|---|---|\n";
+    for (const CompetitorRow& row : c.rows)
+        out += StringPrintf("| %s | %.3f%s | %s | %s | %.4f | %s |\n", row.label.c_str(), row.seconds,
+                            row.reference ? " (1 run)" : "",
+                            soft && soft->seconds > 0 ? StringPrintf("%.2f", row.seconds / soft->seconds).c_str() : "–",
+                            Psnr(row.psnr).c_str(), row.ssim,
+                            std::isnan(row.shadowRatio) ? "–" : StringPrintf("%.3f", row.shadowRatio).c_str());
+    if (soft && soft->setupSeconds > 0) out += StringPrintf("\nsoft's set-up (not in its time): %.3g s.\n", soft->setupSeconds);
+    const EqualQuality& e = c.equal;
+    // The measured N around the equal-quality point, for the sentence.
+    std::vector<int> ns;
+    for (const CompetitorRow& row : c.rows)
+        if (row.method == "area" && !row.reference) ns.push_back(row.samples);
+    std::sort(ns.begin(), ns.end());
+    if (ns.empty()) return out + "\nNo area rows: no equal-quality comparison.\n\n";
+    out += StringPrintf("\nEqual quality (area's PSNR linear in log2 N between the measured N = %d…%d): ", ns.front(),
+                        ns.back());
+    if (!e.valid) {
+        out += StringPrintf("area sampling does not reach soft's %s dB at the N tried and its PSNR does not rise "
+                            "between the last two N, so there is no line to extrapolate.\n\n",
+                            Psnr(e.targetPsnr).c_str());
+        return out;
+    }
+    // "soft is 2.50× faster", or "soft is 1.75× slower (0.57×)" when area is the faster.
+    const std::string verdict =
+        e.speedup >= 1 ? StringPrintf("soft is %s%.2f× faster than area sampling at equal PSNR", e.atMost ? "at most " : "",
+                                      e.speedup)
+                       : StringPrintf("soft is %s%.2f× slower than area sampling at equal PSNR (speed-up %.2f×)",
+                                      e.atMost ? "at least " : "", 1 / e.speedup, e.speedup);
+    if (e.atMost)
+        out += StringPrintf("area sampling with N = %d already reaches soft's %s dB; at N = %d area takes %.3f s, "
+                            "soft %.3f s: %s.\n\n",
+                            ns.front(), Psnr(e.targetPsnr).c_str(), ns.front(), e.areaSeconds, e.softSeconds,
+                            verdict.c_str());
+    else
+        out += StringPrintf("area sampling reaches soft's %s dB at N ≈ %.1f%s, where it takes %.3f s (%s) against "
+                            "soft's %.3f s: %s%s.\n\n",
+                            Psnr(e.targetPsnr).c_str(), e.samples,
+                            e.extrapolated ? StringPrintf(" (extrapolated from N = %d and %d)", ns[ns.size() - 2], ns.back()).c_str()
+                                           : "",
+                            e.areaSeconds,
+                            e.extrapolated ? "extrapolated linearly in N" : "interpolated in log2 N", e.softSeconds,
+                            verdict.c_str(), e.extrapolated ? " (extrapolated)" : "");
+    return out;
+}
+
 std::string BenchQualityMarkdown(const BenchReport& report) {
     std::string out;
     for (const BenchQuality& q : report.quality) {
         const size_t mr = q.mainRadius;
-        out += StringPrintf("### Quality: %s, %dx%d\n\n", q.scene.c_str(), q.width, q.height);
+        out += BenchCompetitorsMarkdown(q);
+        out += StringPrintf("### Quality of the paper's variants, every light of radius R = kI·h = %.4g: %s, %dx%d\n\n",
+                            q.radius, q.scene.c_str(), q.width, q.height);
         out += StringPrintf(
-            "Against the area-light reference (\"area\", %d samples) of radius R = r = kI·h = %.4g (h = %.4g; "
-            "%.1f px at the look-at distance). Leaks: pixels deeper than r inside RT's shadow that the method "
-            "lights (approximate, see BenchQuality).\n\n",
+            "Against the area-light reference (\"area\", %d samples) of radius R = r = kI·h = %.4g for every light "
+            "(h = %.4g; %.1f px at the look-at distance), not the lights' own radii. Leaks: pixels deeper than r "
+            "inside RT's shadow that the method lights (approximate, see BenchQuality).\n\n",
             q.refSamples, q.radius, q.meshStep, q.radiusPixels);
         out += "| Method | s | PSNR dB | SSIM | leaks px |\n|---|---|---|---|---|\n";
         for (const QualityRow& row : q.rows)
@@ -287,6 +369,84 @@ std::string BenchQualityMarkdown(const BenchReport& report) {
         out += "\n";
     }
     return out;
+}
+
+std::string BenchJson(const BenchReport& report) {
+    using nlohmann::json;
+    // NaN and infinities become null (nlohmann writes them so); a PSNR of 99 (equal images) too.
+    const auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+    const auto psnr = [&](double v) { return v >= 99 ? json(nullptr) : num(v); };
+    json cells = json::array();
+    for (const BenchResult& r : report.results) {
+        json c = {{"scene", r.scene},   {"width", r.width},         {"height", r.height},  {"method", r.method},
+                  {"variant", r.variant}, {"paper_name", r.paperName}, {"accel", r.accel},  {"cc", r.cc},
+                  {"ki", r.ki},           {"samples", r.samples},      {"role", r.role},    {"median_s", r.median},
+                  {"runs_s", r.seconds},  {"setup_s", r.setupSeconds}, {"image", r.image},
+                  {"camera_rays", r.counters.cameraRays}, {"shadow_rays", r.counters.shadowRays},
+                  {"peak_memory_bytes", r.peakMemoryBytes}};
+        if (r.method == "penumbra") c["light_radius"] = r.lightRadius, c["thin_check"] = r.thinCheck;
+        if (!std::isnan(r.refPsnr)) {
+            c["ref_psnr"] = psnr(r.refPsnr);
+            c["ref_ssim"] = num(r.refSsim);
+            c["shadow_total_ratio"] = num(r.shadowRatio);
+        }
+        cells.push_back(std::move(c));
+    }
+    json quality = json::array();
+    for (const BenchQuality& q : report.quality) {
+        const BenchCompetitors& comp = q.competitors;
+        json rows = json::array();
+        for (const CompetitorRow& row : comp.rows)
+            rows.push_back({{"label", row.label},
+                            {"method", row.method},
+                            {"samples", row.samples},
+                            {"reference", row.reference},
+                            {"seconds", row.seconds},
+                            {"runs", row.runs},
+                            {"setup_s", row.setupSeconds},
+                            {"psnr", psnr(row.psnr)},
+                            {"ssim", num(row.ssim)},
+                            {"shadow_total_ratio", num(row.shadowRatio)},
+                            {"image", row.image}});
+        const EqualQuality& e = comp.equal;
+        json equal = {{"valid", e.valid},
+                      {"target_psnr", psnr(e.targetPsnr)},
+                      {"samples", e.valid ? num(e.samples) : json(nullptr)},
+                      {"extrapolated", e.extrapolated},
+                      {"at_most", e.atMost},
+                      {"area_seconds", e.valid ? num(e.areaSeconds) : json(nullptr)},
+                      {"soft_seconds", num(e.softSeconds)},
+                      {"speedup", e.valid ? num(e.speedup) : json(nullptr)}};
+        json old = json::array();
+        for (const QualityRow& row : q.rows) {
+            json p = json::array(), s = json::array();
+            for (double v : row.psnr) p.push_back(psnr(v));
+            for (double v : row.ssim) s.push_back(num(v));
+            old.push_back({{"label", row.label}, {"method", row.method}, {"variant", row.variant}, {"cc", row.cc},
+                           {"ki", row.ki}, {"samples", row.samples}, {"seconds", row.seconds}, {"psnr", p},
+                           {"ssim", s}, {"leaks", row.leaks < 0 ? json(nullptr) : json(row.leaks)}});
+        }
+        quality.push_back({{"scene", q.scene},
+                           {"width", q.width},
+                           {"height", q.height},
+                           {"mesh_step", q.meshStep},
+                           {"radius", q.radius},
+                           {"ref_samples", q.refSamples},
+                           {"radii", q.radii},
+                           {"ref_seconds", q.refSeconds},
+                           {"main_radius", q.mainRadius},
+                           {"rows", old},
+                           {"competitors",
+                            {{"accel", comp.accel},
+                             {"light_radii", comp.lightRadii},
+                             {"radius_override", comp.radiusOverride},
+                             {"ref_samples", comp.refSamples},
+                             {"repeat", comp.repeat},
+                             {"rows", rows},
+                             {"equal_quality", equal}}}});
+    }
+    json doc = {{"repeat", report.repeat}, {"cells", cells}, {"quality", quality}};
+    return doc.dump(2) + "\n";
 }
 
 }  // namespace lm

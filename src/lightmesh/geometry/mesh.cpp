@@ -110,7 +110,10 @@ CleanReport CleanMesh(TriangleMesh* mesh) {
         const auto& t = mesh->triangles[i];
         const Vec3 &p0 = mesh->positions[t[0]], &p1 = mesh->positions[t[1]],
                    &p2 = mesh->positions[t[2]];
-        const Vec3 n = TriangleNormal(p0, p1, p2);
+        // Relative to the triangle's own size: the edges scaled to its largest component
+        // first, so a valid model at 1e-17 scale is kept (its squared cross product
+        // underflowed to 0 in float) and only a flat triangle is dropped.
+        const Vec3 n = ScaledTriangleNormal(p0, p1, p2);
         if (!IsFinite(p0) || !IsFinite(p1) || !IsFinite(p2) || !(LengthSquared(n) > 0) ||
             !IsFinite(n)) {
             ++report.degenerate;

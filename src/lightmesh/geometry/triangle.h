@@ -141,6 +141,31 @@ inline Vec3 TriangleNormal(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
     return Cross(p1 - p0, p2 - p0);
 }
 
+/// The cross product of the edges scaled by the triangle's own size (the power of two of
+/// its largest edge component, so the scaling is exact and a collinear triangle stays
+/// exactly flat), so it neither underflows nor overflows whatever the scale: zero only for
+/// a flat triangle (collinear or repeated vertices). Degeneracy is decided on it
+/// (CleanMesh; issue 45: a box at 1e-17 scale, whose squared cross product underflows in
+/// float, was "zero area").
+inline Vec3 ScaledTriangleNormal(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
+    const Vec3 e1 = p1 - p0, e2 = p2 - p0;
+    const float s = std::max(MaxComponent(Abs(e1)), MaxComponent(Abs(e2)));
+    if (!(s > 0) || !std::isfinite(s)) return Vec3(0.0f);
+    int exponent = 0;
+    std::frexp(s, &exponent);
+    const float scale = std::ldexp(1.0f, -exponent);
+    return Cross(e1 * scale, e2 * scale);
+}
+
+/// The unit normal (Normalize(TriangleNormal), bit for bit, for every triangle whose cross
+/// product squares within float's range; from ScaledTriangleNormal for tiny or huge ones).
+inline Vec3 UnitTriangleNormal(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
+    const Vec3 n = TriangleNormal(p0, p1, p2);
+    const float l2 = LengthSquared(n);
+    if (l2 > 1e-36f && l2 < 1e36f) return Normalize(n);
+    return Normalize(ScaledTriangleNormal(p0, p1, p2));
+}
+
 /// How far rays leaving a point of the triangle start off its surface, along the normal
 /// (the shading point's origin). The rounding errors of a hit point and of the
 /// intersection test's t both scale with the magnitude of the coordinates involved, so the

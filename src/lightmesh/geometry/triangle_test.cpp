@@ -115,6 +115,28 @@ TEST(Triangle, BadCases) {
     EXPECT_FALSE(IntersectTriangle(Ray{Vec3(-1, 0, 0), Vec3(1, 0, 0), 0, Infinity}, A, B, C, &h));
 }
 
+// Issue 45: normals at the triangle's own scale. At 1e-17 the plain cross product's square
+// underflows (the loader called such a model "zero area"); the scaled one does not, and
+// stays exactly zero for a flat triangle; the unit normal is Normalize(TriangleNormal) bit
+// for bit at everyday scales.
+TEST(Triangle, NormalsAtTheTrianglesOwnScale) {
+    for (const float scale : {1e-17f, 1e-30f, 1.0f, 1e15f}) {
+        SCOPED_TRACE(scale);
+        const Vec3 a(0, 0, 0), b(scale, 0, 0), c(0, scale, 0);
+        EXPECT_GT(LengthSquared(ScaledTriangleNormal(a, b, c)), 0.0f);
+        const Vec3 n = UnitTriangleNormal(a, b, c);
+        EXPECT_NEAR(n.z, 1.0f, 1e-6f);
+        EXPECT_EQ(ScaledTriangleNormal(a, b, Vec3(2 * scale, 0, 0)), Vec3(0.0f));  // collinear
+        EXPECT_EQ(ScaledTriangleNormal(a, a, c), Vec3(0.0f));                     // repeated vertex
+    }
+    EXPECT_EQ(LengthSquared(TriangleNormal(Vec3(0, 0, 0), Vec3(1e-17f, 0, 0), Vec3(0, 1e-17f, 0))), 0.0f);
+    const Vec3 p0(0.3f, 1.7f, -2.1f), p1(4.1f, 0.2f, 0.9f), p2(-1.3f, 2.2f, 3.3f);
+    EXPECT_EQ(UnitTriangleNormal(p0, p1, p2), Normalize(TriangleNormal(p0, p1, p2)));
+    // Exactly scaled (a power of two): the same zero/non-zero verdict as the plain product
+    // wherever that does not underflow, e.g. collinear lattice points.
+    EXPECT_EQ(ScaledTriangleNormal(Vec3(3, 6, 0.5f), Vec3(10, 20, 0.5f), Vec3(1, 2, 0.5f)), Vec3(0.0f));
+}
+
 }  // namespace
 }  // namespace lm
 

@@ -33,7 +33,13 @@ void CheckSizes(const Image& a, const Image& b, const Image* mask) {
                    a.height);
 }
 
-bool Included(const Image* mask, size_t i) { return !mask || !mask->pixels[i].IsBlack(); }
+/// A mask pixel selects when one of its channels is above 0: black, negative and NaN
+/// pixels do not (issue 45: an all-NaN mask selected every pixel as "not black").
+bool Included(const Image* mask, size_t i) {
+    if (!mask) return true;
+    const Color& c = mask->pixels[i];
+    return c.r > 0 || c.g > 0 || c.b > 0;
+}
 
 struct Display {
     double r, g, b;
@@ -96,7 +102,9 @@ ImageMetrics CompareImages(const Image& a, const Image& b, const Image* mask) {
         const Color &ca = a.pixels[i], &cb = b.pixels[i];
         for (const double d : {double(ca.r) - cb.r, double(ca.g) - cb.g, double(ca.b) - cb.b}) sqLinear += d * d;
     }
-    if (count == 0) ThrowError("the mask selects no pixel (only non-black mask pixels are compared)");
+    if (count == 0)
+        ThrowError("the mask selects no pixel (only mask pixels with a channel above 0 are compared; black, "
+                   "negative and NaN pixels are not)");
     const double mse = sq / (3.0 * static_cast<double>(count));
     m.pixels = count;
     m.rmse = std::sqrt(mse);
@@ -131,6 +139,13 @@ ImageMetrics CompareImages(const Image& a, const Image& b, const Image* mask) {
 
 void WriteDiffImage(const std::string& path, const Image& a, const Image& b, float scale, const Image* mask) {
     CheckSizes(a, b, mask);
+    if (mask) {
+        bool any = false;
+        for (size_t i = 0; i < a.pixels.size() && !any; ++i) any = Included(mask, i);
+        if (!any)
+            ThrowError("the mask selects no pixel (only mask pixels with a channel above 0 are compared; black, "
+                       "negative and NaN pixels are not)");
+    }
     const size_t n = a.pixels.size();
     std::vector<float> diff(n, 0.0f);
     float largest = 0;

@@ -28,7 +28,7 @@ struct ImageMetrics {
 };
 
 /// Compares `a` with `b`. With a mask (same size), only the pixels where the mask is not
-/// black are compared. SSIM uses an 11×11 Gaussian window (σ = 1.5), K1 = 0.01,
+/// black are compared: where one of its channels is above 0 (NaN and negative are black). SSIM uses an 11×11 Gaussian window (σ = 1.5), K1 = 0.01,
 /// K2 = 0.03, on the luma Y' = 0.2126 R' + 0.7152 G' + 0.0722 B' of the display values;
 /// the window is cut at the image's border and its weights renormalised (so any size
 /// works), and the SSIM map is averaged over the compared pixels. Throws Error if the

@@ -2,9 +2,18 @@
 
 #include <gtest/gtest.h>
 
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <zlib.h>
+
 #include <cmath>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <random>
+#include <vector>
 
 #include "lightmesh/util/error.h"
 #include "run_lightmesh.h"
@@ -135,6 +144,129 @@ TEST(Compare, MaskRestrictsThePixels) {
     EXPECT_FALSE(std::isinf(CompareImages(a, b, &mask).psnr));
     const Image black(64, 48);
     EXPECT_THROW(CompareImages(a, b, &black), Error);
+    // Issue 45: a mask of NaN (or negative) pixels selects nothing either; it used to
+    // select every pixel as "not black".
+    Image nan(64, 48);
+    for (Color& c : nan.pixels) c = Color(std::nanf(""));
+    Image negative(64, 48);
+    for (Color& c : negative.pixels) c = Color(-1.0f);
+    for (const Image* m : {&nan, &negative}) {
+        try {
+            CompareImages(a, b, m);
+            ADD_FAILURE() << "no error";
+        } catch (const Error& e) {
+            EXPECT_EQ(std::string(e.what()),
+                      "the mask selects no pixel (only mask pixels with a channel above 0 are compared; black, "
+                      "negative and NaN pixels are not)");
+        }
+        EXPECT_THROW(WriteDiffImage(Temp("nan_mask_diff.png"), a, b, 0, m), Error);
+    }
+}
+
+/// A 16-bit RGB PNG of w × h pixels whose samples are value(x, y, channel).
+template <typename F>
+void WritePng16(const std::string& path, int w, int h, F value) {
+    std::vector<unsigned char> raw;
+    for (int y = 0; y < h; ++y) {
+        raw.push_back(0);  // filter: none
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const uint16_t v = value(x, y, c);
+                raw.push_back(static_cast<unsigned char>(v >> 8));
+                raw.push_back(static_cast<unsigned char>(v & 0xff));
+            }
+    }
+    uLongf size = compressBound(static_cast<uLong>(raw.size()));
+    std::vector<unsigned char> z(size);
+    ASSERT_EQ(compress(z.data(), &size, raw.data(), static_cast<uLong>(raw.size())), Z_OK);
+    z.resize(size);
+    std::string png("\x89PNG\r\n\x1a\n", 8);
+    auto be32 = [](uint32_t v) {
+        return std::string{static_cast<char>(v >> 24), static_cast<char>(v >> 16), static_cast<char>(v >> 8),
+                           static_cast<char>(v)};
+    };
+    auto chunk = [&](const std::string& type, const std::string& data) {
+        const std::string body = type + data;
+        png += be32(static_cast<uint32_t>(data.size())) + body +
+               be32(static_cast<uint32_t>(crc32(0, reinterpret_cast<const Bytef*>(body.data()), static_cast<uInt>(body.size()))));
+    };
+    chunk("IHDR", be32(static_cast<uint32_t>(w)) + be32(static_cast<uint32_t>(h)) + std::string("\x10\x02\0\0\0", 5));
+    chunk("IDAT", std::string(z.begin(), z.end()));
+    chunk("IEND", "");
+    std::ofstream(path, std::ios::binary) << png;
+}
+
+// Issue 45: two 16-bit PNGs that differ in every sample's low byte compared as identical
+// (they were read at 8 bits); they are read at their depth now.
+TEST(Compare, SixteenBitPngsAreComparedAtSixteenBits) {
+    const std::string a = Temp("a16.png"), b = Temp("b16.png");
+    auto base = [](int x, int y, int c) { return static_cast<uint16_t>((x * 2000 + y * 700 + c * 5000) & 0xff00); };
+    WritePng16(a, 16, 8, base);
+    WritePng16(b, 16, 8, [&](int x, int y, int c) { return static_cast<uint16_t>(base(x, y, c) | 0x80); });
+    const Image ia = ReadImage(a), ib = ReadImage(b);
+    const ImageMetrics m = CompareImages(ia, ib);
+    EXPECT_FALSE(std::isinf(m.psnr));
+    EXPECT_NEAR(m.maxDiff, 128.0 / 65535, 1e-5);
+    EXPECT_TRUE(std::isinf(CompareImages(ia, ReadImage(a)).psnr));
+    // The 16-bit values decode as sRGB at their own precision.
+    EXPECT_NEAR(SrgbEncode(ib.At(0, 0).r), 0x80 / 65535.0f, 1e-6f);
+}
+
+/// An EXR of w × h float pixels with the channels given, each filled by value(x, y, channel index).
+template <typename F>
+void WriteExrChannels(const std::string& path, int w, int h, const std::vector<std::string>& names, F value) {
+    Imf::Header header(w, h);
+    for (const std::string& n : names) header.channels().insert(n, Imf::Channel(Imf::FLOAT));
+    std::vector<std::vector<float>> planes(names.size(), std::vector<float>(static_cast<size_t>(w) * h));
+    Imf::FrameBuffer fb;
+    for (size_t c = 0; c < names.size(); ++c) {
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) planes[c][static_cast<size_t>(y) * w + x] = value(x, y, static_cast<int>(c));
+        fb.insert(names[c], Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(planes[c].data()), sizeof(float),
+                                       sizeof(float) * w));
+    }
+    Imf::OutputFile file(path.c_str(), header);
+    file.setFrameBuffer(fb);
+    file.writePixels(h);
+}
+
+// Issue 45: an EXR with only Y, or with channels r, g, b, was read as black. Y is read as
+// grey, lower-case r, g, b as colour, anything else is refused naming the channels.
+TEST(Compare, ExrLayoutsAreReadOrRefusedByName) {
+    auto v = [](int x, int y, int c) { return 0.1f * static_cast<float>(x) + 0.01f * static_cast<float>(y) + 0.3f * c; };
+    const std::string y = Temp("y.exr"), lower = Temp("lower.exr"), upper = Temp("upper.exr");
+    WriteExrChannels(y, 8, 4, {"Y"}, v);
+    WriteExrChannels(lower, 8, 4, {"r", "g", "b"}, v);
+    Image expected(8, 4);
+    for (int yy = 0; yy < 4; ++yy)
+        for (int x = 0; x < 8; ++x) expected.At(x, yy) = Color(v(x, yy, 0), v(x, yy, 1), v(x, yy, 2));
+    WriteImage(upper, expected);
+    const Image grey = ReadImage(y), rgb = ReadImage(lower);
+    EXPECT_EQ(grey.At(3, 2).r, v(3, 2, 0));
+    EXPECT_EQ(grey.At(3, 2).g, v(3, 2, 0));
+    EXPECT_EQ(grey.At(3, 2).b, v(3, 2, 0));
+    EXPECT_TRUE(std::isinf(CompareImages(rgb, ReadImage(upper)).psnr));
+    EXPECT_GT(CompareImages(rgb, Image(8, 4)).maxDiff, 0.5);  // not black
+    struct Bad {
+        std::vector<std::string> channels;
+        std::string message;
+    };
+    for (const Bad& bad : std::vector<Bad>{
+             {{"A", "Z"}, "EXR has no R, G, B (or r, g, b) and no Y channel to read (its channels: A, Z)"},
+             {{"R", "G"}, "EXR has only some of the channels R, G, B (its channels: G, R)"},
+             {{"diffuse.R", "diffuse.G", "diffuse.B"},
+              "EXR has no R, G, B (or r, g, b) and no Y channel to read (its channels: diffuse.B, diffuse.G, diffuse.R)"},
+             {{"Y", "RY", "BY"}, "EXR is luminance-chroma (Y, RY, BY), which compare does not read; convert it to R, G, "
+                                 "B (its channels: BY, RY, Y)"}}) {
+        const std::string path = Temp("bad.exr");
+        WriteExrChannels(path, 8, 4, bad.channels, v);
+        try {
+            ReadImage(path);
+            ADD_FAILURE() << "no error for " << bad.message;
+        } catch (const Error& e) {
+            EXPECT_EQ(std::string(e.what()), path + ": " + bad.message);
+        }
+    }
 }
 
 TEST(Compare, PngAndExrOfOneImageCompareAlike) {

@@ -5,6 +5,7 @@
 #include <OpenEXR/ImfOutputFile.h>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cassert>
 #include <cmath>
@@ -388,6 +389,18 @@ void WriteExr(const std::string& tmp, const Image& image) {
 
 Image ReadPng(const std::string& path) {
     int w = 0, h = 0, n = 0;
+    // 16-bit PNGs at their depth (issue 45: two that differed in every sample's low byte
+    // compared as identical when read at 8 bits).
+    if (stbi_is_16_bit(path.c_str())) {
+        stbi_us* data = stbi_load_16(path.c_str(), &w, &h, &n, 3);
+        if (!data) ThrowErrorAt({path}, "cannot read PNG: %s", stbi_failure_reason());
+        Image image(w, h);
+        auto decode = [](stbi_us v) { return SrgbDecode(static_cast<float>(v) / 65535.0f); };
+        for (size_t i = 0; i < image.pixels.size(); ++i)
+            image.pixels[i] = Color(decode(data[3 * i]), decode(data[3 * i + 1]), decode(data[3 * i + 2]));
+        stbi_image_free(data);
+        return image;
+    }
     unsigned char* data = stbi_load(path.c_str(), &w, &h, &n, 3);
     if (!data) ThrowErrorAt({path}, "cannot read PNG: %s", stbi_failure_reason());
     Image image(w, h);
@@ -398,23 +411,61 @@ Image ReadPng(const std::string& path) {
     return image;
 }
 
+/// The EXR channels to read as R, G and B: "R", "G", "B", or lower-case "r", "g", "b" (all
+/// three of one kind), or a luminance-only "Y" (or "y") read into all three as grey. Any
+/// other layout is refused by name (issue 45: Y-only and lower-case files read as black).
+/// A luminance-chroma file (Y with RY, BY) is refused too: its chroma is subsampled.
+std::array<std::string, 3> ExrChannels(const std::string& path, const Imf::ChannelList& channels) {
+    std::vector<std::string> names;
+    for (auto it = channels.begin(); it != channels.end(); ++it) names.push_back(it.name());
+    auto has = [&](const char* name) { return channels.findChannel(name) != nullptr; };
+    auto list = [&] {
+        std::string s;
+        for (size_t i = 0; i < names.size() && i < 12; ++i) s += (i ? ", " : "") + names[i];
+        if (names.size() > 12) s += StringPrintf(" and %zu more", names.size() - 12);
+        return s.empty() ? std::string("none") : s;
+    };
+    for (const char* set : {"RGB", "rgb"}) {
+        const std::string r(1, set[0]), g(1, set[1]), b(1, set[2]);
+        const int found = has(r.c_str()) + has(g.c_str()) + has(b.c_str());
+        if (found == 3) return {r, g, b};
+        if (found > 0)
+            ThrowErrorAt({path}, "EXR has only some of the channels %s, %s, %s (its channels: %s)", r.c_str(),
+                         g.c_str(), b.c_str(), list().c_str());
+    }
+    for (const char* y : {"Y", "y"}) {
+        if (!has(y)) continue;
+        if (has("RY") || has("BY") || has("ry") || has("by"))
+            ThrowErrorAt({path}, "EXR is luminance-chroma (Y, RY, BY), which compare does not read; convert it to "
+                         "R, G, B (its channels: %s)", list().c_str());
+        return {y, y, y};
+    }
+    ThrowErrorAt({path}, "EXR has no R, G, B (or r, g, b) and no Y channel to read (its channels: %s)",
+                 list().c_str());
+}
+
 Image ReadExr(const std::string& path) {
     Imf::InputFile file(path.c_str());
     const Imath::Box2i dw = file.header().dataWindow();
     const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
     if (w <= 0 || h <= 0 || static_cast<int64_t>(w) * h > (int64_t(1) << 28))
         ThrowErrorAt({path}, "unsupported EXR size %dx%d", w, h);
+    const std::array<std::string, 3> names = ExrChannels(path, file.header().channels());
     Image image(w, h);
     Imf::FrameBuffer fb;
     char* base = reinterpret_cast<char*>(image.pixels.data()) -
                  (static_cast<ptrdiff_t>(dw.min.x) + static_cast<ptrdiff_t>(dw.min.y) * w) *
                      static_cast<ptrdiff_t>(sizeof(Color));
     const size_t xs = sizeof(Color), ys = sizeof(Color) * w;
-    fb.insert("R", Imf::Slice(Imf::FLOAT, base + offsetof(Color, r), xs, ys));
-    fb.insert("G", Imf::Slice(Imf::FLOAT, base + offsetof(Color, g), xs, ys));
-    fb.insert("B", Imf::Slice(Imf::FLOAT, base + offsetof(Color, b), xs, ys));
+    fb.insert(names[0], Imf::Slice(Imf::FLOAT, base + offsetof(Color, r), xs, ys));
+    if (names[1] != names[0]) {
+        fb.insert(names[1], Imf::Slice(Imf::FLOAT, base + offsetof(Color, g), xs, ys));
+        fb.insert(names[2], Imf::Slice(Imf::FLOAT, base + offsetof(Color, b), xs, ys));
+    }
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
+    if (names[1] == names[0])  // grey: Y into G and B too
+        for (Color& c : image.pixels) c.g = c.b = c.r;
     return image;
 }
 

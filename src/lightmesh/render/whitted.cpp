@@ -33,7 +33,7 @@ ShadingPoint WhittedRenderer::MakeShadingPoint(const TriangleMesh& mesh, const R
     // The point from barycentrics is accurate to a few ulps of the vertices, unlike
     // o + t·d, whose error grows with the ray's length (pbrt-v4 §6.8).
     sp.p = p0 * b0 + p1 * hit.b1 + p2 * hit.b2;
-    Vec3 n = Normalize(TriangleNormal(p0, p1, p2));
+    Vec3 n = UnitTriangleNormal(p0, p1, p2);
     if (Dot(n, ray.d) > 0) n = -n;
     sp.n = n;
     // Push the origin off the surface so rays leaving it never hit its own triangle.
@@ -133,7 +133,7 @@ Color WhittedRenderer::Pixel(int x, int y, RenderCounters& counters) const {
     return sum * (1.0f / static_cast<float>(aa * aa));
 }
 
-void WhittedRenderer::RenderTile(int tile, Image* image, RenderCounters& counters) const {
+void WhittedRenderer::RenderTile(int tile, Image* image, RenderCounters& counters, int originX, int originY) const {
     const int w = options_.width, h = options_.height, tilesX = TilesX(), aa = options_.aa;
     const int x0 = (tile % tilesX) * kTileSize, y0 = (tile / tilesX) * kTileSize;
     const int x1 = std::min(x0 + kTileSize, w), y1 = std::min(y0 + kTileSize, h);
@@ -209,9 +209,34 @@ void WhittedRenderer::RenderTile(int tile, Image* image, RenderCounters& counter
                         ++counters.cameraRays;
                         sum += colors[k];
                     }
-                    image->At(x, y) = sum * (1.0f / static_cast<float>(aa * aa));
+                    image->At(x - originX, y - originY) = sum * (1.0f / static_cast<float>(aa * aa));
                 }
         }
+}
+
+double WhittedRenderer::EstimateSeconds(int samples) const {
+    const int tiles = TileCount();
+    const int n = std::clamp(samples, 1, tiles);
+    std::vector<int> picked(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i)
+        picked[static_cast<size_t>(i)] = static_cast<int>((static_cast<int64_t>(i) * 2 + 1) * tiles / (2 * static_cast<int64_t>(n)));
+    // Two interleaved halves timed apart, the faster one counted: a machine shared with
+    // other work (a build beside the bench) spoils one half more often than both.
+    auto time = [&](int parity) {
+        const auto start = std::chrono::steady_clock::now();
+        const int count = (n - parity + 1) / 2;
+        ParallelFor(tbb::blocked_range<int>(0, count, 1), [&](const tbb::blocked_range<int>& range) {
+            Image scratch(kTileSize, kTileSize);
+            RenderCounters counters;
+            for (int i = range.begin(); i != range.end(); ++i) {
+                const int tile = picked[static_cast<size_t>(2 * i + parity)];
+                RenderTile(tile, &scratch, counters, (tile % TilesX()) * kTileSize, (tile / TilesX()) * kTileSize);
+            }
+        });
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / count;
+    };
+    const double perTile = n >= 2 ? std::min(time(0), time(1)) : time(0);
+    return perTile * static_cast<double>(tiles);
 }
 
 RenderResult WhittedRenderer::Render(ProgressReporter* progress) const {

@@ -56,7 +56,16 @@ class WhittedRenderer {
     int TileCount() const { return TilesX() * ((options_.height + kTileSize - 1) / kTileSize); }
     /// The pixels of one tile into *image (of the render's size): Pixel()'s values, with the
     /// camera rays of kPacketSize × kPacketSize pixels traced together (IntersectMany).
-    void RenderTile(int tile, Image* image, RenderCounters& counters) const;
+    /// With an origin, pixel (x, y) goes to image->At(x - originX, y - originY) instead
+    /// (a tile-sized scratch image).
+    void RenderTile(int tile, Image* image, RenderCounters& counters, int originX = 0, int originY = 0) const;
+    /// The seconds the whole render would take, from `samples` of its tiles spread evenly
+    /// over the image (all of them if it has no more), rendered in parallel into scratch
+    /// images in two interleaved halves: the faster half's wall time per tile × tiles.
+    /// `bench` estimates its matrix so (issue 45); the lazily evaluated work a render shares
+    /// between neighbouring tiles (the light mesh's nodes) is shared less among spread
+    /// tiles, so the figure errs high.
+    double EstimateSeconds(int samples) const;
     static constexpr int kPacketSize = 8;
 
     /// Builds the shading point for a hit of `ray` (also used by tests and the shadow

@@ -17,6 +17,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <mutex>
@@ -26,6 +29,7 @@
 #include <vector>
 
 #include "lightmesh/util/error.h"
+#include "lightmesh/util/log.h"
 #include "lightmesh/util/system.h"
 
 // Assimp's ai_assert() calls Assimp::aiAssertViolation, which Debian's build (5.2, without
@@ -91,9 +95,8 @@ class ScopedAssimpLog {
 namespace mesh_import {
 
 std::string Thousands(uint64_t n) {
-    std::string s = std::to_string(n);
-    for (int i = static_cast<int>(s.size()) - 3; i > 0; i -= 3) s.insert(static_cast<size_t>(i), ",");
-    return s;
+    // (FormatCount: inserting into a string here drew GCC 12's false -Wrestrict warning.)
+    return FormatCount(n);
 }
 
 /// The child's result file while it imports (-1 in the parent and in-process imports).
@@ -366,6 +369,78 @@ void CheckReadable(const std::string& path) {
                                 true);
         throw MeshFileError(path, "the file is empty", true);
     }
+    // No mesh format starts with a run of NUL bytes (a binary STL's 80-byte header may be
+    // zeros, but its triangle count and data follow): a zeroed or sparse file is refused
+    // here rather than read to its end under the import deadline (issue 45: a 20 GB sparse
+    // file of zeros was read at 160 MB/s).
+    constexpr size_t kProbe = 4096;
+    const int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) return;
+    char head[kProbe];
+    size_t got = 0;
+    while (got < kProbe) {
+        const ssize_t n = read(fd, head + got, kProbe - got);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) break;
+        got += static_cast<size_t>(n);
+    }
+    close(fd);
+    if (got > 0 && std::all_of(head, head + got, [](char c) { return c == 0; }))
+        throw MeshFileError(path,
+                            StringPrintf("its first %s bytes are all zero (NUL): not a mesh file (a zeroed or "
+                                         "sparse file?)",
+                                         Thousands(got).c_str()),
+                            true);
+}
+
+/// Assimp 5.2's OBJ reader looks each `o` name up among the objects so far, one by one:
+/// its time grows with the square of their number (200,000 objects: 41 s), inside Assimp,
+/// where lightmesh cannot change it. The `o` lines are counted first (a pass over the file
+/// at memory speed) and the time estimated at kObjSecondsPerObjectPair (measured here:
+/// 50,000 objects 2.1 s, 200,000 about 40 s): past the import deadline the file is refused
+/// at once; past kAnnouncedObjSeconds a warning says what is coming.
+void CheckObjObjectCount(const std::string& path) {
+    std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : "";
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (ext != ".obj") return;
+    const int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) return;
+    uint64_t objects = 0;
+    enum { kLineStart, kSawO, kRest } state = kLineStart;  // "o NAME", blanks allowed before
+    std::vector<char> buf(1 << 20);
+    for (;;) {
+        const ssize_t n = read(fd, buf.data(), buf.size());
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) break;
+        for (ssize_t i = 0; i < n; ++i) {
+            const char c = buf[static_cast<size_t>(i)];
+            if (c == '\n') {
+                state = kLineStart;
+            } else if (state == kLineStart) {
+                if (c == 'o') state = kSawO;
+                else if (c != ' ' && c != '\t' && c != '\r') state = kRest;
+            } else if (state == kSawO) {
+                objects += c == ' ' || c == '\t';
+                state = kRest;
+            }
+        }
+    }
+    close(fd);
+    const double seconds = kObjSecondsPerObjectPair * static_cast<double>(objects) * static_cast<double>(objects);
+    const double deadline = ImportTimeoutSeconds(path);
+    if (seconds > deadline)
+        throw MeshFileError(
+            path,
+            StringPrintf("%s objects (`o` lines): Assimp's OBJ reader takes time growing with the square of their "
+                         "number, about %s here, more than the import deadline of %s (LIGHTMESH_IMPORT_TIMEOUT "
+                         "raises it); merge the objects, or convert the file to glTF",
+                         Thousands(objects).c_str(), FormatDuration(seconds).c_str(), FormatDuration(deadline).c_str()),
+            true);
+    if (seconds > kAnnouncedObjSeconds)
+        LogWarning(path + StringPrintf(": %s objects (`o` lines): Assimp's OBJ reader takes time growing with the "
+                                       "square of their number, about %s here (merge the objects, or convert the "
+                                       "file to glTF)",
+                                       Thousands(objects).c_str(), FormatDuration(seconds).c_str()));
 }
 
 /// Assimp's error string as a reason.
@@ -395,6 +470,7 @@ LoadedMesh ImportMeshInProcess(const std::string& path, const MeshLoadOptions& o
                                const ImportBudget& budget) {
     CheckReadable(path);
     CheckGltfHierarchy(path, budget);
+    mesh_import::CheckObjObjectCount(path);
     LoadedMesh out;
     std::vector<std::string> log, refused;
     try {

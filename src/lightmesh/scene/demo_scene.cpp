@@ -74,10 +74,15 @@ Scene MakeGazebo() {
     b.Box({-0.4f, 0, -4.2f}, {0.4f, 0.8f, -3.4f}, Stone);
     b.Sphere({0, 1.25f, -3.8f}, 0.45f, 12, 16, Marble);
 
+    // Radii: what DefaultLightRadius gives lights without a stated size, 2 % of each light's
+    // distance to the centre of the scene's box ([-7, -0.3, -7] - [7, 4.39, 7]), written out
+    // so the scene states its lights' sizes like a scene file would (a test holds the two
+    // together): 0.02 · 8.644 and 0.02 · 8.197.
+    constexpr float kKeyRadius = 0.173f, kFillRadius = 0.164f;
     scene.lights = {
         // A warm key light behind-left, so shadows fall towards the camera, and a cool fill.
-        {{-5.5f, 8.0f, -3.0f}, Color(85.0f, 80.0f, 70.0f), Falloff::InverseSquare},
-        {{7.0f, 5.5f, -2.5f}, Color(22.0f, 25.0f, 32.0f), Falloff::InverseSquare},
+        {{-5.5f, 8.0f, -3.0f}, Color(85.0f, 80.0f, 70.0f), Falloff::InverseSquare, kKeyRadius},
+        {{7.0f, 5.5f, -2.5f}, Color(22.0f, 25.0f, 32.0f), Falloff::InverseSquare, kFillRadius},
     };
     scene.camera = Camera{{7.5f, 4.6f, 9.5f}, {0.0f, 1.3f, 0.0f}, {0, 1, 0}, 42.0f};
     scene.ambient = Color(0.06f, 0.065f, 0.075f);

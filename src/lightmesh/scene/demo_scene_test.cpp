@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "lightmesh/scene/scene_file.h"
 #include "lightmesh/util/error.h"
 
 namespace lm {
@@ -23,6 +24,17 @@ TEST(DemoScene, GazeboIsAFewThousandClosedTrianglesWithTwoLights) {
     EXPECT_EQ(r.degenerate + r.duplicate, 0u);
     // The lights are outside every object, above the ground.
     for (const PointLight& l : s.lights) EXPECT_GT(l.position.y, s.mesh.Bounds().hi.y);
+}
+
+// The gazebo states its lights' sizes: the constants are the default rule's values, so
+// the built-in scene looks as a scene file without "radius" would.
+TEST(DemoScene, GazeboLightsHaveTheDefaultRulesRadii) {
+    const Scene s = MakeBuiltinScene("gazebo");
+    const Bounds3 box = s.mesh.Bounds();
+    for (const PointLight& l : s.lights) {
+        EXPECT_GT(l.radius, 0.1f);
+        EXPECT_NEAR(l.radius, DefaultLightRadius(box, l.position), 1e-3f);
+    }
 }
 
 TEST(DemoScene, UnknownNameIsAnError) {

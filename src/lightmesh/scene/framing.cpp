@@ -170,14 +170,21 @@ Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options,
     // Two lights above the model: a key light front-left, a weaker fill light right.
     // With inverse-square falloff, intensities scale with distance² so the model receives
     // about 0.9 and 0.3 of full irradiance whatever its size.
+    // Each is a small sphere, sized by the rule for lights without a stated size (from the
+    // model's box, which the lights are placed by), so the shadows are soft by default.
     const Vec3 keyPosition = center + Vec3(-1.5f, 3.5f, 2.0f) * radius;
     const Vec3 fillPosition = center + Vec3(2.5f, 2.5f, 0.5f) * radius;
-    scene.lights.push_back(
-        {keyPosition, Color(0.9f * LengthSquared(keyPosition - center)), Falloff::InverseSquare});
-    scene.lights.push_back(
-        {fillPosition, Color(0.3f * LengthSquared(fillPosition - center)), Falloff::InverseSquare});
-    notes.push_back(StringPrintf("key light at %s and fill light at %s, inverse-square falloff",
-                                 FormatVec(keyPosition).c_str(), FormatVec(fillPosition).c_str()));
+    const float keyRadius = DefaultLightRadius(box, keyPosition);
+    const float fillRadius = DefaultLightRadius(box, fillPosition);
+    scene.lights.push_back({keyPosition, Color(0.9f * LengthSquared(keyPosition - center)), Falloff::InverseSquare,
+                            keyRadius});
+    scene.lights.push_back({fillPosition, Color(0.3f * LengthSquared(fillPosition - center)),
+                            Falloff::InverseSquare, fillRadius});
+    notes.push_back(StringPrintf(
+        "key light at %s and fill light at %s, inverse-square falloff, radius %.3g and %.3g (%d %% of their "
+        "distance to the model's centre; --light-radius 0 makes them points)",
+        FormatVec(keyPosition).c_str(), FormatVec(fillPosition).c_str(), static_cast<double>(keyRadius),
+        static_cast<double>(fillRadius), static_cast<int>(std::lround(100 * kDefaultLightRadiusShare))));
     for (const PointLight& l : scene.lights)
         if (std::string p = CoordinateProblem(l.position, "a light"); !p.empty())
             r.Fail("", "automatic framing: " + p +

@@ -250,8 +250,11 @@ const char* SignalName(int sig) {
     }
 }
 
+}  // namespace
+
 /// LIGHTMESH_IMPORT_TIMEOUT (seconds) if set, else 60 s + 2 s per MB of the file (Assimp
-/// parses tens of MB per second).
+/// parses tens of MB per second), at most kMaxDefaultImportSeconds (a 20 GB file of zeros
+/// had 11 hours).
 double ImportTimeoutSeconds(const std::string& path) {
     if (const char* env = std::getenv("LIGHTMESH_IMPORT_TIMEOUT"); env && *env) {
         char* end = nullptr;
@@ -260,8 +263,10 @@ double ImportTimeoutSeconds(const std::string& path) {
     }
     struct stat st {};
     const double mb = stat(path.c_str(), &st) == 0 ? static_cast<double>(st.st_size) / 1e6 : 0;
-    return 60.0 + 2.0 * mb;
+    return std::min(60.0 + 2.0 * mb, kMaxDefaultImportSeconds);
 }
+
+namespace {
 
 // Assimp's OBJ and PLY readers fill a line cache of 16 MiB (IOStreamBuffer) however small
 // the file: in the fresh child that is 4,096 first touches of 4 KiB pages, about 45 ms
@@ -365,11 +370,14 @@ LoadedMesh ImportIsolated(const std::string& path, const MeshLoadOptions& option
     lock.unlock();
     if (timedOut) {
         close(fd);
+        const bool capped = timeout >= kMaxDefaultImportSeconds && !std::getenv("LIGHTMESH_IMPORT_TIMEOUT");
         throw MeshFileError(path,
                             StringPrintf("the importer did not finish within %.0f s and was "
-                                         "stopped (Assimp loops forever on some malformed files; "
+                                         "stopped (%s; "
                                          "LIGHTMESH_IMPORT_TIMEOUT sets the limit in seconds)",
-                                         timeout),
+                                         timeout,
+                                         capped ? "the default limit's most, however large the file"
+                                                : "Assimp loops forever on some malformed files"),
                             true);
     }
     // The result, mapped rather than read: one copy, into the vectors.

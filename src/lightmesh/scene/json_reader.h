@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
 #include <set>
 #include <string>
 #include <string_view>
@@ -25,10 +26,20 @@ namespace lm {
 // "materials" list follow, is recorded by the parser callback (KeyOrder).
 using Json = nlohmann::json;
 
-/// The keys of every object of the file in file order, by the object's JSON pointer.
-using KeyOrder = std::unordered_map<std::string, std::vector<std::string>>;
+/// The keys of every object of the file in file order, by a hash of the object's JSON
+/// pointer (json::PointerHash): a key per object, not the pointer's whole text, so a file
+/// of long keys or deep paths costs memory in proportion to its size.
+using KeyOrder = std::unordered_map<uint64_t, std::vector<std::string>>;
 
 namespace json {
+
+/// The deepest nesting of arrays and objects a JSON file (a scene, a bench matrix) may
+/// have: deeper is refused with the file and the pointer where it happens. A scene file
+/// nests five levels at most; the limit keeps a hostile file's bookkeeping small.
+inline constexpr size_t kMaxJsonDepth = 256;
+
+/// 64-bit FNV-1a of a JSON pointer ("/lights/0"), the key of KeyOrder.
+uint64_t PointerHash(std::string_view pointer);
 
 std::string Lower(std::string s);
 /// A key as a JSON-pointer token (RFC 6901: "~" → "~0", "/" → "~1").
@@ -51,7 +62,7 @@ class Reader {
     /// The keys of object `j` at `path` in the file's order (sorted if unknown), each once.
     std::vector<std::string> KeysInOrder(const std::string& path, const Json& j) const {
         std::vector<std::string> keys;
-        if (auto it = order_.find(path); it != order_.end()) {
+        if (auto it = order_.find(PointerHash(path)); it != order_.end()) {
             std::unordered_set<std::string> seen;
             for (const std::string& k : it->second)
                 if (j.contains(k) && seen.insert(k).second) keys.push_back(k);
@@ -144,6 +155,11 @@ class Object {
 };
 
 std::string Index(const std::string& path, size_t i);
+/// A number as messages show it: as given, not as stored ("got 16.000001", not "got 16"
+/// for a float that rounds to 16.000002): the shortest digits that read back as the
+/// value, without an exponent from 1e-5 to 1e16.
+std::string NumberText(double v);
+std::string NumberText(const Json& j);
 double Number(const Reader& r, const Json& j, const std::string& path);
 float Float(const Reader& r, const Json& j, const std::string& path);
 float NonNegative(const Reader& r, const Json& j, const std::string& path);

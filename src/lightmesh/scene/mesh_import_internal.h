@@ -19,8 +19,15 @@ namespace mesh_import {
 /// "4194304" as "4,194,304", for the budgets' messages.
 std::string Thousands(uint64_t n);
 /// Checks what Assimp would report less clearly: a missing file, a directory, a FIFO, an
-/// empty or unreadable file.
+/// empty or unreadable file, one whose first 4 KiB are all NUL bytes.
 void CheckReadable(const std::string& path);
+/// Assimp's OBJ reader is quadratic in the number of `o` objects: an .obj file's are
+/// counted and the time estimated; past the import deadline it is refused (MeshFileError),
+/// past kAnnouncedObjSeconds a warning says how long it will take.
+void CheckObjObjectCount(const std::string& path);
+/// Seconds per pair of `o` objects in Assimp 5.2's OBJ reader (200,000 objects: 40 s).
+inline constexpr double kObjSecondsPerObjectPair = 1e-9;
+inline constexpr double kAnnouncedObjSeconds = 10;
 /// Assimp's error string as a reason.
 std::string ImportErrorReason(std::string err, const ImportBudget& budget);
 
@@ -40,6 +47,12 @@ Material MaterialFromFile(const aiMaterial& am);
 void CheckGltfHierarchy(const std::string& path, const ImportBudget& budget);
 
 // isolated_import.cpp
+
+/// The import deadline without LIGHTMESH_IMPORT_TIMEOUT: 60 s + 2 s per MB, at most this.
+inline constexpr double kMaxDefaultImportSeconds = 600;
+/// The import's deadline for `path`: LIGHTMESH_IMPORT_TIMEOUT (seconds, any value up to
+/// 1e7) when set, else 60 s + 2 s per MB of the file, at most kMaxDefaultImportSeconds.
+double ImportTimeoutSeconds(const std::string& path);
 
 /// An error as the child's result, written to `fd` (Assimp's assertions in the child end
 /// with it).

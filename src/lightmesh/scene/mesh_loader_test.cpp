@@ -1,9 +1,12 @@
 // Tests of LoadMeshFile (Assimp import, node walk, materials, excludes).
 #include "lightmesh/scene/mesh_loader.h"
+#include "lightmesh/scene/mesh_import_internal.h"
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -374,6 +377,65 @@ TEST(MeshLoader, ChildProcessImportEqualsInProcessImport) {
     EXPECT_EQ(child.meshesPlaced, local.meshesPlaced);
     EXPECT_EQ(child.excludeNamesMatched, (std::vector<bool>{true, false}));
     EXPECT_EQ(child.warnings, local.warnings);
+}
+
+// Issue 45: the import deadline is 60 s + 2 s per MB but at most 10 minutes (a 20 GB file
+// had 11 hours), LIGHTMESH_IMPORT_TIMEOUT sets any other; a file of zeros is refused before
+// the importer reads it, and an OBJ whose `o` objects Assimp would look up for longer than
+// the deadline is refused with the estimate.
+TEST(MeshLoader, ImportDeadlineAndEarlyRefusals) {
+    const std::string folder = TempFolder();
+    const std::string big = folder + "/big.obj";
+    { std::ofstream(big, std::ios::binary) << "v 0 0 0\n"; }
+    fs::resize_file(big, uint64_t(20) << 30);  // sparse: 20 GB of (mostly) zeros
+    unsetenv("LIGHTMESH_IMPORT_TIMEOUT");
+    EXPECT_EQ(mesh_import::ImportTimeoutSeconds(big), mesh_import::kMaxDefaultImportSeconds);
+    EXPECT_EQ(mesh_import::kMaxDefaultImportSeconds, 600);
+    EXPECT_NEAR(mesh_import::ImportTimeoutSeconds(WriteFile(folder, "small.obj", std::string(5'000'000, '#'))), 70.0, 0.01);
+    setenv("LIGHTMESH_IMPORT_TIMEOUT", "3600", 1);
+    EXPECT_EQ(mesh_import::ImportTimeoutSeconds(big), 3600);
+    unsetenv("LIGHTMESH_IMPORT_TIMEOUT");
+    fs::remove(big);
+
+    const std::string zeros = folder + "/zeros.ply";
+    { std::ofstream(zeros, std::ios::binary); }
+    fs::resize_file(zeros, uint64_t(1) << 30);
+    try {
+        LoadMeshFile(zeros);
+        ADD_FAILURE() << "no error";
+    } catch (const MeshFileError& e) {
+        EXPECT_EQ(e.Reason(), "its first 4,096 bytes are all zero (NUL): not a mesh file (a zeroed or sparse file?)");
+    }
+    fs::remove(zeros);
+    // A binary STL may start with an 80-byte header of zeros: it is read.
+    std::string stl(80, '\0');
+    const uint32_t one = 1;
+    stl.append(reinterpret_cast<const char*>(&one), 4);
+    const float tri[12] = {0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0};
+    stl.append(reinterpret_cast<const char*>(tri), sizeof tri);
+    stl.append(2, '\0');
+    EXPECT_EQ(LoadMeshFile(WriteFile(folder, "zero-header.stl", stl)).mesh.TriangleCount(), 1u);
+
+    auto objects = [&](int n) {
+        std::string s;
+        for (int i = 0; i < n; ++i)
+            s += " o ob" + std::to_string(i) + "\nv 0 0 " + std::to_string(i) + "\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n";
+        return WriteFile(folder, "objects" + std::to_string(n) + ".obj", s + "# o is counted at a line's start only\n");
+    };
+    setenv("LIGHTMESH_IMPORT_TIMEOUT", "1", 1);  // 40,000² pairs at 1 ns: 1.6 s
+    const auto start = std::chrono::steady_clock::now();
+    try {
+        LoadMeshFile(objects(40000));
+        ADD_FAILURE() << "no error";
+    } catch (const MeshFileError& e) {
+        EXPECT_EQ(e.Reason(),
+                  "40,000 objects (`o` lines): Assimp's OBJ reader takes time growing with the square of their "
+                  "number, about 1.6 s here, more than the import deadline of 1.0 s (LIGHTMESH_IMPORT_TIMEOUT raises "
+                  "it); merge the objects, or convert the file to glTF");
+    }
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 0.9);
+    unsetenv("LIGHTMESH_IMPORT_TIMEOUT");
+    EXPECT_EQ(LoadMeshFile(objects(3000)).mesh.TriangleCount(), 3000u);
 }
 
 }  // namespace

@@ -29,6 +29,11 @@ struct PointLight {
     Vec3 position;
     Color intensity{1.0f};
     Falloff falloff = Falloff::InverseSquare;
+    /// The radius of the sphere the light stands for, in scene units (finite, >= 0; 0: a
+    /// point). Methods that soften shadows by the light's size read it through LightRadii
+    /// (shadow/shadow.h), which applies the render's --light-radius override. Scene files
+    /// without "radius" and framed bare meshes get DefaultLightRadius (scene_file.h).
+    float radius = 0.0f;
 };
 
 /// A pinhole camera.

@@ -175,6 +175,9 @@ void Validate(const Scene& scene) {
             ThrowError(
                 "%s: light %zu has a non-finite position or a negative or non-finite intensity",
                 name.c_str(), i);
+        if (!(std::isfinite(l.radius) && l.radius >= 0))
+            ThrowError("%s: light %zu has a negative or non-finite radius (%g)", name.c_str(), i,
+                       static_cast<double>(l.radius));
     }
     std::string key;
     if (std::string problem = CameraProblem(scene.camera, &key); !problem.empty())

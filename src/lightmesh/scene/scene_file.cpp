@@ -13,7 +13,10 @@
 //   "materials"  {NAME: {"kd": colour (0.8), "ks": colour (0), "phong": number ≥ 0 (32),
 //                "mirror": colour (0)}, ...}.
 //   "lights"     required, ≥ 1: [{"position": [x,y,z] (required), "intensity": colour (1),
-//                "falloff": "inverse_square" (default) | "none"}, ...].
+//                "falloff": "inverse_square" (default) | "none", "radius": number ≥ 0 (the
+//                sphere the light stands for, scene units; 0 is a point; default 2 % of the
+//                light's distance to the centre of the scene's bounding box, ground
+//                included: DefaultLightRadius, recorded in a note)}, ...].
 //   "meshes"     required, ≥ 1: [{"file": path relative to the scene file's folder
 //                (required), "transform": {"scale": number | [3] (non-zero), "rotate":
 //                [[ax, ay, az, degrees], ...] (a single [ax, ay, az, degrees] is accepted too),
@@ -38,8 +41,9 @@
 //                "area"), "accel" ("brute" | "grid" | "embree"), "grid" (0..4096),
 //                "cc" (1..4096), "ki" (0.01..16), "variant" (string), "ns" (0..64),
 //                "template_dir" (string), "cell_summaries" ("auto" | "on" | "off"),
-//                "light_radius" (≥ 0: the sphere each point light stands for: sampled by
-//                "shadows": "area", sizing the penumbrae of "lmm"), "thin_check" ("off" |
+//                "light_radius" (≥ 0: overrides every light's "radius": sampled by
+//                "shadows": "area"; only this key turns on and sizes the contact-hardening
+//                penumbrae of "lmm", the lights' own radii do not), "thin_check" ("off" |
 //                "lit" | "all": with a light radius, P's own ray checks the nodes), "samples"
 //                (1..4096, shadow rays per light).
 //                The ranges and choices are the settings table's (settings/render_settings.cpp).
@@ -53,6 +57,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <cerrno>
 #include <cstring>
@@ -143,7 +148,9 @@ Material ReadMaterial(const Reader& r, const Json& j, const std::string& path,
     return m;
 }
 
-PointLight ReadLight(const Reader& r, const Json& j, const std::string& path) {
+/// One entry of "lights"; *hasRadius tells whether it states its "radius" (the others get
+/// the default once the meshes give the scene's bounds).
+PointLight ReadLight(const Reader& r, const Json& j, const std::string& path, bool* hasRadius) {
     Object o(r, j, path);
     PointLight light;
     light.position = ReadVec3(r, o.Require("position"), o.Child("position"));
@@ -153,6 +160,11 @@ PointLight ReadLight(const Reader& r, const Json& j, const std::string& path) {
         light.falloff = Enum(r, *v, o.Child("falloff"), {"inverse_square", "none"}) == "none"
                             ? Falloff::None
                             : Falloff::InverseSquare;
+    }
+    *hasRadius = false;
+    if (const Json* v = o.Find("radius")) {
+        light.radius = NonNegative(r, *v, o.Child("radius"));
+        *hasRadius = true;
     }
     if (const Json* v = o.Find("name")) String(r, *v, o.Child("name"));
     o.Finish();
@@ -258,7 +270,7 @@ void ReadRender(const Reader& r, const Json& j, RenderOptions* ro) {
     if (const Json* v = o.Find("shadows")) ro->shadows = choice(*v, "shadows");
     if (const Json* v = o.Find("accel")) ro->accel = choice(*v, "accel");
     if (const Json* v = o.Find("grid")) ro->accelOptions.gridResolution = integer(*v, "grid");
-    if (const Json* v = o.Find("cc")) ro->lightMesh.cc = integer(*v, "cc");
+    if (const Json* v = o.Find("cc")) ro->lightMesh.cc = ro->soft.cc = integer(*v, "cc");
     if (const Json* v = o.Find("ki")) ro->lightMesh.ki = number(*v, "ki");
     if (const Json* v = o.Find("variant")) {
         ro->lightMesh.variant = String(r, *v, o.Child("variant"));
@@ -276,6 +288,7 @@ void ReadRender(const Reader& r, const Json& j, RenderOptions* ro) {
     if (const Json* v = o.Find("light_radius")) ro->areaLight.radius = number(*v, "light_radius");
     if (const Json* v = o.Find("thin_check")) ro->lightMesh.thinCheck = choice(*v, "thin_check");
     if (const Json* v = o.Find("samples")) ro->areaLight.samples = integer(*v, "samples");
+    if (const Json* v = o.Find("soft_samples")) ro->soft.samples = integer(*v, "soft_samples");
     // Where each value came from, for the messages of the factories that read it.
     for (const RenderSetting& s : RenderSettings())
         if (o.Find(s.key)) ro->origins[s.key] = SourceLoc(r.File(), 0, 0, o.Child(s.key));
@@ -316,6 +329,40 @@ int LookUpMaterial(const Reader& r, const Json& j, const std::string& path,
                                       : " (defined: " + list + ")"));
 }
 
+/// Gives the lights `unsized` (indices into scene->lights, ascending) DefaultLightRadius
+/// from the finished scene's bounds (ground included: the box `lightmesh info` prints), and
+/// says so in one note: a soft shadow nobody asked for should be explained, with the way
+/// back to a point.
+void SizeUnsizedLights(Scene* scene, const std::vector<size_t>& unsized) {
+    if (unsized.empty()) return;
+    const Bounds3 bounds = scene->mesh.Bounds();
+    // At most this many lights by name; a file with hundreds of lights gets a count.
+    constexpr size_t kListed = 8;
+    std::string which, radii;
+    for (size_t k = 0; k < unsized.size(); ++k) {
+        PointLight& light = scene->lights[unsized[k]];
+        light.radius = DefaultLightRadius(bounds, light.position);
+        if (k >= kListed) continue;
+        const char* sep = k == 0 ? "" : (k + 1 == unsized.size() ? " and " : ", ");
+        which += sep + std::to_string(unsized[k]);
+        radii += sep + StringPrintf("%.3g", static_cast<double>(light.radius));
+    }
+    if (unsized.size() > kListed) {
+        const std::string more = StringPrintf(" and %zu more", unsized.size() - kListed);
+        which += more;
+        radii += more;
+    }
+    const int share = static_cast<int>(std::lround(100 * kDefaultLightRadiusShare));
+    scene->report.notes.push_back(
+        unsized.size() == 1
+            ? StringPrintf("light %s has no \"radius\": %s (%d %% of its distance to the scene's centre); "
+                           "\"radius\": 0 makes it a point",
+                           which.c_str(), radii.c_str(), share)
+            : StringPrintf("lights %s have no \"radius\": %s (%d %% of each one's distance to the scene's "
+                           "centre); \"radius\": 0 makes a light a point",
+                           which.c_str(), radii.c_str(), share));
+}
+
 // ---------------------------------------------------------------------------------------
 // The three kinds of scene
 
@@ -350,8 +397,12 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
     const Json& lj = top.Require("lights", "a scene needs at least one point light");
     if (!lj.is_array()) r.Fail("/lights", "expected a list of lights [...], got " + Describe(lj));
     if (lj.empty()) r.Fail("/lights", "a scene needs at least one light, got an empty list");
-    for (size_t i = 0; i < lj.size(); ++i)
-        scene.lights.push_back(ReadLight(r, lj[i], Index("/lights", i)));
+    std::vector<size_t> unsized;  // lights without "radius": sized once the bounds are known
+    for (size_t i = 0; i < lj.size(); ++i) {
+        bool hasRadius = false;
+        scene.lights.push_back(ReadLight(r, lj[i], Index("/lights", i), &hasRadius));
+        if (!hasRadius) unsized.push_back(i);
+    }
 
     const Json& mj = top.Require("meshes", "a scene needs at least one mesh");
     if (!mj.is_array()) r.Fail("/meshes", "expected a list of meshes [...], got " + Describe(mj));
@@ -525,6 +576,7 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
     }
     if (std::string p = SpanProblem(scene); !p.empty()) r.Fail("", p);
     CheckLightsOutsideSolids(r, scene);
+    SizeUnsizedLights(&scene, unsized);
     return scene;
 }
 
@@ -543,6 +595,10 @@ Scene LoadBuiltin(const std::string& spec, std::vector<std::string>* warnings) {
 }
 
 }  // namespace
+
+float DefaultLightRadius(const Bounds3& sceneBounds, const Vec3& position) {
+    return kDefaultLightRadiusShare * Length(position - sceneBounds.Center());
+}
 
 std::string ModelCacheDir() {
     const std::string dir = CacheDir("models");

@@ -26,10 +26,25 @@ struct SceneLoadOptions {
     std::function<LoadedMesh(const std::string& path, const MeshLoadOptions&)> loadMesh = nullptr;
 };
 
+/// The share of a light's distance to the scene's centre that a light with no stated size
+/// gets as its radius (DefaultLightRadius): 2 %.
+inline constexpr float kDefaultLightRadiusShare = 0.02f;
+
+/// The radius a light at `position` gets when nothing gives it one (a scene file's light
+/// without "radius", the lights that frame a bare mesh): kDefaultLightRadiusShare of its
+/// distance to the centre of `sceneBounds`. Soft shadows are what lightmesh is for, and a
+/// size proportional to the distance makes every such light subtend the same small angle
+/// from the scene's middle (half-angle asin 0.02, about 1.1 degrees) wherever it is and
+/// whatever the scene's units: a bulb 2 m from the middle of a room gets 4 cm, a sun far
+/// away a proportionally large disc. A light at the very centre gets 0, a point.
+float DefaultLightRadius(const Bounds3& sceneBounds, const Vec3& position);
+
 /// Loads "builtin:NAME", a JSON scene file (*.json; the format is described at the top of
 /// scene_file.cpp), or a bare mesh file in any format Assimp reads. A bare mesh is framed
 /// automatically: a camera that sees the whole model, a ground plane under it and two
-/// point lights above it, each choice recorded in scene.report.notes.
+/// point lights above it, each choice recorded in scene.report.notes. Lights that do not
+/// state their size (a scene file's light without "radius", the framing's lights) get
+/// DefaultLightRadius, also recorded in the notes.
 ///
 /// Every scene is then cleaned (degenerate and duplicate triangles dropped, counted in
 /// scene.report, with a warning) and validated: at least one triangle, a finite non-zero

@@ -2,7 +2,9 @@
 #pragma once
 
 #include <map>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "lightmesh/settings/accel_options.h"
 #include "lightmesh/settings/render_settings.h"
@@ -43,7 +45,8 @@ struct LightMeshOptions {
     /// point lights stand for, in scene units. With R > 0 the interpolation radius at each
     /// penumbra point follows the light's size and the blocker's distance (see
     /// LightMeshShadows); 0 is the paper's fixed radius r = kI·h. Filled from the render's
-    /// "light_radius" setting (AreaLightOptions::radius), which the area reference shares.
+    /// explicit "light_radius" override (AreaLightOptions::radius) only, 0 without one: the
+    /// lights' own radii (PointLight::radius) do not turn the mode on.
     float lightRadius = 0.0f;
     /// With a light radius (ours): where the nodes agree on a light, P's own shadow ray
     /// checks their answer, so that occluders ("lit": the points the nodes call lit) and
@@ -54,14 +57,37 @@ struct LightMeshOptions {
 };
 
 /// Settings of the area-light reference ("--shadows area", issue 7): every point light
-/// becomes a sphere of this radius (same centre and intensity), and each shading point
-/// traces `samples` stratified shadow rays per light (the paper's "naive" soft shadows,
-/// §1.2). Radius 0 is exactly "rt".
+/// becomes a sphere of its radius (same centre and intensity; LightRadii in
+/// shadow/shadow.h), and each shading point traces `samples` stratified shadow rays per
+/// light (the paper's "naive" soft shadows, §1.2). Lights of radius 0 get exactly the shadow
+/// ray of "rt".
 struct AreaLightOptions {
-    float radius = 0.0f;  ///< sphere radius in scene units, finite and >= 0
+    /// The override of every light's radius, in scene units, finite and >= 0 (0: all lights
+    /// are points): --light-radius, a scene file's "render": {"light_radius"}, or code that
+    /// sets it (the bench's references). Unset: each light's own PointLight::radius. It is
+    /// also the only thing that turns on the light mesh's contact-hardening penumbrae
+    /// (LightMeshOptions::lightRadius).
+    std::optional<float> radius;
     int samples = 16;     ///< shadow rays per light and shading point, 1 .. 4096
 };
 
+
+/// Settings of the default soft shadows ("--shadows soft", shadow/soft_shadows.h; ours).
+struct SoftShadowOptions {
+    /// Cells across the longest side of the scene's box (the light mesh's CC).
+    int cc = 64;
+    /// Directions per light at a point whose cone meets a listed triangle: 4 .. 256, a
+    /// multiple of 4.
+    int samples = 64;
+    /// Rays per light at a point of a dense cell (traced through the back-end); 0: a
+    /// quarter of `samples`, at least 8.
+    int denseSamples = 0;
+    /// Cell lists longer than this are "dense" (at most 1024).
+    int denseEntries = 512;
+    /// The lights' radii, one per light: filled in by the shadow-method factory
+    /// (LightRadii: --light-radius, else each light's own).
+    std::vector<float> radii;
+};
 
 struct RenderOptions {
     int width = 640;
@@ -70,8 +96,9 @@ struct RenderOptions {
     int aa = 1;
     /// Mirror recursion limit (1 = no reflected rays).
     int maxDepth = 5;
-    /// Shadow method: "none", "rt" (one shadow ray per light), "lmm" or "area".
-    std::string shadows = "rt";
+    /// Shadow method: "soft" (the default: soft shadows of the lights' spheres), "none",
+    /// "rt" (one shadow ray per light), "lmm" (the paper's light mesh) or "area".
+    std::string shadows = "soft";
     /// Ray-query back-end: "brute", "grid" or "embree". The default is the fastest one
     /// measured (README, Benchmarks): Embree when the build has it; the nested grid (the
     /// paper's §2, which reproduces its tables) is one flag away.
@@ -79,6 +106,7 @@ struct RenderOptions {
     AccelOptions accelOptions;
     LightMeshOptions lightMesh;
     AreaLightOptions areaLight;
+    SoftShadowOptions soft;
     /// Where each knob's value came from, by scene-file key: "scene.json /render/ki" or
     /// "--ki" (the CLI's value replaces the file's); a knob left at its default is absent.
     std::map<std::string, SourceLoc> origins;

@@ -15,9 +15,10 @@ const std::vector<RenderSetting>& RenderSettings() {
         {"height", "--height", K::Int, 1, 16384, {}, "Image height in pixels", nullptr, {}},
         {"aa", "--aa", K::Int, 1, 16, {}, "Anti-aliasing: N x N camera rays per pixel", nullptr, {}},
         {"max_depth", "--max-depth", K::Int, 1, 64, {}, "Mirror recursion limit (1: no reflections)", nullptr, {}},
-        {"shadows", "--shadows", K::Choice, 0, 0, {"none", "rt", "lmm", "area"},
-         "Shadows: none, rt (hard: one shadow ray per light), lmm (soft: the light mesh method) or area "
-         "(soft reference: spherical lights, --samples shadow rays each)", nullptr, {}},
+        {"shadows", "--shadows", K::Choice, 0, 0, {"soft", "none", "rt", "lmm", "area"},
+         "Shadows: soft (default: soft shadows of the lights' spheres from the light mesh's cells), none, rt "
+         "(hard: one shadow ray per light), lmm (the paper's light mesh method) or area (soft reference: "
+         "--samples shadow rays per light)", nullptr, {}},
         {"accel", "--accel", K::Choice, 0, 0, {"brute", "grid", "embree"},
          std::string("Ray-query back-end: brute, grid (the paper's nested grid) or embree; default ") +
              kDefaultAccelerator,
@@ -26,7 +27,8 @@ const std::vector<RenderSetting>& RenderSettings() {
         {"grid", "--grid", K::Int, 0, 4096, {}, "Nested grid: top-level cells along the longest side (0: automatic)",
          "accel", {"grid"}},
         {"cc", "--cc", K::Int, 1, 4096, {},
-         "Light mesh: cells across the longest side of the scene (the paper's CC; default 100)", "shadows", {"lmm"}},
+         "Light mesh: cells across the longest side of the scene (the paper's CC; default 100 for lmm, 64 for soft)",
+         "shadows", {"lmm", "soft"}},
         {"ki", "--ki", K::Float, 0.01, 16, {}, "Light mesh: interpolation radius in mesh steps, r = kI*h (default 2)",
          "shadows", {"lmm"}},
         {"variant", "--variant", K::String, 0, 0, {},
@@ -45,14 +47,20 @@ const std::vector<RenderSetting>& RenderSettings() {
          "rays or more), on (every cell; also none, inside) or off",
          "shadows", {"lmm"}},
         {"light_radius", "--light-radius", K::Float, 0, kNoLimit, {},
-         "Radius of the sphere each point light stands for: area shadows sample it, lmm sizes its "
-         "penumbrae by it (contact hardening; default 0: point lights)", "shadows", {"area", "lmm"}},
+         "Overrides every light's own radius (scene key \"radius\"; default 2% of its distance to the "
+         "scene's centre) with this one; 0: point lights. Soft and area shadows use spheres of it; lmm sizes "
+         "its penumbrae by it (contact hardening), which only this option turns on, not the lights' own radii",
+         "shadows", {"soft", "area", "lmm"}},
         {"thin_check", "--thin-check", K::Choice, 0, 0, {"off", "lit", "all"},
          "Light mesh with --light-radius: P's own shadow ray checks where the nodes agree, so occluders (lit) "
          "and also gaps (all) thinner than the mesh step keep their effect; off: the nodes decide (default all)",
          "shadows", {"lmm"}},
         {"samples", "--samples", K::Int, 1, 4096, {},
          "Area shadows: stratified shadow rays per light and shading point (default 16)", "shadows", {"area"}},
+        {"soft_samples", "--soft-samples", K::Int, 16, 256, {},
+         "Soft shadows: directions per light where a triangle is in a point's cone to it, a multiple of 16 (a "
+         "quarter first; the rest only in a penumbra; default 64)",
+         "shadows", {"soft"}},
     };
     return rows;
 }

@@ -60,7 +60,7 @@ class SettingError : public Error {
 [[noreturn]] void ThrowSettingError(const char* key, const char* fmt, ...) __attribute__((format(printf, 2, 3)));
 
 /// The warning for knob `key` given as its flag when setting `s.usedWith` is `value`, or ""
-/// when that render uses it: "--cc is not used by --shadows rt (only by lmm); ignored".
+/// when that render uses it: "--cc is not used by --shadows rt (only by lmm and soft); ignored".
 std::string UnusedSettingWarning(std::string_view key, std::string_view value);
 
 }  // namespace lm

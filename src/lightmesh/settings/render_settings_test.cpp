@@ -40,10 +40,10 @@ TEST(RenderSettings, RowsAreWellFormed) {
 // Which knobs a method or back-end uses is the table's: a flag given for a render that does
 // not use it gets one warning naming the users; a knob every render uses, none.
 TEST(RenderSettings, UnusedFlagsAreNamedByTheTable) {
-    EXPECT_EQ(UnusedSettingWarning("cc", "rt"), "--cc is not used by --shadows rt (only by lmm); ignored");
+    EXPECT_EQ(UnusedSettingWarning("cc", "rt"), "--cc is not used by --shadows rt (only by lmm and soft); ignored");
     EXPECT_EQ(UnusedSettingWarning("cc", "lmm"), "");
     EXPECT_EQ(UnusedSettingWarning("light_radius", "none"),
-              "--light-radius is not used by --shadows none (only by area and lmm); ignored");
+              "--light-radius is not used by --shadows none (only by soft, area and lmm); ignored");
     EXPECT_EQ(UnusedSettingWarning("light_radius", "area"), "");
     EXPECT_EQ(UnusedSettingWarning("samples", "lmm"), "--samples is not used by --shadows lmm (only by area); ignored");
     EXPECT_EQ(UnusedSettingWarning("grid", "embree"), "--grid is not used by --accel embree (only by grid); ignored");

@@ -25,6 +25,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <utility>
 
 #include "lightmesh/settings/render_settings.h"
 #include "lightmesh/util/error.h"
@@ -48,8 +49,8 @@ constexpr float OneMinusEpsilon = 0x1.fffffep-1f;
 }  // namespace
 
 void ValidateAreaLightOptions(const AreaLightOptions& o) {
-    if (!(std::isfinite(o.radius) && o.radius >= 0))
-        ThrowSettingError("light_radius", "light radius %g: must be a finite number >= 0", static_cast<double>(o.radius));
+    if (o.radius && !(std::isfinite(*o.radius) && *o.radius >= 0))
+        ThrowSettingError("light_radius", "light radius %g: must be a finite number >= 0", static_cast<double>(*o.radius));
     if (o.samples < 1 || o.samples > 4096)
         ThrowSettingError("samples", "area-light samples %d: must be 1 to 4096", o.samples);
 }
@@ -59,6 +60,22 @@ uint64_t AreaLightSeed(const ShadingPoint& sp, uint32_t light) {
     h = Mix64(h ^ (std::bit_cast<uint32_t>(sp.p.x) | uint64_t(std::bit_cast<uint32_t>(sp.p.y)) << 32));
     h = Mix64(h ^ (std::bit_cast<uint32_t>(sp.p.z) | uint64_t(sp.prim) << 32));
     return h;
+}
+
+void ConcentricDisc(float u0, float u1, float* dx, float* dy) {
+    const float ox = 2.0f * u0 - 1.0f, oy = 2.0f * u1 - 1.0f;
+    *dx = *dy = 0;
+    if (ox == 0 && oy == 0) return;
+    float r, theta;
+    if (std::abs(ox) > std::abs(oy)) {
+        r = ox;
+        theta = (Pi / 4) * (oy / ox);
+    } else {
+        r = oy;
+        theta = Pi / 2 - (Pi / 4) * (ox / oy);
+    }
+    *dx = r * std::cos(theta);
+    *dy = r * std::sin(theta);
 }
 
 namespace {
@@ -75,21 +92,8 @@ Vec3 SampleCone(const Vec3& e1, const Vec3& e2, const Vec3& axis, float oneMinus
     const float u0 = std::min(static_cast<float>(a), OneMinusEpsilon);
     const float u1 = std::min(static_cast<float>(b), OneMinusEpsilon);
 
-    // Concentric map of [0, 1)² to the unit disc (Shirley & Chiu 1997; pbrt-v4).
-    const float ox = 2.0f * u0 - 1.0f, oy = 2.0f * u1 - 1.0f;
-    float dx = 0, dy = 0;
-    if (ox != 0 || oy != 0) {
-        float r, theta;
-        if (std::abs(ox) > std::abs(oy)) {
-            r = ox;
-            theta = (Pi / 4) * (oy / ox);
-        } else {
-            r = oy;
-            theta = Pi / 2 - (Pi / 4) * (ox / oy);
-        }
-        dx = r * std::cos(theta);
-        dy = r * std::sin(theta);
-    }
+    float dx, dy;
+    ConcentricDisc(u0, u1, &dx, &dy);
 
     // Disc to cone: 1 − cos θ = r²·k keeps solid angle uniform; sin θ = r·sqrt(k(2 − r²k)).
     const float r2k = (dx * dx + dy * dy) * oneMinusCosMax;
@@ -229,8 +233,9 @@ namespace {
 /// "area": the Monte Carlo soft-shadow reference.
 class AreaLightShadows final : public ShadowMethod {
   public:
-    AreaLightShadows(const Scene& scene, const Accelerator& accel, const AreaLightOptions& options)
-        : scene_(scene), accel_(accel), options_(options) {}
+    AreaLightShadows(const Scene& scene, const Accelerator& accel, const AreaLightOptions& options,
+                     std::vector<float> radii)
+        : scene_(scene), accel_(accel), options_(options), radii_(std::move(radii)) {}
     std::string_view Name() const override { return "area"; }
 
     void Visibility(const ShadingPoint& sp, const bool* needed, float* vis,
@@ -238,36 +243,52 @@ class AreaLightShadows final : public ShadowMethod {
         for (size_t i = 0; i < scene_.lights.size(); ++i) {
             if (!needed[i]) continue;
             const Vec3& center = scene_.lights[i].position;
-            if (options_.radius == 0) {
+            if (radii_[i] == 0) {
                 // A point light: exactly the shadow ray of "rt", so R = 0 equals RT bit for bit.
                 ++counters.shadowRays;
                 vis[i] = LightVisible(accel_, sp.origin, center) ? 1.0f : 0.0f;
                 continue;
             }
             int rays = 0;
-            vis[i] = SphereLightVisibility(accel_, sp.origin, center, options_.radius, options_.samples,
+            vis[i] = SphereLightVisibility(accel_, sp.origin, center, radii_[i], options_.samples,
                                            AreaLightSeed(sp, static_cast<uint32_t>(i)), &rays);
             counters.shadowRays += static_cast<uint64_t>(rays);
         }
     }
 
+    // One radius when every light has it (the override), else the list in light order.
     ShadowFigures Figures() const override {
-        return {{"light radius", StringPrintf("%g", static_cast<double>(options_.radius))},
-                {"samples per light", std::to_string(options_.radius == 0 ? 1 : options_.samples)}};
+        const bool same = std::all_of(radii_.begin(), radii_.end(), [&](float r) { return r == radii_.front(); });
+        const size_t points = static_cast<size_t>(std::count(radii_.begin(), radii_.end(), 0.0f));
+        std::string radii;
+        for (size_t i = 0; i < (same ? std::min<size_t>(radii_.size(), 1) : radii_.size()); ++i)
+            radii += (i ? ", " : "") + StringPrintf("%.3g", static_cast<double>(radii_[i]));
+        const std::string samples = points == radii_.size() ? "1"
+                                    : points == 0
+                                        ? std::to_string(options_.samples)
+                                        : StringPrintf("%d (1 for the lights of radius 0)", options_.samples);
+        return {{same ? "light radius" : "light radii", radii}, {"samples per light", samples}};
     }
 
   private:
     const Scene& scene_;
     const Accelerator& accel_;
     const AreaLightOptions options_;
+    const std::vector<float> radii_;  ///< per light, from LightRadii
 };
 
 }  // namespace
 
 std::unique_ptr<ShadowMethod> CreateAreaLightShadows(const Scene& scene, const Accelerator& accel,
-                                                     const AreaLightOptions& options) {
+                                                     const AreaLightOptions& options, std::vector<float> radii) {
     ValidateAreaLightOptions(options);
-    return std::make_unique<AreaLightShadows>(scene, accel, options);
+    if (radii.size() != scene.lights.size())
+        ThrowError("area lights: %zu radii for %zu lights", radii.size(), scene.lights.size());
+    for (size_t i = 0; i < radii.size(); ++i)
+        if (!(std::isfinite(radii[i]) && radii[i] >= 0))
+            ThrowError("%s: light %zu: radius %g: must be a finite number >= 0", scene.name.c_str(), i,
+                       static_cast<double>(radii[i]));
+    return std::make_unique<AreaLightShadows>(scene, accel, options, std::move(radii));
 }
 
 }  // namespace lm

@@ -5,12 +5,14 @@
 
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "lightmesh/shadow/shadow.h"
 
 namespace lm {
 
-/// Throws Error unless the radius is finite and >= 0 and samples is in 1 .. 4096.
+/// Throws Error unless the radius override (when set) is finite and >= 0 and samples is in
+/// 1 .. 4096.
 void ValidateAreaLightOptions(const AreaLightOptions& options);
 
 /// The seed of the sample sequence of one (shading point, light) pair: a hash of the bits
@@ -68,6 +70,10 @@ class DiscRings {
     bool inside_ = false;
 };
 
+/// Shirley and Chiu's concentric map of [0, 1)² to the unit disc (pbrt-v4's
+/// SampleUniformDiskConcentric): area-preserving, and it keeps strata compact.
+void ConcentricDisc(float u0, float u1, float* dx, float* dy);
+
 /// Direction `index` of `samples` in the cone around the unit vector `axis` whose
 /// half-angle θmax has 1 - cos θmax = `oneMinusCosMax` (in [0, 1]): uniform in solid
 /// angle and stratified, shifted by (`shift0`, `shift1`) in [0, 1)² (Cranley–Patterson
@@ -75,10 +81,12 @@ class DiscRings {
 Vec3 SampleConeStratified(const Vec3& axis, float oneMinusCosMax, int index, int samples,
                           float shift0, float shift1);
 
-/// "area": soft shadows from spherical lights by Monte Carlo. With radius 0 it traces
-/// exactly the shadow ray of "rt" and gives bit-identical images. Throws Error for bad
-/// options (ValidateAreaLightOptions).
+/// "area": soft shadows from spherical lights by Monte Carlo, light i a sphere of radius
+/// radii[i] (LightRadii: the lights' own radii or the override). For a light of radius 0 it
+/// traces exactly the shadow ray of "rt", so with every radius 0 the images are
+/// bit-identical. Throws Error for bad options (ValidateAreaLightOptions) or radii (not one
+/// per light, negative or not finite).
 std::unique_ptr<ShadowMethod> CreateAreaLightShadows(const Scene& scene, const Accelerator& accel,
-                                                     const AreaLightOptions& options);
+                                                     const AreaLightOptions& options, std::vector<float> radii);
 
 }  // namespace lm

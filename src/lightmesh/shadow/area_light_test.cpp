@@ -110,10 +110,12 @@ TEST(AreaLight, ValidatesOptions) {
 }
 
 // R = 0 is a point light: the very shadow ray of "rt", so the images are bit-identical.
+// The lights have sizes of their own; the override --light-radius 0 makes them points.
 TEST(AreaLight, ZeroRadiusEqualsRtBitForBit) {
     Scene s = FloorScene();
     AddBox(&s, {-1, 0.5f, -1}, {1, 1.5f, 1});
     s.lights.push_back({{-2, 3, 1}, Color(5.0f), Falloff::InverseSquare});
+    for (PointLight& l : s.lights) l.radius = 0.4f;
     auto accel = CreateAccelerator("grid", s.mesh);
     const RenderOptions area = AreaOptions(s, 0.0f, 64);
     auto rt = CreateShadowMethod("rt", s, *accel, s.render);
@@ -124,6 +126,90 @@ TEST(AreaLight, ZeroRadiusEqualsRtBitForBit) {
     EXPECT_EQ(a.counters.shadowRays, b.counters.shadowRays);
     // The shadow is really there (the test would be empty otherwise).
     EXPECT_EQ(Vis(*zero, FloorPoint(0.1f, 0.1f)), 0.0f);
+}
+
+// Without the override each light keeps its own radius: lights of radius 0 (the default of
+// a scene built in code) are points, so the image is RT's bit for bit; with a size the
+// shadow goes soft.
+TEST(AreaLight, LightsOwnZeroRadiiEqualRtBitForBit) {
+    Scene s = FloorScene();
+    AddBox(&s, {-1, 0.5f, -1}, {1, 1.5f, 1});
+    s.lights.push_back({{-2, 3, 1}, Color(5.0f), Falloff::InverseSquare});
+    auto accel = CreateAccelerator("grid", s.mesh);
+    RenderOptions area = s.render;
+    area.shadows = "area";
+    ASSERT_FALSE(area.areaLight.radius.has_value());
+    auto rt = CreateShadowMethod("rt", s, *accel, s.render);
+    auto points = CreateShadowMethod("area", s, *accel, area);
+    const RenderResult a = WhittedRenderer(s, *accel, *rt, s.render).Render();
+    const RenderResult b = WhittedRenderer(s, *accel, *points, area).Render();
+    EXPECT_EQ(a.image.pixels, b.image.pixels);
+    EXPECT_EQ(a.counters.shadowRays, b.counters.shadowRays);
+    EXPECT_EQ(points->Figures(), (ShadowFigures{{"light radius", "0"}, {"samples per light", "1"}}));
+    for (PointLight& l : s.lights) l.radius = 0.5f;
+    auto sized = CreateShadowMethod("area", s, *accel, area);
+    const RenderResult c = WhittedRenderer(s, *accel, *sized, area).Render();
+    EXPECT_NE(a.image.pixels, c.image.pixels);
+    EXPECT_EQ(c.counters.shadowRays, 16 * a.counters.shadowRays);  // 16 samples per light
+}
+
+// Each light with its own radius: two lights at the same place over the half-plane, light
+// 0 a point (radius 0) and light 1 a sphere of radius R. Light 0 gets RT's visibility,
+// exactly and with one ray, everywhere; light 1 the sphere's fractional visibility across
+// the penumbra, within Monte Carlo error of the closed form.
+TEST(AreaLight, EachLightIsSampledWithItsOwnRadius) {
+    Scene s = HalfPlaneScene();
+    s.lights.push_back(s.lights[0]);
+    s.lights[0].radius = 0.0f;
+    s.lights[1].radius = R;
+    auto accel = CreateAccelerator("brute", s.mesh);
+    RenderOptions area = s.render;
+    area.shadows = "area";
+    area.areaLight.samples = 1024;
+    auto soft = CreateShadowMethod("area", s, *accel, area);
+    auto rt = CreateShadowMethod("rt", s, *accel, s.render);
+    int fractional = 0;
+    for (int k = 0; k <= 20; ++k) {
+        const float x = -1.5f + 0.15f * k;
+        const ShadingPoint sp = FloorPoint(x, 0.3f);
+        bool needed[2] = {true, true};
+        float vis[2] = {-1, -1}, hard[2] = {-1, -1};
+        RenderCounters c, cr;
+        soft->Visibility(sp, needed, vis, c);
+        rt->Visibility(sp, needed, hard, cr);
+        EXPECT_EQ(vis[0], hard[0]) << "x = " << x;  // the point light: RT's answer exactly
+        EXPECT_EQ(c.shadowRays, 1u + 1024u) << "x = " << x;  // one ray to the point, N to the sphere
+        EXPECT_NEAR(vis[1], ExactVisibleFraction(sp.origin), 0.01) << "x = " << x;
+        fractional += vis[1] > 0.05f && vis[1] < 0.95f;
+    }
+    EXPECT_GE(fractional, 8);  // the penumbra, |x| < 1, is really sampled
+    // The figures list the radii in light order.
+    const ShadowFigures f = soft->Figures();
+    EXPECT_EQ(f, (ShadowFigures{{"light radii", "0, 1"}, {"samples per light", "1024 (1 for the lights of radius 0)"}}));
+    // The override replaces both: R for each, so light 0 is soft too.
+    area.areaLight.radius = R;
+    auto both = CreateShadowMethod("area", s, *accel, area);
+    EXPECT_EQ(both->Figures(), (ShadowFigures{{"light radius", "1"}, {"samples per light", "1024"}}));
+    EXPECT_NEAR(Vis(*both, FloorPoint(0.2f, 0.3f), 0), ExactVisibleFraction(FloorPoint(0.2f, 0.3f).origin), 0.01);
+}
+
+// A light with a bad radius of its own is refused (scene files cannot give one; code can).
+TEST(AreaLight, RefusesABadLightRadius) {
+    Scene s = FloorScene();
+    auto accel = CreateAccelerator("brute", s.mesh);
+    RenderOptions area = s.render;
+    area.shadows = "area";
+    for (float bad : {-0.5f, NAN, INFINITY}) {
+        s.lights[0].radius = bad;
+        try {
+            CreateShadowMethod("area", s, *accel, area);
+            FAIL() << "expected an error for radius " << bad;
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("test:floor: light 0: radius"), std::string::npos) << e.what();
+        }
+    }
+    area.areaLight.radius = 0.2f;  // the override replaces it
+    EXPECT_NO_THROW(CreateShadowMethod("area", s, *accel, area));
 }
 
 // Nothing between the floor and a small sphere light: every sample reaches the light (no

@@ -158,10 +158,12 @@ LightMeshVariant ParseLightMeshVariant(std::string_view name) {
     for (const VariantName& v : kVariants)
         if (name == v.name || name == v.paper || name == v.ascii)
             return {v.enumeration, v.local, v.name, v.paper};
-    ThrowSettingError("variant",
-                      "unknown light-mesh variant \"%.*s\" (choose grid, templates, reduced, none, inside, "
-               "object or grid-none; or the paper's Grid, Ш, У, Нет, СТ, ОТ)",
-               static_cast<int>(name.size()), name.data());
+    // The name as given, NUL bytes included (Error shows them as <U+0000>; "%s" cut there).
+    std::string names;
+    for (size_t i = 0; i < std::size(kVariants); ++i)
+        names += (i == 0 ? "" : (i + 1 == std::size(kVariants) ? " or " : ", ")) + std::string(kVariants[i].name);
+    throw SettingError("variant", "unknown light-mesh variant \"" + std::string(name) + "\" (choose " + names +
+                                      "; or the paper's Grid, Ш, У, Нет, СТ, ОТ)");
 }
 
 namespace {
@@ -502,7 +504,7 @@ inline void LightMesh<Word>::ConvertTemplates() {
     // side, far past CC's 4096.
     const int64_t reach = std::max(-minOffset_, maxOffset_);
     if (linear(reach, reach, reach) > std::numeric_limits<int32_t>::max())
-        ThrowError("light mesh %dx%dx%d: too many nodes for the templates' 32-bit offsets: lower --cc", lattice_.nx,
+        ThrowSettingError("cc", "light mesh %dx%dx%d: too many nodes for the templates' 32-bit offsets: lower CC", lattice_.nx,
                    lattice_.ny, lattice_.nz);
     const int cubeSide = maxOffset_ - minOffset_ + 1;
     if (cubeSide > kMaxCubeSide)  // (an internal error: the templates' parser checks the offsets)
@@ -658,8 +660,10 @@ std::unique_ptr<LightMeshShadows> CreateLightMeshShadows(const Scene& scene, con
     const uint64_t need = lattice.NodeCount() * static_cast<uint64_t>(bytesPerNode);
     const uint64_t physical = PhysicalMemoryBytes();
     if (physical && need > physical / 2)
-        ThrowError("light mesh %dx%dx%d (CC %d, kI %g) needs %s of node storage%s, more than half of "
-                   "this machine's %s: lower --cc",
+        // A SettingError: NamingOrigins puts where CC was given in front ("--cc", "scene.json
+        // /render/cc", "m.json /cc/1"), which "lower --cc" used to assume.
+        ThrowSettingError("cc", "light mesh %dx%dx%d (CC %d, kI %g) needs %s of node storage%s, more than half of "
+                   "this machine's %s: lower CC",
                    lattice.nx, lattice.ny, lattice.nz, options.cc, options.ki, FormatBytes(need).c_str(),
                    options.lightRadius > 0
                        ? StringPrintf(" (%d bytes per node with the blocker distances of the light radius)", bytesPerNode).c_str()
@@ -674,6 +678,9 @@ std::unique_ptr<LightMeshShadows> CreateLightMeshShadows(const Scene& scene, con
     }
     TemplateLoad templates;
     if (variant.enumeration == SphereEnumeration::Templates) {
+        // The templates and the light mesh's copy of them for its kernels (a FrontBlock of
+        // 64 bytes per 8 entries): refused before either is made when they would not fit.
+        CheckSphereTemplateBudget(ns, options.ki, 3 + sizeof(FrontBlock) / 8, "light mesh: sphere templates");
         templates = LoadOrBuildSphereTemplates(ns, options.ki, options.templateDir);
         if (!templates.note.empty()) LogWarning("templates: " + templates.note);
     }

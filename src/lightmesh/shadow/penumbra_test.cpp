@@ -247,7 +247,16 @@ TEST(Penumbra, ImagesAreIdenticalForAnyThreadCount) {
     // And the light radius changes the image (it is not ignored by lmm).
     s.render.areaLight.radius = 0.0f;
     auto fixed = CreateShadowMethod("lmm", s, *accel, s.render);
-    EXPECT_NE(WhittedRenderer(s, *accel, *fixed, s.render).Render().image.pixels, one.image.pixels);
+    const RenderResult fixedImage = WhittedRenderer(s, *accel, *fixed, s.render).Render();
+    EXPECT_NE(fixedImage.image.pixels, one.image.pixels);
+    // Only the override turns the mode on: the gazebo's lights have radii of their own
+    // (0.173, 0.164), and without --light-radius lmm is the fixed-radius method.
+    ASSERT_GT(s.lights[0].radius, 0.0f);
+    s.render.areaLight.radius.reset();
+    auto own = CreateShadowMethod("lmm", s, *accel, s.render);
+    const RenderResult ownImage = WhittedRenderer(s, *accel, *own, s.render).Render();
+    EXPECT_EQ(ownImage.image.pixels, fixedImage.image.pixels);
+    EXPECT_EQ(Count(ownImage.counters, Lmc::kPenumbraLights), 0u);
 }
 
 // A rod (or, with `slit`, a plate with a slit) thinner than the mesh step at height 1,

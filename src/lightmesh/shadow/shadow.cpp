@@ -6,6 +6,7 @@
 #include "lightmesh/settings/render_settings.h"
 #include "lightmesh/shadow/area_light.h"
 #include "lightmesh/shadow/light_mesh.h"
+#include "lightmesh/shadow/soft_shadows.h"
 #include "lightmesh/util/error.h"
 
 namespace lm {
@@ -144,22 +145,34 @@ float CameraRayAngle(const Camera& camera, const RenderOptions& options) {
 
 }  // namespace
 
-std::vector<std::string> ShadowMethodNames() { return {"none", "rt", "lmm", "area"}; }
+std::vector<std::string> ShadowMethodNames() { return {"soft", "none", "rt", "lmm", "area"}; }
+
+std::vector<float> LightRadii(const Scene& scene, const RenderOptions& options) {
+    std::vector<float> radii;
+    radii.reserve(scene.lights.size());
+    for (const PointLight& light : scene.lights) radii.push_back(options.areaLight.radius.value_or(light.radius));
+    return radii;
+}
 
 std::unique_ptr<ShadowMethod> CreateShadowMethod(std::string_view name, const Scene& scene,
                                                  const Accelerator& accel,
                                                  const RenderOptions& options) {
     if (name == "none") return std::make_unique<NoShadows>(scene.lights.size());
     if (name == "rt") return std::make_unique<HardShadows>(scene, accel);
+    if (name == "soft") {
+        SoftShadowOptions soft = options.soft;
+        soft.radii = LightRadii(scene, options);
+        return CreateSoftShadows(scene, accel, soft);
+    }
     if (name == "lmm") {
         // One light size for the reference and the light mesh's penumbrae.
         LightMeshOptions lmm = options.lightMesh;
-        lmm.lightRadius = options.areaLight.radius;
+        lmm.lightRadius = options.areaLight.radius.value_or(0.0f);  // the override only, not the lights' own
         lmm.rayAngle = CameraRayAngle(scene.camera, options);
         return CreateLightMeshShadows(scene, accel, lmm);
     }
-    if (name == "area") return CreateAreaLightShadows(scene, accel, options.areaLight);
-    ThrowSettingError("shadows", "unknown shadow method \"%.*s\" (choose none, rt, lmm or area)", static_cast<int>(name.size()),
+    if (name == "area") return CreateAreaLightShadows(scene, accel, options.areaLight, LightRadii(scene, options));
+    ThrowSettingError("shadows", "unknown shadow method \"%.*s\" (choose soft, none, rt, lmm or area)", static_cast<int>(name.size()),
                name.data());
 }
 

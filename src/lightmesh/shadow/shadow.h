@@ -66,6 +66,14 @@ std::unique_ptr<ShadowMethod> CreateShadowMethod(std::string_view name, const Sc
 /// The names CreateShadowMethod accepts.
 std::vector<std::string> ShadowMethodNames();
 
+/// The radius of each light's sphere (one per scene.lights entry, in scene units): the
+/// override options.areaLight.radius for every light when it is set (--light-radius, a
+/// scene file's "render": {"light_radius"}, or code), else the light's own
+/// PointLight::radius. Every method that uses the lights' sizes takes them from here, so
+/// the override means the same to all of them. (The light mesh's contact-hardening mode
+/// is the exception by design: only the override turns it on; LightMeshOptions::lightRadius.)
+std::vector<float> LightRadii(const Scene& scene, const RenderOptions& options);
+
 /// The shadow segment from `origin` to a point light. It stops just short of the light so
 /// geometry touching the light does not count.
 inline Ray LightSegment(const Vec3& origin, const Vec3& light) { return Ray{origin, light - origin, 0.0f, 1.0f - 1e-5f}; }

@@ -39,6 +39,26 @@ void ForEachAccel(const Scene& s, F&& f) {
     }
 }
 
+// LightRadii: each light's own radius, unless the override (--light-radius, the scene's
+// "light_radius", or code such as the bench setting areaLight.radius) is given, which then
+// replaces every one, 0 included.
+TEST(Shadow, LightRadiiAreTheLightsOwnUnlessOverridden) {
+    Scene s = FloorScene();
+    s.lights.push_back({{-2, 3, 1}, Color(5.0f), Falloff::InverseSquare, 0.25f});
+    s.lights.push_back({{2, 3, 1}, Color(5.0f), Falloff::InverseSquare, 0.0f});
+    s.lights[0].radius = 0.1f;
+    RenderOptions o;
+    EXPECT_EQ(LightRadii(s, o), (std::vector<float>{0.1f, 0.25f, 0.0f}));
+    o.areaLight.radius = 0.5f;
+    EXPECT_EQ(LightRadii(s, o), (std::vector<float>{0.5f, 0.5f, 0.5f}));
+    o.areaLight.radius = 0.0f;  // every light a point
+    EXPECT_EQ(LightRadii(s, o), (std::vector<float>{0.0f, 0.0f, 0.0f}));
+    o.areaLight.radius.reset();
+    EXPECT_EQ(LightRadii(s, o), (std::vector<float>{0.1f, 0.25f, 0.0f}));
+    s.lights.clear();
+    EXPECT_TRUE(LightRadii(s, o).empty());
+}
+
 // LightsVisible traces a point's rays to the lights of a mask together (a packet on
 // Embree, 16 at a time): each light must get LightVisible's answer, for any mask, also
 // past 16 lights, where the rays go in more than one packet.

@@ -34,9 +34,36 @@ struct SphereTemplates {
     int SubPosition(int a, int b, int c) const { return (c * (ns + 1) + b) * (ns + 1) + a; }
     bool operator==(const SphereTemplates&) const = default;
 
-    /// Builds the templates. Throws Error for ns outside [1, 64] or kI outside (0, 16].
+    /// Builds the templates. Throws Error for ns outside [1, 64] or kI outside (0, 16], or
+    /// beyond the 32-bit index (CheckSphereTemplateBudget says so before building).
     static SphereTemplates Build(int ns, float ki);
 };
+
+/// The size and build time of the templates for (ns, kI), estimated before anything is
+/// built: the nodes of 5 × 5 × 5 sub-positions spread over the cell (all of them for ns < 4)
+/// are counted and their build timed, and both scaled to the (ns + 1)³ sub-positions. The
+/// count is within a per cent or two (a template's size varies only by its surface).
+struct TemplateEstimate {
+    uint64_t subPositions = 0;
+    double entriesPerSubPosition = 0;
+    uint64_t entries = 0;     ///< all sub-positions' nodes
+    uint64_t bytes = 0;       ///< the templates' memory: 3 per entry + 8 per sub-position
+    double buildSeconds = 0;  ///< measured on the sample, + 1 s per GB of memory touched
+};
+TemplateEstimate EstimateSphereTemplates(int ns, float ki);
+
+/// The estimate, or an Error before anything is allocated when the templates for (ns, kI)
+/// would need more than half the memory budget (PhysicalMemoryBytes: the machine's, a
+/// container's or LIGHTMESH_MEMORY_LIMIT) at `bytesPerEntry` (the templates' 3; the light
+/// mesh's copy for its kernels adds 8), or more entries than their 32-bit index holds: the
+/// message names `what`, says what they would need, and which ns at this kI and which kI at
+/// this ns fit (ns 32, kI 16: 616 M entries, 1.7 GiB; ns 64, kI 16: 4.7 G entries, too many
+/// for the index).
+TemplateEstimate CheckSphereTemplateBudget(int ns, float ki, uint64_t bytesPerEntry = 3,
+                                           const char* what = "templates");
+
+/// Builds estimated to take longer than this are announced (LogInfo) with the estimate.
+inline constexpr double kAnnouncedTemplateSeconds = 5.0;
 
 /// Writes templates to a file atomically (temporary file + rename): concurrent writers of
 /// the same templates never leave a corrupt file. Format: a header (magic "LMSPHTPL",
@@ -63,7 +90,9 @@ std::string TemplateFileName(const std::string& dir, int ns, float ki);
 /// Templates for (ns, kI): read from the cache in `dir` (DefaultTemplateDir() if empty)
 /// when a valid file is there, else built and written there. A missing, truncated,
 /// corrupt or foreign file is reported in `note` (one line), rebuilt and replaced; a cache
-/// that cannot be written is reported and the templates are used from memory.
+/// that cannot be written is reported and the templates are used from memory. Checked
+/// first against the memory budget (CheckSphereTemplateBudget); a build estimated over
+/// kAnnouncedTemplateSeconds is announced with its size and time.
 struct TemplateLoad {
     SphereTemplates templates;
     bool loaded = false;   ///< read from disk (else built)

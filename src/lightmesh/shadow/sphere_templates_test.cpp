@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -70,6 +73,93 @@ TEST(SphereTemplates, BoundaryIsTheOuterShell) {
         EXPECT_GT(boundary.size(), 0u);
         EXPECT_LT(boundary.size(), all.size());
     }
+}
+
+// Issue 45: the build goes row by row of the lattice (an interval of di per row) instead of
+// testing every node of the cube and its six neighbours; the lists, their order and their
+// boundaries are those of the cube loop, for odd ns and kI that are not dyadic too.
+TEST(SphereTemplates, RowBuildIsTheCubeLoopsEntryForEntry) {
+    for (float ki : {0.01f, 0.5f, 1.0f, 1.7f, 2.0f, 3.3f, 5.0f}) {
+        for (int ns : {1, 3, 5, 8}) {
+            const SphereTemplates t = SphereTemplates::Build(ns, ki);
+            const double limit2 = static_cast<double>(ki) * ns * static_cast<double>(ki) * ns;
+            const int reach = static_cast<int>(std::ceil(ki)) + 1;
+            auto inside = [&](int a, int b, int c, int di, int dj, int dk) {
+                const double x = di * ns - a, y = dj * ns - b, z = dk * ns - c;
+                return x * x + y * y + z * z <= limit2;
+            };
+            std::vector<Offset> expected;
+            std::vector<uint32_t> begin, boundaryCount;
+            for (int c = 0; c <= ns; ++c)
+                for (int b = 0; b <= ns; ++b)
+                    for (int a = 0; a <= ns; ++a) {
+                        std::vector<Offset> boundary, inner;
+                        for (int dk = -reach; dk <= reach; ++dk)
+                            for (int dj = -reach; dj <= reach; ++dj)
+                                for (int di = -reach; di <= reach; ++di) {
+                                    if (!inside(a, b, c, di, dj, dk)) continue;
+                                    const bool shell = !inside(a, b, c, di - 1, dj, dk) || !inside(a, b, c, di + 1, dj, dk) ||
+                                                       !inside(a, b, c, di, dj - 1, dk) || !inside(a, b, c, di, dj + 1, dk) ||
+                                                       !inside(a, b, c, di, dj, dk - 1) || !inside(a, b, c, di, dj, dk + 1);
+                                    (shell ? boundary : inner)
+                                        .push_back({static_cast<int8_t>(di), static_cast<int8_t>(dj), static_cast<int8_t>(dk)});
+                                }
+                        begin.push_back(static_cast<uint32_t>(expected.size()));
+                        boundaryCount.push_back(static_cast<uint32_t>(boundary.size()));
+                        expected.insert(expected.end(), boundary.begin(), boundary.end());
+                        expected.insert(expected.end(), inner.begin(), inner.end());
+                    }
+            begin.push_back(static_cast<uint32_t>(expected.size()));
+            ASSERT_EQ(t.offsets, expected) << "ns " << ns << " kI " << ki;
+            ASSERT_EQ(t.begin, begin);
+            ASSERT_EQ(t.boundaryCount, boundaryCount);
+        }
+    }
+}
+
+// Issue 45: `templates --ns 64 --ki 16` ran for minutes and took 5 GB before saying
+// anything. The size is estimated first (within a few per cent), and what does not fit the
+// memory budget or the 32-bit index is refused at once, saying what would fit.
+TEST(SphereTemplates, SizeIsEstimatedAndRefusedBeforeBuilding) {
+    for (const auto& [ns, ki] : std::vector<std::pair<int, float>>{{8, 2.0f}, {3, 0.7f}, {16, 4.5f}, {1, 16.0f}}) {
+        const TemplateEstimate e = EstimateSphereTemplates(ns, ki);
+        const double built = static_cast<double>(SphereTemplates::Build(ns, ki).offsets.size());
+        EXPECT_NEAR(static_cast<double>(e.entries), built, 0.03 * built) << "ns " << ns << " kI " << ki;
+        EXPECT_EQ(e.subPositions, static_cast<uint64_t>((ns + 1) * (ns + 1) * (ns + 1)));
+    }
+    const auto start = std::chrono::steady_clock::now();
+    try {
+        CheckSphereTemplateBudget(64, 16.0f);
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        const std::string m = e.what();
+        EXPECT_EQ(m.rfind("templates ns 64, kI 16: about 4,", 0), 0u) << m;
+        EXPECT_NE(m.find("more than the 4,294,967,295 their 32-bit index holds"), std::string::npos) << m;
+        EXPECT_NE(m.find("with kI 16, ns up to 6"), std::string::npos) << m;
+    }
+    // A budget of 64 MiB (half of LIGHTMESH_MEMORY_LIMIT's 128 MiB): ns 8, kI 2 (82 K
+    // entries) fits, ns 32, kI 16 (616 M) does not, and neither do its suggestions' next steps.
+    setenv("LIGHTMESH_MEMORY_LIMIT", "128M", 1);
+    EXPECT_NO_THROW(CheckSphereTemplateBudget(8, 2.0f));
+    try {
+        CheckSphereTemplateBudget(32, 16.0f);
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        const std::string m = e.what();
+        EXPECT_EQ(m.rfind("templates ns 32, kI 16 would need about 1.7 GiB (6", 0), 0u) << m;
+        // 64 MiB / 3 bytes = 22 M entries: (9 + 1)³ spheres of 17,136 nodes at kI 16; at
+        // ns 32, 622 nodes per sphere, kI 5.29.
+        EXPECT_NE(m.find("more than half of this machine's 128.0 MiB (LIGHTMESH_MEMORY_LIMIT); with kI 16, ns up to 9 "
+                         "fits; with ns 32, kI up to 5.2"),
+                  std::string::npos)
+            << m;
+    }
+    EXPECT_NO_THROW(CheckSphereTemplateBudget(9, 16.0f));
+    EXPECT_THROW(CheckSphereTemplateBudget(10, 16.0f), Error);
+    EXPECT_NO_THROW(CheckSphereTemplateBudget(32, 5.2f));
+    EXPECT_THROW(LoadOrBuildSphereTemplates(32, 16.0f, ""), Error);
+    unsetenv("LIGHTMESH_MEMORY_LIMIT");
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 2.0);
 }
 
 TEST(SphereTemplates, BadParametersAreErrors) {

@@ -26,7 +26,8 @@ std::string StringPrintf(const char* fmt, ...) {
 }
 
 std::string Printable(const std::string& text) {
-    auto control = [](unsigned char c) { return (c < 0x20 && c != '\n' && c != '\t') || c == 0x7f; };
+    // A newline or carriage return too: a message is one line, and a file name may hold one.
+    auto control = [](unsigned char c) { return (c < 0x20 && c != '\t') || c == 0x7f; };
     bool any = false;
     for (unsigned char c : text) any = any || control(c);
     if (!any) return text;

@@ -13,8 +13,9 @@ namespace lm {
 std::string StringPrintf(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
 std::string StringVPrintf(const char* fmt, va_list args);
 
-/// The text with control characters other than newline and tab (which a scene file can
-/// smuggle into a message, e.g. terminal escapes in a key) shown as <U+001B>.
+/// The text with control characters other than tab (which a scene file can smuggle into a
+/// message, e.g. terminal escapes in a key, or a newline in a file name that would split the
+/// one-line error) shown as <U+001B>, <U+000A>; a NUL byte as <U+0000>.
 std::string Printable(const std::string& text);
 
 /// Where in the user's input an error lies: a file and, inside it, a line and column (a

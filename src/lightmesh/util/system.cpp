@@ -3,12 +3,14 @@
 #include <dirent.h>
 #include <fcntl.h>
 #include <sched.h>
+#include <sys/mman.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -127,9 +129,35 @@ std::string ReadRegularFile(const std::string& path, const char* kind) {
     return out;
 }
 
+namespace {
+
+/// Whether an existing output that is neither a regular file nor a folder can be written
+/// into in place ("" if so): a character device (a copy of /dev/null) or a FIFO can; a
+/// block device (a disk) or a socket cannot.
+std::string SpecialOutputProblem(const std::string& path, const struct stat& st) {
+    if (S_ISBLK(st.st_mode)) return "is a block device: refusing to write an output over it";
+    if (S_ISSOCK(st.st_mode)) return "is a socket, not a file";
+    if (access(path.c_str(), W_OK) != 0) return StringPrintf("is not writable: %s", std::strerror(errno));
+    return "";
+}
+
+/// An existing output that is not a regular file (nor a folder), as stat() sees it through
+/// symbolic links; false if there is none or it is a regular file.
+bool IsSpecialOutput(const std::string& path, struct stat* st) {
+    return stat(path.c_str(), st) == 0 && !S_ISREG(st->st_mode) && !S_ISDIR(st->st_mode);
+}
+
+}  // namespace
+
 void CheckWritableFolder(const std::string& path) {
     if (path.find('\0') != std::string::npos)
         ThrowErrorAt({path}, "the name contains a NUL byte");
+    if (struct stat target {}; IsSpecialOutput(path, &target)) {
+        // Written into in place (WriteFileAtomically), so its folder need not be writable.
+        if (std::string problem = SpecialOutputProblem(path, target); !problem.empty())
+            ThrowErrorAt({path}, "%s", problem.c_str());
+        return;
+    }
     const std::string dir = FolderOf(path);
     std::error_code ec;
     struct stat st {};
@@ -198,8 +226,63 @@ std::string TemporaryPathFor(const std::string& path, long pid) {
         .string();
 }
 
+namespace {
+
+/// WriteFileAtomically for an existing output that is not a regular file: a rename would
+/// replace the device or FIFO itself (as root, `--csv /dev/null` would have replaced the
+/// system's /dev/null by a regular file). The content is made in an anonymous memory file
+/// (the callback writes by name: /proc/self/fd/N), then written into the target in place,
+/// as `cp` would: a copy of /dev/null takes it, /dev/full fails with ENOSPC, a FIFO's
+/// reader gets it. A FIFO with no reader is an error, not a wait.
+void WriteIntoSpecialFile(const std::string& path, const struct stat& st,
+                          const std::function<void(const std::string& tmpPath)>& write) {
+    if (std::string problem = SpecialOutputProblem(path, st); !problem.empty())
+        ThrowErrorAt({path}, "%s", problem.c_str());
+    struct Fd {
+        int fd = -1;
+        ~Fd() {
+            if (fd >= 0) close(fd);
+        }
+    } mem, out;
+    mem.fd = memfd_create("lightmesh-output", MFD_CLOEXEC);
+    if (mem.fd < 0) ThrowErrorAt({path}, "cannot write: %s", std::strerror(errno));
+    write("/proc/self/fd/" + std::to_string(mem.fd));
+    out.fd = open(path.c_str(), O_WRONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+    if (out.fd < 0) {
+        if (errno == ENXIO) ThrowErrorAt({path}, "is a FIFO with no reader: nothing written");
+        ThrowErrorAt({path}, "cannot write: %s", std::strerror(errno));
+    }
+    struct stat now {};
+    if (fstat(out.fd, &now) != 0 || S_ISREG(now.st_mode) || S_ISDIR(now.st_mode))
+        ThrowErrorAt({path}, "cannot write: it changed while the output was made");
+    // Blocking from here: a FIFO's reader takes the data at its own pace.
+    const int flags = fcntl(out.fd, F_GETFL);
+    if (flags >= 0) fcntl(out.fd, F_SETFL, flags & ~O_NONBLOCK);
+    char buf[65536];
+    for (off_t at = 0;;) {
+        const ssize_t n = pread(mem.fd, buf, sizeof buf, at);
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) ThrowErrorAt({path}, "cannot write: %s", std::strerror(errno));
+        if (n == 0) break;
+        at += n;
+        for (ssize_t done = 0; done < n;) {
+            const ssize_t w = ::write(out.fd, buf + done, static_cast<size_t>(n - done));
+            if (w < 0 && errno == EINTR) continue;
+            if (w <= 0) ThrowErrorAt({path}, "cannot write: %s", std::strerror(w < 0 ? errno : EIO));
+            done += w;
+        }
+    }
+    const int fd = out.fd;
+    out.fd = -1;
+    if (close(fd) != 0) ThrowErrorAt({path}, "cannot write: %s", std::strerror(errno));
+}
+
+}  // namespace
+
 void WriteFileAtomically(const std::string& path,
                          const std::function<void(const std::string& tmpPath)>& write) {
+    if (struct stat target {}; path.find('\0') == std::string::npos && IsSpecialOutput(path, &target))
+        return WriteIntoSpecialFile(path, target, write);
     CheckWritableFolder(path);
     const std::filesystem::path p(path);
     RemoveStaleTemporaries(FolderOf(path), TemporaryPrefix(p.filename().string()));
@@ -301,6 +384,18 @@ std::string FormatBytes(uint64_t bytes) {
     }
     return u == 0 ? StringPrintf("%llu B", static_cast<unsigned long long>(bytes))
                   : StringPrintf("%.1f %s", v, units[u]);
+}
+
+std::string FormatDuration(double seconds) {
+    if (!(seconds >= 0)) return "?";
+    if (seconds < 60) return StringPrintf("%.1f s", seconds);
+    if (seconds > 1e12) return StringPrintf("%.2g years", seconds / 31557600.0);
+    const uint64_t s = static_cast<uint64_t>(std::llround(seconds));
+    if (s < 3600) return StringPrintf("%llu min %llu s", static_cast<unsigned long long>(s / 60),
+                                      static_cast<unsigned long long>(s % 60));
+    if (s < 86400) return StringPrintf("%llu h %llu min", static_cast<unsigned long long>(s / 3600),
+                                       static_cast<unsigned long long>(s % 3600 / 60));
+    return StringPrintf("%s d %llu h", FormatCount(s / 86400).c_str(), static_cast<unsigned long long>(s % 86400 / 3600));
 }
 
 std::string FormatCount(uint64_t n) {

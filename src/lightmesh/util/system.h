@@ -13,6 +13,10 @@ namespace lm {
 /// If `write` throws, or the process is interrupted by SIGINT/SIGTERM meanwhile (see
 /// InstallInterruptCleanup), the temporary file is removed and `path` is left untouched.
 /// Throws Error naming `path` when the folder is missing or not writable.
+/// Only a regular file (or nothing) at `path` is renamed over: an existing character
+/// device (a copy of /dev/null or /dev/full) or FIFO is written into in place, the content
+/// made in memory first (`write` gets a /proc/self/fd/N name), so the device stays; a FIFO
+/// without a reader, a block device or a socket is an Error.
 void WriteFileAtomically(const std::string& path,
                          const std::function<void(const std::string& tmpPath)>& write);
 
@@ -21,7 +25,8 @@ void WriteFileAtomically(const std::string& path,
 void InstallInterruptCleanup();
 
 /// Throws Error unless `path`'s folder exists and is writable (checked before a long
-/// render, so a typo does not cost the render).
+/// render, so a typo does not cost the render); for an existing device or FIFO (written
+/// into in place), unless it is writable and not a block device or a socket.
 void CheckWritableFolder(const std::string& path);
 
 /// Why `path` cannot be read as a regular file, or "" when it can: "no such file", "is a
@@ -70,6 +75,9 @@ uint64_t ParseByteCount(const std::string& text);
 
 /// "1.5 GiB", "320 MiB", "12 KiB", "17 B".
 std::string FormatBytes(uint64_t bytes);
+
+/// A duration as a person reads it: "8.5 s", "12 min 5 s", "3 h 12 min", "4 d 6 h".
+std::string FormatDuration(double seconds);
 
 /// "1,234,567": a count with thousands separators.
 std::string FormatCount(uint64_t n);

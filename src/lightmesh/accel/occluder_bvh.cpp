@@ -1,0 +1,126 @@
+#include "lightmesh/accel/occluder_bvh.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "lightmesh/util/error.h"
+
+namespace lm {
+
+OccluderBvh::OccluderBvh(const TriangleMesh& mesh) : mesh_(mesh) {
+    const auto start = std::chrono::steady_clock::now();
+    const size_t n = mesh.TriangleCount();
+    if (n >= UINT32_MAX / 2) throw Error("occluder hierarchy: too many triangles");
+    std::vector<BuildItem> items(n);
+    for (size_t i = 0; i < n; ++i) {
+        const uint32_t id = static_cast<uint32_t>(i);
+        Bounds3 b(mesh.Vertex(id, 0), mesh.Vertex(id, 1));
+        b.Extend(mesh.Vertex(id, 2));
+        items[i] = {b, b.Center(), id};
+    }
+    prims_.resize(n);
+    nodes_.reserve(n ? 2 * ((n + kLeafSize - 1) / kLeafSize) : 1);
+    if (n) Build(items.data(), n, 0, 0);
+    buildSeconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+uint32_t OccluderBvh::Build(BuildItem* items, size_t count, size_t first, int depth) {
+    Bounds3 bounds, centroids;
+    for (size_t i = 0; i < count; ++i) {
+        bounds.Extend(items[i].bounds);
+        centroids.Extend(items[i].centroid);
+    }
+    const uint32_t self = static_cast<uint32_t>(nodes_.size());
+    nodes_.push_back(Node{{bounds.lo.x, bounds.lo.y, bounds.lo.z}, 0, {bounds.hi.x, bounds.hi.y, bounds.hi.z}, 0});
+    const Vec3 extent = centroids.Diagonal();
+    // A leaf for a few triangles, for coincident centroids, and past a depth that only a
+    // degenerate split sequence reaches (the median split halves the count each level).
+    if (count <= static_cast<size_t>(kLeafSize) || MaxComponent(extent) <= 0 || depth > 60) {
+        for (size_t i = 0; i < count; ++i) prims_[first + i] = items[i].prim;
+        nodes_[self].index = static_cast<uint32_t>(first);
+        nodes_[self].count = static_cast<uint32_t>(count);
+        return self;
+    }
+    const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
+    const size_t mid = count / 2;
+    // Ties broken by the id, so the tree does not depend on the sort's internals.
+    std::nth_element(items, items + mid, items + count, [axis](const BuildItem& p, const BuildItem& q) {
+        const float a = p.centroid[axis], b = q.centroid[axis];
+        return a < b || (a == b && p.prim < q.prim);
+    });
+    Build(items, mid, first, depth + 1);
+    const uint32_t right = Build(items + mid, count - mid, first + mid, depth + 1);
+    nodes_[self].index = right;
+    return self;
+}
+
+HullPieces::HullPieces(const BallHull& hull) {
+    const Vec3 d = hull.b - hull.a;
+    for (int j = 0; j < kPieces; ++j) {
+        const float s0 = static_cast<float>(j) / kPieces, s1 = static_cast<float>(j + 1) / kPieces;
+        const Vec3 o = hull.a + d * s0;
+        const Vec3 seg = d * (s1 - s0);
+        Piece& p = pieces_[j];
+        for (int k = 0; k < 3; ++k) {
+            p.o[k] = o[k];
+            // A zero component gets a huge finite inverse: (bound − o)·inv is then ±huge or
+            // 0, never NaN, and the slab test stays exact.
+            p.inv[k] = std::abs(seg[k]) > 1e-30f ? 1.0f / seg[k] : (seg[k] < 0 ? -1e30f : 1e30f);
+        }
+        // The radius grows or shrinks linearly: its largest value on the stretch is at an
+        // end; a relative margin covers the rounding of the grown boxes.
+        const float r = std::max(hull.ra + (hull.rb - hull.ra) * s0, hull.ra + (hull.rb - hull.ra) * s1);
+        p.r = r * (1.0f + 1e-5f) + 1e-6f * (MaxComponent(Abs(o)) + Length(seg));
+    }
+}
+
+bool HullPieces::MeetsBox(const float lo[3], const float hi[3]) const {
+    for (const Piece& p : pieces_) {
+        // The slab test of the piece's axis against the box grown by its radius (a box
+        // grown by r contains every point within r of the box).
+        float t0 = 0.0f, t1 = 1.0f;
+        for (int k = 0; k < 3; ++k) {
+            float a = (lo[k] - p.r - p.o[k]) * p.inv[k];
+            float b = (hi[k] + p.r - p.o[k]) * p.inv[k];
+            if (a > b) std::swap(a, b);
+            t0 = std::max(t0, a);
+            t1 = std::min(t1, b);
+        }
+        if (t0 <= t1) return true;
+    }
+    return false;
+}
+
+bool OccluderBvh::Query(const BallHull& hull, std::vector<uint32_t>* out, size_t limit) const {
+    if (nodes_.empty()) return true;
+    const size_t start = out->size();
+    const HullPieces pieces(hull);
+    auto meets = [&](const float lo[3], const float hi[3]) { return pieces.MeetsBox(lo, hi); };
+    uint32_t stack[128];
+    int top = 0;
+    stack[top++] = 0;
+    while (top) {
+        const Node& node = nodes_[stack[--top]];
+        if (!meets(node.lo, node.hi)) continue;
+        if (node.count) {
+            for (uint32_t i = 0; i < node.count; ++i) {
+                const uint32_t prim = prims_[node.index + i];
+                const Vec3 &p0 = mesh_.Vertex(prim, 0), &p1 = mesh_.Vertex(prim, 1), &p2 = mesh_.Vertex(prim, 2);
+                const Vec3 lo = Min(Min(p0, p1), p2), hi = Max(Max(p0, p1), p2);
+                const float l[3] = {lo.x, lo.y, lo.z}, h[3] = {hi.x, hi.y, hi.z};
+                if (node.count == 1 || meets(l, h)) out->push_back(prim);
+            }
+            if (out->size() - start > limit) return false;
+            continue;
+        }
+        const uint32_t self = static_cast<uint32_t>(&node - nodes_.data());
+        // Far child first on the stack, so the near (left) one is popped first: the order
+        // only matters for determinism, which any fixed order gives.
+        stack[top++] = node.index;
+        stack[top++] = self + 1;
+    }
+    return true;
+}
+
+}  // namespace lm

@@ -1,0 +1,86 @@
+// occluder_bvh.h -- a bounding volume hierarchy over the scene's triangles for the one query
+// the ray back-ends do not answer: which triangles may lie between a region of space and a
+// spherical light, i.e. meet the convex hull of two balls. The soft-shadow mode (soft_shadows.h)
+// asks it once per light-mesh cell and light, and then shades every point of the cell against
+// the short list it returns instead of tracing rays through the whole scene.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "lightmesh/geometry/mesh.h"
+#include "lightmesh/math/bounds.h"
+
+namespace lm {
+
+/// The convex hull of the balls (a, ra) and (b, rb): the union of the balls centred at
+/// a + t·(b − a) with radius ra + t·(rb − ra), t in [0, 1]. Every segment from a point of
+/// the first ball to a point of the second lies inside it.
+struct BallHull {
+    Vec3 a;
+    float ra = 0;
+    Vec3 b;
+    float rb = 0;
+};
+
+/// A BallHull as OccluderBvh tests it: kPieces capsules along the axis, each with the
+/// largest radius of its stretch; a box meets it if the axis of some piece meets the box
+/// grown by the piece's radius. Conservative: a box that meets the hull always passes.
+class HullPieces {
+  public:
+    static constexpr int kPieces = 4;
+    explicit HullPieces(const BallHull& hull);
+    bool MeetsBox(const float lo[3], const float hi[3]) const;
+    bool MeetsBox(const Bounds3& b) const {
+        const float lo[3] = {b.lo.x, b.lo.y, b.lo.z}, hi[3] = {b.hi.x, b.hi.y, b.hi.z};
+        return MeetsBox(lo, hi);
+    }
+
+  private:
+    struct Piece {
+        float o[3], inv[3], r;
+    };
+    Piece pieces_[kPieces];
+};
+
+/// A binary BVH (median splits on the longest axis of the centroids, up to 4 triangles a
+/// leaf) over a TriangleMesh, which must outlive it.
+class OccluderBvh {
+  public:
+    explicit OccluderBvh(const TriangleMesh& mesh);
+
+    /// Appends to *out the ids of the triangles whose bounding boxes may meet `hull`. It is
+    /// conservative: every triangle that meets the hull is listed, and some near it may be.
+    /// The hull is tested as HullPieces against the nodes' and the triangles' boxes. The
+    /// order is the tree's (deterministic for a given mesh).
+    /// Stops, returning false, once more than `limit` ids have been appended.
+    bool Query(const BallHull& hull, std::vector<uint32_t>* out, size_t limit = SIZE_MAX) const;
+
+    size_t NodeCount() const { return nodes_.size(); }
+    size_t Bytes() const { return nodes_.size() * sizeof(Node) + prims_.size() * sizeof(uint32_t); }
+    double BuildSeconds() const { return buildSeconds_; }
+
+    static constexpr int kLeafSize = 4;
+
+  private:
+    struct Node {
+        float lo[3];
+        uint32_t index;  ///< leaf: first of prims_; inner: the right child (the left is next)
+        float hi[3];
+        uint32_t count;  ///< leaf: triangles (> 0); inner: 0
+    };
+    struct BuildItem {
+        Bounds3 bounds;
+        Vec3 centroid;
+        uint32_t prim;
+    };
+    uint32_t Build(BuildItem* items, size_t count, size_t first, int depth);
+
+    const TriangleMesh& mesh_;
+    std::vector<Node> nodes_;
+    std::vector<uint32_t> prims_;
+    double buildSeconds_ = 0;
+};
+
+}  // namespace lm
