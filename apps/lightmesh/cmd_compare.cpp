@@ -5,6 +5,7 @@
 
 #include "lightmesh/io/compare.h"
 #include "lightmesh/io/image.h"
+#include "lightmesh/util/log.h"
 
 namespace lm::cli {
 
@@ -13,6 +14,7 @@ int RunCompare(const CompareCommand& cmd) {
         lm::ThrowError("--threshold-psnr: must be a finite number of dB, got %g", *cmd.thresholdPsnr);
     if (!(cmd.diffScale >= 0) || !std::isfinite(cmd.diffScale))
         lm::ThrowError("--diff-scale: must be a finite number >= 0, got %g", double(cmd.diffScale));
+    if (cmd.diffScaleGiven && cmd.diff.empty()) lm::LogWarning("--diff-scale is used only with --diff; ignored");
     const lm::Image a = lm::ReadImage(cmd.a), b = lm::ReadImage(cmd.b);
     std::optional<lm::Image> mask;
     if (!cmd.mask.empty()) mask = lm::ReadImage(cmd.mask);

@@ -52,6 +52,9 @@ int RunInfo(const CommonOptions& common, const std::string& accelName, int grid)
     lm::AccelOptions accelOptions = scene.render.accelOptions;
     if (grid >= 0) accelOptions.gridResolution = grid;
     const std::string name = accelName.empty() ? scene.render.accel : accelName;
+    if (grid >= 0)
+        if (const std::string unused = lm::UnusedSettingWarning("grid", name); !unused.empty())
+            lm::LogWarning(unused);
     const auto t = Clock::now();
     auto accel = lm::CreateAccelerator(name, scene.mesh, accelOptions);
     std::printf("accel      %s, built in %.3f s\n", name.c_str(), SecondsSince(t));

@@ -120,6 +120,11 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
                                : std::filesystem::path(cmd.common.scene).stem().string();
         output = stem + ".png";
     }
+    // A folder is named so whatever its name looks like ("out", "out.png", ".", "out/"),
+    // before the extension is judged.
+    std::error_code folderError;
+    if (std::filesystem::is_directory(output, folderError)) lm::ThrowErrorAt({output}, "is a folder, not a file");
+    if (output.back() == '/') lm::ThrowErrorAt({output}, "names a folder, not a file");
     lm::ImageFormatFor(output);
     lm::CheckWritableFolder(output);
     const uint64_t imageBytes = static_cast<uint64_t>(options.width) * options.height * sizeof(lm::Color);
@@ -150,11 +155,13 @@ std::string RenderWork(const lm::RenderOptions& o) {
 // The summary line, and with --stats the figures (per rank under MPI).
 void PrintRender(const RenderCommand& cmd, const PreparedRender& p, const lm::RenderResult& result,
                  double writeSeconds, const std::vector<lm::RankReport>* ranks) {
+    // -q prints errors only; --stats asks for the figures, the summary line with them.
+    if (cmd.common.quiet && !cmd.stats) return;
     const lm::RenderOptions& options = p.job->Options();
-    std::printf("%s: %dx%d, shadows %s, accel %s, %zu triangles, %zu lights: render %.3f s\n",
-                p.output.c_str(), options.width, options.height, std::string(p.job->Shadows().Name()).c_str(),
-                std::string(p.job->Accel().Name()).c_str(), p.scene.mesh.TriangleCount(), p.scene.lights.size(),
-                result.seconds);
+    std::printf("%s: %dx%d, shadows %s, accel %s, %s, %s: render %.3f s\n", p.output.c_str(), options.width,
+                options.height, std::string(p.job->Shadows().Name()).c_str(),
+                std::string(p.job->Accel().Name()).c_str(), Counted(p.scene.mesh.TriangleCount(), "triangle").c_str(),
+                Counted(p.scene.lights.size(), "light").c_str(), result.seconds);
     if (!cmd.stats) return;
     const lm::RenderCounters& c = result.counters;
     std::printf("time      load %.3f s, build %.3f s, shadow setup %.3f s, render %.3f s, write %.3f s\n",
@@ -187,10 +194,17 @@ void PrintRender(const RenderCommand& cmd, const PreparedRender& p, const lm::Re
     std::printf("memory    peak %s%s\n", lm::FormatBytes(lm::PeakMemoryBytes()).c_str(), ranks ? " (rank 0)" : "");
 }
 
+// What an interrupted render leaves: the interrupt handler's line ends with it.
+std::string InterruptNote(const std::string& output) {
+    std::error_code ec;
+    return output + (std::filesystem::exists(output, ec) ? " not written: the previous file is kept" : " not written");
+}
+
 int RunRender(const RenderCommand& cmd) {
     ApplyLogLevel(cmd.common);
     lm::InstallInterruptCleanup();
     const std::unique_ptr<PreparedRender> p = PrepareRender(cmd);
+    lm::SetInterruptMessage(InterruptNote(p->output));
     lm::RenderResult result;
     {
         lm::ProgressReporter progress(p->job->Renderer().TileCount(), "Rendering",
@@ -200,6 +214,7 @@ int RunRender(const RenderCommand& cmd) {
     }
     const auto t3 = Clock::now();
     lm::WriteImage(p->output, result.image);
+    lm::SetInterruptMessage("");
     PrintRender(cmd, *p, result, SecondsSince(t3), nullptr);
     return 0;
 }
@@ -228,6 +243,7 @@ int RunRenderMpi(const RenderCommand& cmd, const lm::MpiSession& session) {
         error = lm::CurrentExceptionLine();
     }
     if (!session.AllSucceeded(error, &message, &failedRank)) return fail(message, failedRank);
+    if (root) lm::SetInterruptMessage(InterruptNote(p->output));
     // mpirun binds each of up to two ranks to one core by default: more threads than the
     // CPUs a rank may run on only share them.
     const int cpus = lm::AffinityCpuCount();
@@ -249,6 +265,7 @@ int RunRenderMpi(const RenderCommand& cmd, const lm::MpiSession& session) {
     if (!root) return 0;
     const auto t3 = Clock::now();
     lm::WriteImage(p->output, d.result.image);
+    lm::SetInterruptMessage("");
     PrintRender(cmd, *p, d.result, SecondsSince(t3), &d.ranks);
     return 0;
 }

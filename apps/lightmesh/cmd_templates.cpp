@@ -9,6 +9,7 @@ namespace lm::cli {
 /// `lightmesh templates`: build (or load) and cache sphere templates; with --measure, the
 /// error of snapping P to a sub-position for several ns, which is how the default was chosen.
 int RunTemplates(int ns, float ki, const std::string& dir, bool measure) {
+    if (ns == 0) ns = lm::kDefaultTemplateSubsteps;  // as `render --ns 0`
     const lm::TemplateLoad load = lm::LoadOrBuildSphereTemplates(ns, ki, dir);
     if (!load.note.empty()) lm::LogWarning("templates: " + load.note);
     const lm::SphereTemplates& t = load.templates;

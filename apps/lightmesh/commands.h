@@ -28,6 +28,8 @@ using Clock = std::chrono::steady_clock;
 using lm::SecondsSince;
 // "1,234,567": counts are easier to read with thousands separators.
 std::string Count(uint64_t n);
+// "1 light", "24,614 triangles": a count with its noun, singular or plural (noun + "s").
+std::string Counted(uint64_t n, const char* noun);
 
 /// Runs a command so that every exception becomes one line and exit code 1.
 template <typename F>
@@ -52,8 +54,12 @@ void AddCommonOptions(CLI::App* cmd, CommonOptions* o);
 lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth = 0, int frameHeight = 0);
 void ApplyLogLevel(const CommonOptions& o);
 
-// The range of a numeric knob of the settings table, as CLI11 checks it.
-CLI::Range SettingRange(const char* key);
+// A number from lo to hi (both included), worded as the scene file's checks word it:
+// "--ki: must be between 0.01 and 16, got 20"; `integer`: a whole number ("expected an
+// integer, got 1.5"). Floats are compared in single precision, as they are stored.
+CLI::Validator InRange(double lo, double hi, bool integer);
+// The range of a numeric knob of the settings table, as InRange checks it.
+CLI::Validator SettingRange(const char* key);
 // A single-precision option's text that reads as a finite float (>= 0 if `nonNegative`):
 // the message shows the text as given ("got 1e39", where the float it becomes said "inf").
 CLI::Validator FiniteFloat(bool nonNegative);
@@ -70,6 +76,16 @@ CLI::Option* AddSetting(CLI::App* cmd, const char* key, T* value) {
     if (s.kind == K::Choice) option->check(CLI::IsMember(s.choices));
     return option;
 }
+
+// Levenshtein distance (insertions, deletions, substitutions), for "did you mean".
+size_t EditDistance(const std::string& a, const std::string& b);
+// The candidate nearest to `word` within edit distance 2 (and less than its length), or "".
+std::string Nearest(const std::string& word, const std::vector<std::string>& candidates);
+// The message for a command line CLI11 refused with `e`, worded for a new user: a
+// mistyped command or option gets "did you mean …?"; "" when CLI11's own is right. Sets
+// *printHelp (and returns "") for `lightmesh help [COMMAND]`.
+std::string CommandLineMistake(const CLI::App& app, const CLI::ParseError& e, int argc, char** argv,
+                               const CLI::App** printHelp);
 
 void PrintFigures(const char* title, const std::vector<std::pair<std::string, std::string>>& figures);
 
@@ -116,6 +132,7 @@ int RunBench(BenchCommand& cmd);
 struct CompareCommand {
     std::string a, b, mask, diff;
     float diffScale = 0;
+    bool diffScaleGiven = false;
     bool json = false;
     std::optional<double> thresholdPsnr;
 };

@@ -1,6 +1,7 @@
 // common.cpp -- what the commands share: scene loading, options, figures.
 #include "commands.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -12,6 +13,7 @@ namespace lm::cli {
 
 // "1,234,567": counts are easier to read with thousands separators.
 std::string Count(uint64_t n) { return lm::FormatCount(n); }
+std::string Counted(uint64_t n, const char* noun) { return Count(n) + " " + noun + (n == 1 ? "" : "s"); }
 
 void AddCommonOptions(CLI::App* cmd, CommonOptions* o) {
     cmd->add_option("scene", o->scene,
@@ -19,10 +21,16 @@ void AddCommonOptions(CLI::App* cmd, CommonOptions* o) {
                     "builtin:gazebo")
         ->required();
     cmd->add_flag("--strict", o->strict, "Unknown keys in the scene file are errors, not warnings");
-    cmd->add_flag("-q,--quiet", o->quiet, "Print errors only: no progress bar, no warnings");
+    // render's result is its image: -q leaves the summary line out too (--stats keeps it and
+    // the figures); info's result is its figures, which stay.
+    cmd->add_flag("-q,--quiet", o->quiet,
+                  cmd->get_name() == "render"
+                      ? "Print errors only: no progress bar, warnings, notes or summary line (with --stats: the "
+                        "summary line and the figures, on stdout)"
+                      : "Print the figures and errors only: no warnings or notes");
     cmd->add_flag("-v,--verbose", o->verbose, "Print more about what is done");
     cmd->add_option("-t,--threads", o->threads, "Worker threads (default: all cores)")
-        ->check(CLI::Range(1, 1024));
+        ->check(InRange(1, 1024, true));
 }
 
 lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth, int frameHeight) {
@@ -41,11 +49,31 @@ void ApplyLogLevel(const CommonOptions& o) {
     lm::SetLogLevel(o.quiet ? lm::LogLevel::Error : (o.verbose ? lm::LogLevel::Debug : lm::LogLevel::Info));
 }
 
-// The range of a numeric knob of the settings table, as CLI11 checks it.
-CLI::Range SettingRange(const char* key) {
+CLI::Validator InRange(double lo, double hi, bool integer) {
+    const std::string range = std::isfinite(hi) ? lm::StringPrintf("between %g and %g", lo, hi)
+                                                : lm::StringPrintf(">= %g", lo);
+    return CLI::Validator(
+        [=](std::string& text) -> std::string {
+            char* end = nullptr;
+            const double v = std::strtod(text.c_str(), &end);
+            const bool number = end != text.c_str() && *end == 0 && !std::isnan(v);
+            if (!number) return std::string(integer ? "expected an integer" : "expected a number") + ", got " + text;
+            if (integer && v != std::floor(v)) return "expected an integer, got " + text;
+            // In float for a float, as it is stored and compared (0.01 is 0.0099999998f).
+            const bool inside = integer ? (v >= lo && v <= hi)
+                                        : (static_cast<float>(v) >= static_cast<float>(lo) &&
+                                           (!std::isfinite(hi) || static_cast<float>(v) <= static_cast<float>(hi)));
+            if (!inside) return "must be " + range + ", got " + text;
+            return "";
+        },
+        std::string(integer ? "INT" : "FLOAT") +
+            (std::isfinite(hi) ? lm::StringPrintf(" in [%g - %g]", lo, hi) : lm::StringPrintf(" >= %g", lo)));
+}
+
+// The range of a numeric knob of the settings table, as InRange checks it.
+CLI::Validator SettingRange(const char* key) {
     const lm::RenderSetting& s = lm::RenderSettingFor(key);
-    if (s.kind == lm::RenderSetting::Kind::Int) return CLI::Range(static_cast<int>(s.lo), static_cast<int>(s.hi));
-    return CLI::Range(static_cast<float>(s.lo), static_cast<float>(s.hi));
+    return InRange(s.lo, s.hi, s.kind == lm::RenderSetting::Kind::Int);
 }
 
 CLI::Validator FiniteFloat(bool nonNegative) {
@@ -61,6 +89,109 @@ CLI::Validator FiniteFloat(bool nonNegative) {
             return "";
         },
         nonNegative ? "FLOAT >= 0" : "FLOAT");
+}
+
+size_t EditDistance(const std::string& a, const std::string& b) {
+    std::vector<size_t> row(b.size() + 1);
+    for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (size_t i = 1; i <= a.size(); ++i) {
+        size_t diagonal = row[0];
+        row[0] = i;
+        for (size_t j = 1; j <= b.size(); ++j) {
+            const size_t up = row[j];
+            row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+            diagonal = up;
+        }
+    }
+    return row[b.size()];
+}
+
+std::string Nearest(const std::string& word, const std::vector<std::string>& candidates) {
+    std::string best;
+    size_t bestDistance = 3;
+    for (const std::string& c : candidates) {
+        const size_t d = EditDistance(word, c);
+        if (d < bestDistance && d < std::max<size_t>(word.size(), 2)) {
+            bestDistance = d;
+            best = c;
+        }
+    }
+    return best;
+}
+
+namespace {
+
+// The names of a command's options as typed: "--shadows", "-q".
+std::vector<std::string> OptionNames(const CLI::App& cmd) {
+    std::vector<std::string> names;
+    for (const CLI::Option* o : cmd.get_options()) {
+        for (const std::string& l : o->get_lnames()) names.push_back("--" + l);
+        for (const std::string& s : o->get_snames()) names.push_back("-" + s);
+    }
+    return names;
+}
+
+std::vector<std::string> CommandNames(const CLI::App& app) {
+    std::vector<std::string> names;
+    for (const auto* sub : app.get_subcommands([](const CLI::App*) { return true; }))
+        names.push_back(sub->get_name());
+    return names;
+}
+
+std::string JoinOr(const std::vector<std::string>& words) {
+    std::string s;
+    for (size_t i = 0; i < words.size(); ++i)
+        s += (i == 0 ? "" : (i + 1 == words.size() ? " or " : ", ")) + words[i];
+    return s;
+}
+
+}  // namespace
+
+std::string CommandLineMistake(const CLI::App& app, const CLI::ParseError& e, int argc, char** argv,
+                               const CLI::App** printHelp) {
+    *printHelp = nullptr;
+    const std::vector<std::string> commands = CommandNames(app);
+    const auto parsed = app.get_subcommands();
+    // No command: `lightmesh`, `lightmesh rendr x`, `lightmesh help [render]`.
+    if (parsed.empty() && dynamic_cast<const CLI::RequiredError*>(&e)) {
+        std::vector<std::string> words;
+        for (int i = 1; i < argc; ++i) words.push_back(argv[i]);
+        if (words.empty()) return "a command is required: " + JoinOr(commands);
+        const std::string& first = words.front();
+        if (first == "help") {
+            *printHelp = &app;
+            if (words.size() > 1)
+                for (const auto* sub : app.get_subcommands([](const CLI::App*) { return true; }))
+                    if (sub->get_name() == words[1]) *printHelp = sub;
+            return "";
+        }
+        if (!first.empty() && first[0] == '-')
+            return lm::Printable(first) + ": not an option of lightmesh; the options go after the command (" +
+                   "lightmesh render SCENE --shadows rt, ...)";
+        const std::string near = Nearest(first, commands);
+        return "unknown command \"" + lm::Printable(first) + "\"" +
+               (near.empty() ? " (the commands: " + JoinOr(commands) + ")" : "; did you mean " + near + "?");
+    }
+    if (!dynamic_cast<const CLI::ExtrasError*>(&e)) return "";
+    // Unexpected arguments, in the order given: an unknown option gets the nearest of its
+    // command's options.
+    const CLI::App& cmd = parsed.empty() ? app : *parsed.front();
+    std::vector<std::string> extras = app.remaining(true);
+    std::vector<std::string> given;
+    for (int i = 1; i < argc; ++i)
+        if (std::find(extras.begin(), extras.end(), argv[i]) != extras.end()) given.push_back(argv[i]);
+    if (given.empty()) return "";
+    const std::string where = parsed.empty() ? "lightmesh" : "`" + cmd.get_name() + "`";
+    for (const std::string& arg : given) {
+        if (arg.size() < 2 || arg[0] != '-') continue;
+        const std::string name = arg.substr(0, arg.find('='));
+        const std::string near = Nearest(name, OptionNames(cmd));
+        return lm::Printable(name) + ": not an option of " + where +
+               (near.empty() ? "" : "; did you mean " + near + "?");
+    }
+    std::string list;
+    for (const std::string& arg : given) list += (list.empty() ? "" : " ") + lm::Printable(arg);
+    return (given.size() == 1 ? "unexpected argument for " : "unexpected arguments for ") + where + ": " + list;
 }
 
 void PrintFigures(const char* title, const std::vector<std::pair<std::string, std::string>>& figures) {

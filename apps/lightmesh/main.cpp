@@ -68,12 +68,15 @@ int main(int argc, char** argv) {
     bool templatesMeasure = false;
     CLI::App* templatesCmd = app.add_subcommand(
         "templates", "Build and cache the light mesh's sphere templates for (ns, kI) (the paper's section 3.1)");
-    templatesCmd->add_option("--ns", templatesNs, "Sub-steps per cell side")->check(CLI::Range(1, 64));
-    templatesCmd->add_option("--ki", templatesKi, "Interpolation radius in mesh steps")->check(SettingRange("ki"));
+    // --ns and --ki take render's ranges (0: the default ns, as `render --ns 0`).
+    templatesCmd->add_option("--ns", templatesNs, "Sub-steps per cell side (default 8; 0: the default)")
+        ->check(SettingRange("ns"));
+    templatesCmd->add_option("--ki", templatesKi, "Interpolation radius in mesh steps (default 2)")->check(SettingRange("ki"));
     templatesCmd->add_option("--template-dir", templatesDir, "Cache folder (default: $XDG_CACHE_HOME/lightmesh/templates)");
     templatesCmd->add_flag("--measure", templatesMeasure,
                            "Also print, for ns = 1 … 32, how many nodes snapping P to a sub-position gets wrong");
-    templatesCmd->add_flag("-q,--quiet", [](int64_t) { lm::SetLogLevel(lm::LogLevel::Error); }, "Print errors only");
+    templatesCmd->add_flag("-q,--quiet", [](int64_t) { lm::SetLogLevel(lm::LogLevel::Error); },
+                           "No warnings or notes: errors and the result line only");
 
     CompareCommand compare;
     CLI::App* compareCmd = app.add_subcommand(
@@ -83,7 +86,7 @@ int main(int argc, char** argv) {
     compareCmd->add_option("b", compare.b, "Image to judge, the same size")->required();
     compareCmd->add_option("--mask", compare.mask, "Compare only where this image (same size) is not black");
     compareCmd->add_option("--diff", compare.diff, "Write a false-colour (Turbo) image of |A - B| here");
-    compareCmd->add_option("--diff-scale", compare.diffScale,
+    CLI::Option* diffScale = compareCmd->add_option("--diff-scale", compare.diffScale,
                            "Difference shown as the top colour (display units, 0..1; default 0: the largest)")
         ->check(FiniteFloat(true));
     compareCmd->add_flag("--json", compare.json, "Print one JSON line (psnr is null for identical images)");
@@ -106,14 +109,14 @@ int main(int argc, char** argv) {
         ->delimiter(',');
     benchCmd->add_option("--cell-summaries", bench.matrix.cellSummaries,
                          "Light mesh cell summaries for every LMM cell: auto (consensus only, where the image is fine enough), "
-                         "on or off")
+                         "on or off; default auto")
         ->check(CLI::IsMember({"auto", "on", "off"}));
     benchCmd->add_option("--thin-check", bench.matrix.thinCheck,
                          "With --quality, the penumbra mode's thin-occluder check: all (default, as render), lit or off")
         ->check(CLI::IsMember(lm::RenderSettingFor("thin_check").choices));
     CLI::Option* benchTable = benchCmd->add_option("--table", bench.table,
                          "Reproduce the paper's table 1, 2, 3 or 4 on scenes/real (replaces --scene --size --cc --ki --variants)")
-        ->check(CLI::Range(1, 4));
+        ->check(InRange(1, 4, true));
     CLI::Option* benchMatrixFile = benchCmd->add_option("--matrix", bench.matrixFile,
                          "Read the matrix from JSON: {\"scenes\", \"sizes\": [[w,h]], \"cc\", \"ki\", \"variants\", \"accels\", \"repeat\"}");
     // (Not CLI::ExistingFile: LoadBenchMatrix says why a file cannot be read; CLI11 called
@@ -140,7 +143,7 @@ int main(int argc, char** argv) {
     benchCmd->add_option("--ref-samples", bench.matrix.refSamples,
                          "Rays per light of the --quality references (the paper's radius sweep and the competitors' "
                          "table); default 256")
-        ->check(CLI::Range(1, 4096));
+        ->check(InRange(1, 4096, true));
     benchCmd->add_option("--light-radius", bench.matrix.lightRadius,
                          "With --quality, the competitors' table (soft, area and its reference) gives every light this "
                          "radius instead of its own; the paper's tables keep R = kI·h")
@@ -151,16 +154,26 @@ int main(int argc, char** argv) {
                          std::string("Ray-query back-ends for RT (the first also serves no shadows and LMM), comma-separated; default ") +
                              lm::kDefaultAccelerator + " (grid for --table, the paper's)")
         ->delimiter(',')->check(CLI::IsMember(lm::AcceleratorNames()));
-    bench.repeatOption = benchCmd->add_option("--repeat", bench.matrix.repeat, "Timed runs per cell after a warm-up; the median is reported")
-        ->check(CLI::Range(1, 100));
+    bench.repeatOption = benchCmd->add_option("--repeat", bench.matrix.repeat, "Timed runs per cell after a warm-up; the median is reported (default 3; 1 with --quick)")
+        ->check(InRange(1, 100, true));
     benchCmd->add_flag("--no-none", bench.noNone, "Skip the render without shadows");
     benchCmd->add_option("--images", bench.matrix.imageDir, "Write each cell's image (PNG) into this folder");
     benchCmd->add_option("--csv", bench.csv, "Also write every figure of every cell as CSV");
     benchCmd->add_option("--markdown", bench.markdown, "Also write the tables to this Markdown file");
     benchCmd->add_option("-t,--threads", render.common.threads, "Worker threads (default: all cores)")
-        ->check(CLI::Range(1, 1024));
-    benchCmd->add_flag("-q,--quiet", bench.quiet, "No progress lines");
+        ->check(InRange(1, 1024, true));
+    benchCmd->add_flag("-q,--quiet", bench.quiet, "No progress lines or warnings: errors and the tables only");
 
+    // `lightmesh help [COMMAND]`: the help, as --help.
+    if (argc >= 2 && std::string(argv[1]) == "help" && argc <= 3) {
+        const CLI::App* shown = &app;
+        if (argc == 3)
+            for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
+                if (sub->get_name() == argv[2]) shown = sub;
+        app.name(argv[0]);
+        std::printf("%s", shown == &app ? app.help().c_str() : shown->help(argv[0]).c_str());
+        return 0;
+    }
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -176,6 +189,18 @@ int main(int argc, char** argv) {
                                      lm::Printable(arg).c_str(), sub->get_name().c_str(), lm::Printable(arg).c_str());
                         return 1;
                     }
+        // A mistyped command or option: the nearest one ("did you mean render?");
+        // `lightmesh help [COMMAND]` prints the help.
+        const CLI::App* help = nullptr;
+        const std::string mistake = CommandLineMistake(app, e, argc, argv, &help);
+        if (help) {
+            std::printf("%s", help->help().c_str());
+            return 0;
+        }
+        if (!mistake.empty()) {
+            std::fprintf(stderr, "lightmesh: error: %s\nRun with --help for more information.\n", mistake.c_str());
+            return 1;
+        }
         // --help and --version exit 0; a command-line mistake exits 1 like any bad input
         // (CLI11's own codes are 100 and up).
         return app.exit(e) == 0 ? 0 : 1;
@@ -213,7 +238,9 @@ int main(int argc, char** argv) {
     if (worldSize > 1) {
         if (worldRank != 0) return 0;
         std::fprintf(stderr, "lightmesh: note: under mpirun only `render` is spread over the ranks; this command "
-                             "runs once, on rank 0 (the other %d ranks exit)\n", worldSize - 1);
+                             "runs once, on rank 0 (%s)\n",
+                     worldSize == 2 ? "the other rank exits"
+                                    : lm::StringPrintf("the other %d ranks exit", worldSize - 1).c_str());
     }
 
     if (benchCmd->parsed()) {
@@ -223,7 +250,10 @@ int main(int argc, char** argv) {
                                                           static_cast<size_t>(render.common.threads));
         return Guarded([&] { return RunBench(bench); });
     }
-    if (compareCmd->parsed()) return Guarded([&] { return RunCompare(compare); });
+    if (compareCmd->parsed()) {
+        compare.diffScaleGiven = diffScale->count() > 0;
+        return Guarded([&] { return RunCompare(compare); });
+    }
     if (templatesCmd->parsed())
         return Guarded([&] { return RunTemplates(templatesNs, templatesKi, templatesDir, templatesMeasure); });
     const CommonOptions& common = renderCmd->parsed() ? render.common : info;

@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <thread>
 
 #include "lightmesh/io/image.h"
@@ -35,6 +36,76 @@ TEST(Cli, HelpForEveryCommand) {
         EXPECT_NE(r.output.find("Usage"), std::string::npos) << r.output;
     }
     EXPECT_NE(Lightmesh("render --help").output.find("--shadows"), std::string::npos);
+}
+
+// Issue 47: the help shows the defaults; `lightmesh help [COMMAND]` is the help.
+TEST(Cli, HelpShowsTheDefaults) {
+    const std::string render = Lightmesh("render --help").output;
+    for (const char* text : {"default soft", "default 640", "default 480", "(default 1)", "default 5",
+                             "default 100 for lmm, 64 for soft", "(default 2)", "default 8", "(default 16)",
+                             "default 64", "default auto", "default all"})
+        EXPECT_NE(render.find(text), std::string::npos) << text << "\n" << render;
+    const std::string templates = Lightmesh("templates --help").output;
+    EXPECT_NE(templates.find("default 8; 0: the default"), std::string::npos) << templates;
+    EXPECT_NE(templates.find("(default 2)"), std::string::npos) << templates;
+    EXPECT_NE(Lightmesh("bench --help").output.find("(default 3; 1 with --quick)"), std::string::npos);
+
+    const CliRun help = Lightmesh("help");
+    EXPECT_EQ(help.exitCode, 0) << help.output;
+    EXPECT_NE(help.output.find("Usage"), std::string::npos) << help.output;
+    const CliRun renderHelp = Lightmesh("help render");
+    EXPECT_EQ(renderHelp.exitCode, 0) << renderHelp.output;
+    EXPECT_NE(renderHelp.output.find("--shadows"), std::string::npos) << renderHelp.output;
+}
+
+// -q prints errors only (issue 47); --stats still prints the summary line and the figures.
+TEST(Cli, QuietPrintsErrorsOnly) {
+    const std::string out = Temp("quiet.png");
+    const CliRun quiet = Lightmesh("render builtin:gazebo --width 16 --height 12 -q -o " + out);
+    EXPECT_EQ(quiet.exitCode, 0);
+    EXPECT_EQ(quiet.output, "");
+    const CliRun stats = Lightmesh("render builtin:gazebo --width 16 --height 12 -q --stats -o " + out);
+    EXPECT_EQ(stats.exitCode, 0);
+    EXPECT_NE(stats.output.find(out + ": 16x12, shadows soft"), std::string::npos) << stats.output;
+    EXPECT_NE(stats.output.find("peak"), std::string::npos) << stats.output;
+}
+
+// The summary line: thousands separators, and a singular for one (issue 47).
+TEST(Cli, SummaryLineCountsReadWell) {
+    const CliRun r = Lightmesh("render builtin:gazebo --width 16 --height 12 -o " + Temp("counts.png"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find(", 2,572 triangles, 2 lights: render "), std::string::npos) << r.output;
+    std::ofstream(Temp("one.obj")) << "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nf 1 2 3\n";
+    std::ofstream(Temp("one.json")) << R"({"camera": {"position": [0, 2, 8], "look_at": [0, 0, 0]},
+        "lights": [{"position": [3, 6, 4]}], "meshes": [{"file": "one.obj"}]})";
+    const CliRun one = Lightmesh("render " + Temp("one.json") + " --width 16 --height 12 -o " + Temp("one.png"));
+    ASSERT_EQ(one.exitCode, 0) << one.output;
+    EXPECT_NE(one.output.find(", 1 triangle, 1 light: render "), std::string::npos) << one.output;
+}
+
+// Options that do nothing without another one say so (issue 47).
+TEST(Cli, OptionsIgnoredWithoutTheirPartnerWarn) {
+    const CliRun info = Lightmesh("info builtin:gazebo --accel brute --grid 20");
+    EXPECT_EQ(info.exitCode, 0) << info.output;
+    EXPECT_NE(info.output.find("lightmesh: warning: --grid is not used by --accel brute (only by grid); ignored"),
+              std::string::npos)
+        << info.output;
+    EXPECT_EQ(Lightmesh("info builtin:gazebo --accel grid --grid 20").output.find("warning"), std::string::npos);
+
+    const std::string a = Temp("cmp-a.png");
+    ASSERT_EQ(Lightmesh("render builtin:gazebo --width 16 --height 12 -q -o " + a).exitCode, 0);
+    const CliRun compare = Lightmesh("compare " + a + " " + a + " --diff-scale 2");
+    EXPECT_EQ(compare.exitCode, 0) << compare.output;
+    EXPECT_NE(compare.output.find("lightmesh: warning: --diff-scale is used only with --diff; ignored"),
+              std::string::npos)
+        << compare.output;
+}
+
+// templates takes render's --ns range: 0 is the default, 8 (issue 47).
+TEST(Cli, TemplatesTakesNsZeroAsTheDefault) {
+    const CliRun r = Lightmesh("templates --ns 0 --ki 1.5 --template-dir " + Temp("templates"));
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("templates ns 8, kI 1.5"), std::string::npos) << r.output;
 }
 
 TEST(Cli, RendersTheDemoSceneEndToEnd) {
@@ -120,6 +191,20 @@ TEST(Cli, BadInputIsAClearErrorAndWritesNothing) {
     }
     EXPECT_FALSE(fs::exists(out));
     EXPECT_FALSE(fs::exists(Temp("x.jpg")));
+}
+
+// Ctrl-C during a render: one line says so and what became of the output (issue 47).
+TEST(Cli, InterruptedRenderSaysSo) {
+    const std::string out = Temp("interrupted.png");
+    ASSERT_EQ(Lightmesh("render builtin:gazebo --width 32 --height 24 -q -o " + out).exitCode, 0);
+    const std::string before = Bytes(out);
+    const CliRun r = lm::testing::RunLightmesh(
+        "render builtin:gazebo --width 4000 --height 3000 --aa 4 -o " + out, "timeout -s INT 1.5");
+    ASSERT_NE(r.output.find("lightmesh: interrupted"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.substr(r.output.find("lightmesh: interrupted")),
+              "lightmesh: interrupted; " + out + " not written: the previous file is kept\n")
+        << r.output;
+    EXPECT_EQ(Bytes(out), before);
 }
 
 // An interrupted render leaves a previous output untouched and no temporary file behind.

@@ -118,8 +118,18 @@ class Object {
     }
     const Json& Require(const std::string& key, const char* why = nullptr) {
         if (const Json* v = Find(key)) return *v;
+        // A near-miss in the object ("lookat" for look_at) is the likely cause: name it.
+        std::string hint;
+        size_t best = 3;
+        for (const auto& item : j_.items()) {
+            const size_t d = EditDistance(Lower(item.key()), Lower(key));
+            if (d < best && d < std::max<size_t>(key.size(), 2)) {
+                best = d;
+                hint = "; " + Quoted(item.key()) + " is not a key: did you mean " + Quoted(key) + "?";
+            }
+        }
         r_.Fail(Child(key),
-                why ? StringPrintf("missing required key (%s)", why) : "missing required key");
+                (why ? StringPrintf("missing required key (%s)", why) : std::string("missing required key")) + hint);
     }
 
     /// Reports every key that was never asked for (the first ten one by one).

@@ -18,6 +18,10 @@ namespace mesh_import {
 
 /// "4194304" as "4,194,304", for the budgets' messages.
 std::string Thousands(uint64_t n);
+/// Whether an importer message is known noise of a file that reads well (the Blender
+/// reader's "<add reason>", "BlendDNA: Did not find a field named ...", textures and lights
+/// lightmesh does not use): one line counts them.
+bool KnownImporterNoise(const std::string& message);
 /// Checks what Assimp would report less clearly: a missing file, a directory, a FIFO, an
 /// empty or unreadable file, one whose first 4 KiB are all NUL bytes.
 void CheckReadable(const std::string& path);

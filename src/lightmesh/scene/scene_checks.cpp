@@ -7,6 +7,7 @@
 
 #include "lightmesh/geometry/mesh.h"
 #include "lightmesh/util/error.h"
+#include "lightmesh/util/system.h"
 
 namespace lm::scene_load {
 
@@ -17,12 +18,15 @@ std::string FormatVec(const Vec3& v) {
 }
 
 std::string DroppedMessage(const CleanReport& c) {
+    // "1 degenerate (zero-area) triangle", "6,510 duplicate triangles".
+    auto count = [](size_t n, const char* kind) {
+        return FormatCount(n) + " " + kind + (n == 1 ? " triangle" : " triangles");
+    };
     if (c.degenerate && c.duplicate)
-        return StringPrintf("dropped %zu degenerate (zero-area) and %zu duplicate triangles",
-                            c.degenerate, c.duplicate);
-    if (c.degenerate)
-        return StringPrintf("dropped %zu degenerate (zero-area) triangles", c.degenerate);
-    return StringPrintf("dropped %zu duplicate triangles", c.duplicate);
+        return "dropped " + FormatCount(c.degenerate) + " degenerate (zero-area) and " +
+               count(c.duplicate, "duplicate");
+    if (c.degenerate) return "dropped " + count(c.degenerate, "degenerate (zero-area)");
+    return "dropped " + count(c.duplicate, "duplicate");
 }
 
 float Reach(const Vec3& p) {

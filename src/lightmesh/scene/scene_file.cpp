@@ -472,19 +472,43 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
     if (const Json* v = top.Find("render")) ReadRender(r, *v, &scene.render);
     top.Finish();
 
-    // Now the mesh files, JSON mistakes having been reported already.
+    // Now the mesh files, JSON mistakes having been reported already. A file named by several
+    // entries with the same exclude patterns (placed twice, say) is imported once, and its
+    // importer warnings are said once; the import is kept until its last entry.
+    auto importKey = [](const MeshEntry& e) {
+        std::string key = e.resolved;
+        for (const std::string& p : e.load.excludeMaterials) key += std::string(1, '\0') + "m" + p;
+        for (const std::string& p : e.load.excludeNames) key += std::string(1, '\0') + "n" + p;
+        return key;
+    };
+    std::unordered_map<std::string, int> importsLeft;
+    for (const MeshEntry& e : entries) ++importsLeft[importKey(e)];
+    std::unordered_map<std::string, LoadedMesh> imported;
+    std::unordered_set<std::string> said;  // the clean-up's warnings, once per file and message
     for (const MeshEntry& e : entries) {
         const std::string filePath = e.path + "/file";
+        const std::string key = importKey(e);
+        const bool again = imported.count(key) > 0;
         LoadedMesh loaded;
-        try {
-            loaded = options.loadMesh ? options.loadMesh(e.resolved, e.load)
-                                      : LoadMeshFile(e.resolved, e.load);
-        } catch (const MeshFileError& err) {
-            if (err.Unreadable())
-                r.Fail(filePath, "cannot read " + Quoted(e.file) + ": " + err.Reason());
-            r.Fail(filePath, Quoted(e.file) + ": " + err.Reason());
+        if (again) {
+            if (--importsLeft[key] == 0) {
+                loaded = std::move(imported[key]);
+                imported.erase(key);
+            } else {
+                loaded = imported[key];
+            }
+        } else {
+            try {
+                loaded = options.loadMesh ? options.loadMesh(e.resolved, e.load)
+                                          : LoadMeshFile(e.resolved, e.load);
+            } catch (const MeshFileError& err) {
+                if (err.Unreadable())
+                    r.Fail(filePath, "cannot read " + Quoted(e.file) + ": " + err.Reason());
+                r.Fail(filePath, Quoted(e.file) + ": " + err.Reason());
+            }
+            for (const std::string& w : loaded.warnings) r.Warn(w);
+            if (--importsLeft[key] > 0) imported[key] = loaded;
         }
-        for (const std::string& w : loaded.warnings) r.Warn(w);
         // Patterns that excluded nothing are probably typos.
         auto warnUnmatched = [&](const char* key, const std::vector<std::string>& patterns,
                                  const std::vector<bool>& matched, bool list, const char* what) {
@@ -515,7 +539,8 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
         const CleanReport clean = CleanMesh(&loaded.mesh);
         scene.report.degenerateRemoved += clean.degenerate;
         scene.report.duplicatesRemoved += clean.duplicate;
-        if (clean.degenerate || clean.duplicate) r.Warn(e.resolved + ": " + DroppedMessage(clean));
+        if (clean.degenerate || clean.duplicate)
+            if (const std::string w = e.resolved + ": " + DroppedMessage(clean); said.insert(w).second) r.Warn(w);
         if (e.material >= 0) {
             std::fill(loaded.mesh.materialIds.begin(), loaded.mesh.materialIds.end(),
                       static_cast<uint32_t>(e.material));
@@ -542,9 +567,9 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
     scene.report.degenerateRemoved += across.degenerate;
     scene.report.duplicatesRemoved += across.duplicate;
     if (across.duplicate)
-        r.Warn(spec +
-               StringPrintf(": dropped %zu triangles that duplicate triangles of another mesh",
-                            across.duplicate));
+        r.Warn(spec + ": dropped " + FormatCount(across.duplicate) +
+               (across.duplicate == 1 ? " triangle that duplicates a triangle of another mesh"
+                                      : " triangles that duplicate triangles of another mesh"));
     if (scene.mesh.TriangleCount() == 0) r.Fail("/meshes", NoTrianglesMessage(scene.report, scene.mesh));
     CheckExtent(r, "/meshes", scene);
 

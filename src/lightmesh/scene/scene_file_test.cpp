@@ -794,11 +794,33 @@ TEST(SceneFile, DegenerateAndDuplicateTrianglesAreDroppedAndCounted) {
     EXPECT_EQ(scene.report.duplicatesRemoved, 3u);  // one per file, one across the files
     for (std::string& w : warnings) w = Replace(w, folder + "/", "");
     const std::vector<std::string> expected = {
-        "dirty.obj: dropped 1 degenerate (zero-area) and 1 duplicate triangles",
-        "dirty.obj: dropped 1 degenerate (zero-area) and 1 duplicate triangles",
-        "scene.json: dropped 1 triangles that duplicate triangles of another mesh",
+        // The file is placed twice: imported once, its warning said once (issue 47).
+        "dirty.obj: dropped 1 degenerate (zero-area) and 1 duplicate triangle",
+        "scene.json: dropped 1 triangle that duplicates a triangle of another mesh",
     };
     EXPECT_EQ(warnings, expected);
+}
+
+// A file placed twice with the same excludes is imported once (issue 47); other excludes
+// import it again.
+TEST(SceneFile, AFilePlacedTwiceIsImportedOnce) {
+    const std::string folder = TempFolder();
+    WriteFile(folder, "tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    const std::string path = WriteFile(folder, "scene.json", R"({
+        "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0]},
+        "lights": [{"position": [0, 5, 0]}],
+        "meshes": [{"file": "tri.obj"}, {"file": "tri.obj", "transform": {"translate": [2, 0, 0]}},
+                   {"file": "tri.obj", "exclude_names": "nothing", "transform": {"translate": [4, 0, 0]}}]})");
+    int imports = 0;
+    SceneLoadOptions options;
+    options.loadMesh = [&](const std::string& file, const MeshLoadOptions& load) {
+        ++imports;
+        return LoadMeshFile(file, load);
+    };
+    std::vector<std::string> warnings;
+    const Scene scene = LoadScene(path, options, &warnings);
+    EXPECT_EQ(imports, 2);
+    EXPECT_EQ(scene.mesh.TriangleCount(), 3u);
 }
 
 TEST(SceneFile, ImporterWarningsReachTheUser) {

@@ -11,20 +11,24 @@ const std::vector<RenderSetting>& RenderSettings() {
     using K = RenderSetting::Kind;
     constexpr double kNoLimit = std::numeric_limits<double>::infinity();
     static const std::vector<RenderSetting> rows = {
-        {"width", "--width", K::Int, 1, 16384, {}, "Image width in pixels", nullptr, {}},
-        {"height", "--height", K::Int, 1, 16384, {}, "Image height in pixels", nullptr, {}},
-        {"aa", "--aa", K::Int, 1, 16, {}, "Anti-aliasing: N x N camera rays per pixel", nullptr, {}},
-        {"max_depth", "--max-depth", K::Int, 1, 64, {}, "Mirror recursion limit (1: no reflections)", nullptr, {}},
+        {"width", "--width", K::Int, 1, 16384, {}, "Image width in pixels (default 640, or the scene file's)",
+         nullptr, {}},
+        {"height", "--height", K::Int, 1, 16384, {}, "Image height in pixels (default 480, or the scene file's)",
+         nullptr, {}},
+        {"aa", "--aa", K::Int, 1, 16, {}, "Anti-aliasing: N x N camera rays per pixel (default 1)", nullptr, {}},
+        {"max_depth", "--max-depth", K::Int, 1, 64, {}, "Mirror recursion limit (1: no reflections; default 5)",
+         nullptr, {}},
         {"shadows", "--shadows", K::Choice, 0, 0, {"soft", "none", "rt", "lmm", "area"},
-         "Shadows: soft (default: soft shadows of the lights' spheres from the light mesh's cells), none, rt "
+         "Shadows: soft (soft shadows of the lights' spheres from the light mesh's cells), none, rt "
          "(hard: one shadow ray per light), lmm (the paper's light mesh method) or area (soft reference: "
-         "--samples shadow rays per light)", nullptr, {}},
+         "--samples shadow rays per light); default soft", nullptr, {}},
         {"accel", "--accel", K::Choice, 0, 0, {"brute", "grid", "embree"},
          std::string("Ray-query back-end: brute, grid (the paper's nested grid) or embree; default ") +
              kDefaultAccelerator,
          nullptr,
          {}},
-        {"grid", "--grid", K::Int, 0, 4096, {}, "Nested grid: top-level cells along the longest side (0: automatic)",
+        {"grid", "--grid", K::Int, 0, 4096, {},
+         "Nested grid: top-level cells along the longest side (default 0: automatic)",
          "accel", {"grid"}},
         {"cc", "--cc", K::Int, 1, 4096, {},
          "Light mesh: cells across the longest side of the scene (the paper's CC; default 100 for lmm, 64 for soft)",
@@ -44,11 +48,12 @@ const std::vector<RenderSetting>& RenderSettings() {
          "Folder caching the sphere templates (default: $XDG_CACHE_HOME/lightmesh/templates)", "shadows", {"lmm"}},
         {"cell_summaries", "--cell-summaries", K::Choice, 0, 0, {"auto", "on", "off"},
          "Light mesh: per-cell summaries (exact; ours): auto (for consensus only, where a cell meets about 8 camera "
-         "rays or more), on (every cell; also none, inside) or off",
+         "rays or more), on (every cell; also none, inside) or off; default auto",
          "shadows", {"lmm"}},
         {"light_radius", "--light-radius", K::Float, 0, kNoLimit, {},
          "Overrides every light's own radius (scene key \"radius\"; default 2% of its distance to the "
-         "scene's centre) with this one; 0: point lights. Soft and area shadows use spheres of it; lmm sizes "
+         "scene's centre) with this one (default: no override); 0: point lights. Soft and area shadows use "
+         "spheres of it; lmm sizes "
          "its penumbrae by it (contact hardening), which only this option turns on, not the lights' own radii",
          "shadows", {"soft", "area", "lmm"}},
         {"thin_check", "--thin-check", K::Choice, 0, 0, {"off", "lit", "all"},

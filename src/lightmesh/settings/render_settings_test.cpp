@@ -37,6 +37,33 @@ TEST(RenderSettings, RowsAreWellFormed) {
     }
 }
 
+// `render --help` shows each knob's default (issue 47): the help text names it, and it is
+// the default RenderOptions' value.
+TEST(RenderSettings, HelpNamesEachDefault) {
+    for (const RenderSetting& s : RenderSettings()) {
+        SCOPED_TRACE(s.key);
+        EXPECT_NE(s.help.find("default"), std::string::npos) << s.help;
+    }
+    const RenderOptions o;
+    auto names = [](const char* key, const std::string& text) {
+        EXPECT_NE(RenderSettingFor(key).help.find(text), std::string::npos)
+            << key << ": " << RenderSettingFor(key).help << "\nlacks: " << text;
+    };
+    names("width", "default " + std::to_string(o.width));
+    names("height", "default " + std::to_string(o.height));
+    names("aa", "default " + std::to_string(o.aa));
+    names("max_depth", "default " + std::to_string(o.maxDepth));
+    names("shadows", "default " + o.shadows);
+    names("grid", "default " + std::to_string(o.accelOptions.gridResolution));
+    names("cc", "default " + std::to_string(o.lightMesh.cc) + " for lmm, " + std::to_string(o.soft.cc) + " for soft");
+    names("ki", "default 2");
+    EXPECT_EQ(o.lightMesh.ki, 2.0f);
+    names("cell_summaries", "default " + o.lightMesh.cellSummaries);
+    names("thin_check", "default " + o.lightMesh.thinCheck);
+    names("samples", "default " + std::to_string(o.areaLight.samples));
+    names("soft_samples", "default " + std::to_string(o.soft.samples));
+}
+
 // Which knobs a method or back-end uses is the table's: a flag given for a render that does
 // not use it gets one warning naming the users; a knob every render uses, none.
 TEST(RenderSettings, UnusedFlagsAreNamedByTheTable) {

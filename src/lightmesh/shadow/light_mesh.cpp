@@ -476,11 +476,12 @@ inline ShadowFigures LightMesh<Word>::Figures() const {
                                   FormatBytes(SummaryBytes()).c_str())});
     if (variant_.enumeration == SphereEnumeration::Templates) {
         const TemplateLoad& t = templates_;
-        f.push_back({"templates", StringPrintf("ns %d, %d sub-positions, %zu entries, %s in %.1f ms%s%s",
-                                               t.templates.ns, t.templates.SubPositionCount(),
-                                               t.templates.offsets.size(),
+        f.push_back({"templates", StringPrintf("ns %d, %s sub-positions, %s entries, %s in %.1f ms%s%s",
+                                               t.templates.ns, FormatCount(t.templates.SubPositionCount()).c_str(),
+                                               FormatCount(t.templates.offsets.size()).c_str(),
                                                t.loaded ? "loaded" : (t.written ? "built and cached" : "built"),
-                                               t.seconds * 1e3, t.path.empty() ? "" : " from/at ",
+                                               t.seconds * 1e3,
+                                               t.path.empty() ? "" : (t.loaded ? " from " : " at "),
                                                t.path.c_str())});
     }
     return f;

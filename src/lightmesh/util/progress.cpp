@@ -39,7 +39,10 @@ void ProgressReporter::Update(int64_t units) {
             const double fraction = std::min(1.0, static_cast<double>(done) / static_cast<double>(total_));
             const double whole = elapsed / fraction;
             if (whole > announceAfter_) {
-                if (enabled_) std::fprintf(stderr, "\r%70s\r", "");  // the bar's line
+                if (enabled_) {
+                    std::fprintf(stderr, "\r%70s\r", "");  // the bar's line
+                    SetInterruptLineOpen(false);
+                }
                 LogInfo(StringPrintf("%s: about %s in all, %s left (measured on the first %.2g %% in %.1f s%s%s)",
                                      title_.c_str(), FormatDuration(whole).c_str(),
                                      FormatDuration(whole - elapsed).c_str(), 100.0 * fraction, elapsed,
@@ -70,7 +73,9 @@ void ProgressReporter::Draw(int64_t done, bool final) {
     bar[kWidth] = '\0';
     if (final) {
         std::fprintf(stderr, "\r%s [%s] 100%% %.1fs        \n", title_.c_str(), bar, elapsed);
+        SetInterruptLineOpen(false);
     } else {
+        SetInterruptLineOpen(true);
         const double left = fraction > 0 ? elapsed * (1.0 - fraction) / fraction : 0.0;
         std::fprintf(stderr, "\r%s [%s] %3d%% %.1fs, %s left   ", title_.c_str(), bar,
                      static_cast<int>(fraction * 100), elapsed, FormatDuration(left).c_str());

@@ -47,9 +47,35 @@ void ReleasePending(int slot) {
     if (slot >= 0) gPendingUsed[slot].store(false);
 }
 
+// What the handler says on SIGINT/SIGTERM (SetInterruptMessage), and whether a progress
+// bar's line is open on stderr (SetInterruptLineOpen): it ends that line first.
+char gInterruptMessage[kMaxPath];
+std::atomic<bool> gInterruptMessageSet{false};
+std::atomic<bool> gInterruptLineOpen{false};
+
+void WriteAll(const char* text, size_t n) {
+    while (n > 0) {
+        const ssize_t w = write(STDERR_FILENO, text, n);
+        if (w <= 0) return;
+        text += w;
+        n -= static_cast<size_t>(w);
+    }
+}
+
 extern "C" void OnInterrupt(int sig) {
     for (int i = 0; i < kMaxPending; ++i)
         if (gPendingUsed[i].load()) unlink(gPending[i]);
+    // Async-signal-safe: write(2) only. SIGHUP (the terminal closed) has no one to tell.
+    if (sig != SIGHUP) {
+        if (gInterruptLineOpen.load()) WriteAll("\n", 1);
+        const char* what = sig == SIGINT ? "lightmesh: interrupted" : "lightmesh: terminated";
+        WriteAll(what, std::strlen(what));
+        if (gInterruptMessageSet.load()) {
+            WriteAll("; ", 2);
+            WriteAll(gInterruptMessage, std::strlen(gInterruptMessage));
+        }
+        WriteAll("\n", 1);
+    }
     std::signal(sig, SIG_DFL);
     std::raise(sig);
 }
@@ -61,6 +87,15 @@ std::string FolderOf(const std::string& path) {
 }
 
 }  // namespace
+
+void SetInterruptMessage(const std::string& message) {
+    gInterruptMessageSet.store(false);
+    if (message.empty() || message.size() >= kMaxPath) return;
+    std::memcpy(gInterruptMessage, message.c_str(), message.size() + 1);
+    gInterruptMessageSet.store(true);
+}
+
+void SetInterruptLineOpen(bool open) { gInterruptLineOpen.store(open); }
 
 void InstallInterruptCleanup() {
     struct sigaction sa {};

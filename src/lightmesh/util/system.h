@@ -21,8 +21,14 @@ void WriteFileAtomically(const std::string& path,
                          const std::function<void(const std::string& tmpPath)>& write);
 
 /// Installs SIGINT, SIGTERM and SIGHUP handlers that delete the temporary files of writes in
-/// progress before the process dies with the signal.
+/// progress before the process dies with the signal. On SIGINT and SIGTERM the handler
+/// also ends an open progress-bar line and prints one line, "lightmesh: interrupted" (or
+/// "terminated"), followed by "; " and the SetInterruptMessage text if one is set.
 void InstallInterruptCleanup();
+/// The rest of the interrupt line ("out.png left as it was"); "" for none.
+void SetInterruptMessage(const std::string& message);
+/// Whether a progress bar's line, not ended by a newline, is on stderr (ProgressReporter).
+void SetInterruptLineOpen(bool open);
 
 /// Throws Error unless `path`'s folder exists and is writable (checked before a long
 /// render, so a typo does not cost the render); for an existing device or FIFO (written
