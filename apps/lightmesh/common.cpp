@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <limits>
 
+#include "lightmesh/scene/json_reader.h"
 #include "lightmesh/scene/scene_file.h"
 #include "lightmesh/util/log.h"
 
@@ -91,20 +92,7 @@ CLI::Validator FiniteFloat(bool nonNegative) {
         nonNegative ? "FLOAT >= 0" : "FLOAT");
 }
 
-size_t EditDistance(const std::string& a, const std::string& b) {
-    std::vector<size_t> row(b.size() + 1);
-    for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
-    for (size_t i = 1; i <= a.size(); ++i) {
-        size_t diagonal = row[0];
-        row[0] = i;
-        for (size_t j = 1; j <= b.size(); ++j) {
-            const size_t up = row[j];
-            row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
-            diagonal = up;
-        }
-    }
-    return row[b.size()];
-}
+size_t EditDistance(const std::string& a, const std::string& b) { return json::EditDistance(a, b); }
 
 std::string Nearest(const std::string& word, const std::vector<std::string>& candidates) {
     std::string best;
