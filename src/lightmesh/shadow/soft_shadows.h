@@ -60,8 +60,6 @@ class SoftShadows final : public ShadowMethod {
     /// The visibility of light `light` from the shading point: in [0, 1], a multiple of
     /// 1/samples (or of 1/denseSamples in a dense cell).
     float LightVisibility(const ShadingPoint& sp, size_t light, RenderCounters& counters) const;
-    /// Cells whose list for some light has been built, and their entries in all.
-    uint64_t CellsBuilt() const { return cellsBuilt_.load(std::memory_order_relaxed); }
     /// The cell step h.
     float Step() const { return h_; }
 
