@@ -6,6 +6,7 @@
 #   util        errors, logging, threads, progress, system, counters
 #   math        vectors, rays, boxes, SIMD lanes
 #   io          images, image comparison
+#   texture     images materials sample: mip-maps, lookups, the cache that reads each once
 #   geometry    triangles, meshes
 #   settings    what controls a render: the settings table, the options
 #   accel       ray queries
@@ -16,7 +17,7 @@
 #   bench       the bench harness: runner, tables, HTML report (library lightmesh_bench)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
-layers=(util math io geometry settings accel scene shadow render distributed bench)
+layers=(util math io texture geometry settings accel scene shadow render distributed bench)
 rank() {
   local i
   for i in "${!layers[@]}"; do [ "${layers[$i]}" = "$1" ] && { echo "$i"; return; }; done

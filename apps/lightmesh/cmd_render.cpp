@@ -39,7 +39,9 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
     auto prepared = std::make_unique<PreparedRender>();
     const auto t0 = Clock::now();
     lm::Scene& scene = prepared->scene;
-    scene = LoadWithWarnings(cmd.common, cmd.width.value_or(0), cmd.height.value_or(0));
+    CommonOptions common = cmd.common;
+    common.textures = !cmd.noTextures;
+    scene = LoadWithWarnings(common, cmd.width.value_or(0), cmd.height.value_or(0));
     prepared->loadSeconds = SecondsSince(t0);
 
     lm::RenderOptions options = scene.render;
@@ -85,6 +87,7 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
         {"samples", cmd.samples.has_value()},
         {"soft_samples", cmd.softSamples.has_value()},
         {"grid", cmd.grid.has_value()},
+        {"textures", cmd.noTextures},
     };
     for (const auto& [key, isGiven] : given) {
         if (!isGiven) continue;

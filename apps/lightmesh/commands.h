@@ -49,6 +49,7 @@ struct CommonOptions {
     bool quiet = false;
     bool verbose = false;
     int threads = 0;
+    bool textures = true;  ///< false: --no-textures (SceneLoadOptions::textures)
 };
 void AddCommonOptions(CLI::App* cmd, CommonOptions* o);
 lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth = 0, int frameHeight = 0);
@@ -99,6 +100,7 @@ struct RenderCommand {
     std::optional<int> softSamples;
     std::optional<std::string> shadows, accel, variant, templateDir, cellSummaries, thinCheck;
     bool stats = false;
+    bool noTextures = false;
 };
 int RunRender(const RenderCommand& cmd);
 /// `mpirun -np N lightmesh render …` (built with MPI only).

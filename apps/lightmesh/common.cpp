@@ -37,6 +37,7 @@ void AddCommonOptions(CLI::App* cmd, CommonOptions* o) {
 lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth, int frameHeight) {
     lm::SceneLoadOptions load;
     load.strict = o.strict;
+    load.textures = o.textures;
     load.frameWidth = frameWidth;
     load.frameHeight = frameHeight;
     std::vector<std::string> warnings;

@@ -29,7 +29,9 @@
 #include "lightmesh/accel/accelerator.h"
 #include "support/accel_scenes.h"
 #include "lightmesh/io/compare.h"
+#include "lightmesh/io/image.h"
 #include "lightmesh/render/render_job.h"
+#include "lightmesh/render/texturing.h"
 #include "lightmesh/scene/scene_file.h"
 #include "lightmesh/shadow/shadow.h"
 #include "lightmesh/util/error.h"
@@ -239,6 +241,77 @@ INSTANTIATE_TEST_SUITE_P(Real, RealSceneTest, ::testing::ValuesIn(Scenes()),
                          [](const ::testing::TestParamInfo<RealScene>& info) {
                              return info.param.file.substr(0, info.param.file.find('.'));
                          });
+
+/// A real scene for the tests outside the table above; skips when its model is not fetched.
+#define LOAD_OR_SKIP(var, file)                                                                    \
+    const Scene& var = Loaded(file);                                                               \
+    if (var.mesh.TriangleCount() == 0) {                                                           \
+        if (g_notFetched.count(file)) GTEST_SKIP() << "the model is not fetched: run scripts/fetch-scenes.sh"; \
+        GTEST_FAIL() << "scene not loaded";                                                        \
+    }
+
+// The castle's glTF names its images; its grass (Material.001, grassfull.png) shows under
+// each hit the texel the image holds there: shading's colour against the PNG read by the
+// image reader (another decoder), filtered bilinearly here, at a footprint below a texel.
+TEST(RealTextures, TheCastlesGrassShowsTheTexelUnderEachHit) {
+    LOAD_OR_SKIP(scene, "castle.json");
+    int grass = -1;
+    for (size_t m = 0; m < scene.materials.size(); ++m)
+        if (scene.materials[m].name == "Material.001") grass = static_cast<int>(m);
+    ASSERT_GE(grass, 0);
+    const Material& mat = scene.materials[static_cast<size_t>(grass)];
+    ASSERT_GE(mat.texture, 0) << "the castle's grass is not textured";
+    EXPECT_EQ(scene.textures.size(), 6u);  // the six base-colour images of castle.gltf
+    const Image png = ReadImage(ModelCacheDir() + "/castle/textures/grassfull.png");
+    ASSERT_EQ(png.width, scene.textures[static_cast<size_t>(mat.texture)]->Width());
+    const auto accel = CreateAccelerator("embree", scene.mesh);
+    auto texel = [&](int x, int y) {
+        x = ((x % png.width) + png.width) % png.width, y = ((y % png.height) + png.height) % png.height;
+        return png.At(x, y);
+    };
+    int checked = 0;
+    float lo = 1, hi = 0;
+    for (uint32_t prim = 0; prim < scene.mesh.TriangleCount() && checked < 200; prim += 7) {
+        if (scene.mesh.materialIds[prim] != static_cast<uint32_t>(grass)) continue;
+        const Vec3 &p0 = scene.mesh.Vertex(prim, 0), &p1 = scene.mesh.Vertex(prim, 1), &p2 = scene.mesh.Vertex(prim, 2);
+        const Vec3 c = (p0 + p1 + p2) / 3.0f, n = Normalize(Cross(p1 - p0, p2 - p0));
+        const Ray ray{c + n * 0.5f, -n, 0, Infinity};
+        Hit hit;
+        if (!accel->Intersect(ray, &hit) || hit.prim != prim) continue;
+        const auto& t = scene.mesh.triangles[prim];
+        const float b0 = 1 - hit.b1 - hit.b2;
+        const float u = scene.mesh.uvs[t[0]].u * b0 + scene.mesh.uvs[t[1]].u * hit.b1 + scene.mesh.uvs[t[2]].u * hit.b2;
+        const float v = scene.mesh.uvs[t[0]].v * b0 + scene.mesh.uvs[t[1]].v * hit.b1 + scene.mesh.uvs[t[2]].v * hit.b2;
+        const float x = u * static_cast<float>(png.width) - 0.5f, y = (1 - v) * static_cast<float>(png.height) - 0.5f;
+        const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+        const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
+        const Color want = (texel(x0, y0) * (1 - fx) + texel(x0 + 1, y0) * fx) * (1 - fy) +
+                           (texel(x0, y0 + 1) * (1 - fx) + texel(x0 + 1, y0 + 1) * fx) * fy;
+        const Color got = TexturedDiffuse(scene, mat, ray, hit, 1e-6f);
+        EXPECT_NEAR(got.r, want.r * mat.textureScale.r, 2e-3f) << "triangle " << prim;
+        EXPECT_NEAR(got.g, want.g * mat.textureScale.g, 2e-3f) << "triangle " << prim;
+        EXPECT_NEAR(got.b, want.b * mat.textureScale.b, 2e-3f) << "triangle " << prim;
+        lo = std::min(lo, got.g), hi = std::max(hi, got.g);
+        ++checked;
+    }
+    EXPECT_GE(checked, 50);
+    EXPECT_GT(hi - lo, 0.05f) << "the grass is one flat colour";
+}
+
+// --no-textures reads no image and leaves no texture coordinates; the images change the
+// castle's image (without them its textured materials are glTF's white base colour).
+TEST(RealTextures, NoTexturesLeavesTheCastleFlat) {
+    LOAD_OR_SKIP(scene, "castle.json");
+    SceneLoadOptions off;
+    off.textures = false;
+    std::vector<std::string> warnings;
+    const Scene flat = LoadScene(ScenePath("castle.json"), off, &warnings);
+    EXPECT_TRUE(flat.textures.empty());
+    EXPECT_TRUE(flat.mesh.uvs.empty());
+    const Image a = Render(scene, "rt"), b = Render(flat, "rt");
+    const ImageMetrics m = CompareImages(a, b);
+    EXPECT_LT(m.psnr, 30.0) << "the textures change the image";
+}
 
 }  // namespace
 }  // namespace lm

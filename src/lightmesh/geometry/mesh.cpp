@@ -26,6 +26,14 @@ void TriangleMesh::Append(const TriangleMesh& other, uint32_t materialOffset) {
     } else {
         normals.clear();
     }
+    // Texture coordinates: kept if either side has them, (0, 0) for the other's vertices.
+    if (!uvs.empty() || !other.uvs.empty()) {
+        uvs.resize(positions.size());
+        if (other.uvs.empty())
+            uvs.resize(positions.size() + other.positions.size());
+        else
+            uvs.insert(uvs.end(), other.uvs.begin(), other.uvs.end());
+    }
     positions.insert(positions.end(), other.positions.begin(), other.positions.end());
     for (const auto& t : other.triangles) triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
     for (uint32_t m : other.materialIds) materialIds.push_back(m + materialOffset);

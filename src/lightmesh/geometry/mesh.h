@@ -10,6 +10,11 @@
 
 namespace lm {
 
+/// Texture coordinates of a vertex (glTF's convention: v grows downwards in the image).
+struct TexCoord {
+    float u = 0, v = 0;
+};
+
 /// All triangles of a scene in world space. A primitive id is an index into `triangles`.
 /// Meshes of a scene file are flattened into one (instances expanded), which keeps every
 /// ray-query back-end a plain array walk.
@@ -17,6 +22,9 @@ struct TriangleMesh {
     std::vector<Vec3> positions;
     /// Optional per-vertex shading normals (empty, or one per position).
     std::vector<Vec3> normals;
+    /// Optional per-vertex texture coordinates: empty when no textured material uses them
+    /// (untextured scenes carry none), else one per position (0, 0 where a mesh had none).
+    std::vector<TexCoord> uvs;
     std::vector<std::array<uint32_t, 3>> triangles;
     /// Material index per triangle (same length as `triangles`).
     std::vector<uint32_t> materialIds;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "lightmesh/geometry/triangle.h"
+#include "lightmesh/render/texturing.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/parallel.h"
 
@@ -21,6 +22,7 @@ WhittedRenderer::WhittedRenderer(const Scene& scene, const Accelerator& accel,
     if (options.aa < 1 || options.aa > 16) ThrowError("--aa %d: must be 1 to 16", options.aa);
     if (options.maxDepth < 1 || options.maxDepth > 64)
         ThrowError("max depth %d: must be 1 to 64", options.maxDepth);
+    spread_ = 2.0f * std::tan(0.5f * scene.camera.fovY * Pi / 180.0f) / static_cast<float>(options.height * options.aa);
 }
 
 ShadingPoint WhittedRenderer::MakeShadingPoint(const TriangleMesh& mesh, const Ray& ray,
@@ -70,6 +72,7 @@ void WhittedRenderer::PrepareShading(const Ray& ray, const Hit& hit, Lighting* l
     lit->sp = sp;
     lit->ns = ns;
     lit->mat = &mat;
+    lit->kd = mat.texture < 0 ? mat.kd : TexturedDiffuse(scene_, mat, ray, hit, spread_);
     lit->any = false;
     const size_t nLights = scene_.lights.size();
     for (size_t i = 0; i < nLights; ++i) {
@@ -82,7 +85,7 @@ void WhittedRenderer::PrepareShading(const Ray& ray, const Hit& hit, Lighting* l
         bool& needed = lit->needed[i];
         needed = Dot(sp.n, l) > 0 && cosN > 0;
         if (!needed) continue;
-        Color local = mat.kd * cosN;
+        Color local = lit->kd * cosN;
         if (!mat.ks.IsBlack()) {
             const float cosR = Dot(Reflect(-l, ns), toEye);
             if (cosR > 0) local += mat.ks * std::pow(cosR, mat.phong);
@@ -97,7 +100,7 @@ void WhittedRenderer::PrepareShading(const Ray& ray, const Hit& hit, Lighting* l
 Color WhittedRenderer::FinishShading(const Ray& ray, const Lighting& lit, const float* vis, int depth,
                                      RenderCounters& counters) const {
     const Material& mat = *lit.mat;
-    Color result = scene_.ambient * mat.kd;
+    Color result = scene_.ambient * lit.kd;
     if (lit.any)
         for (size_t i = 0; i < scene_.lights.size(); ++i)
             if (lit.needed[i]) result += lit.omega[i] * vis[i];

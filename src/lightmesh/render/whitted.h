@@ -78,6 +78,7 @@ class WhittedRenderer {
         ShadingPoint sp;
         Vec3 ns;  ///< shading normal
         const Material* mat = nullptr;
+        Color kd;  ///< the diffuse reflectance here (the material's, or its texture's)
         bool any = false;  ///< some light's term is not black (visibility is needed)
         bool needed[kMaxLights];
         Color omega[kMaxLights];  ///< light i's unshadowed term, where needed[i]
@@ -120,6 +121,7 @@ class WhittedRenderer {
     const ShadowMethod& shadows_;
     const RenderOptions options_;
     CameraRays camera_;
+    float spread_ = 0;  ///< radians between neighbouring camera rays (textures' footprints)
 };
 
 }  // namespace lm

@@ -293,6 +293,14 @@ class SceneWalker {
                 mesh.normals[v] = Vec3(am.mNormals[v].x, am.mNormals[v].y, am.mNormals[v].z);
         }
         const uint32_t material = MaterialIndex(am.mMaterialIndex);
+        // Texture coordinates only where a texture reads them: untextured models carry none.
+        if (out_->materials[material].texture >= 0 && am.HasTextureCoords(0)) {
+            mesh.uvs.resize(am.mNumVertices);
+            for (unsigned v = 0; v < am.mNumVertices; ++v) {
+                const aiVector3D& t = am.mTextureCoords[0][v];
+                mesh.uvs[v] = {std::isfinite(t.x) ? t.x : 0.0f, std::isfinite(t.y) ? t.y : 0.0f};
+            }
+        }
         mesh.triangles.reserve(triangles);
         for (unsigned f = 0; f < am.mNumFaces; ++f) {
             const aiFace& face = am.mFaces[f];
@@ -345,7 +353,8 @@ class SceneWalker {
         if (inserted) {
             out_->materials.push_back(fileIndex < scene_.mNumMaterials &&
                                               scene_.mMaterials[fileIndex]
-                                          ? MaterialFromFile(*scene_.mMaterials[fileIndex])
+                                          ? MaterialFromFile(*scene_.mMaterials[fileIndex], scene_, path_,
+                                                             &out_->textures, &out_->warnings)
                                           : Material{});
         }
         return it->second;

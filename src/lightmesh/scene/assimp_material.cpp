@@ -3,8 +3,12 @@
 #include "lightmesh/scene/mesh_import_internal.h"
 
 #include <assimp/material.h>
+#include <assimp/scene.h>
+#include <assimp/texture.h>
 
 #include <algorithm>
+#include <unistd.h>
+
 #include <cmath>
 #include <string>
 
@@ -19,6 +23,67 @@ Color ToColor(const aiColor3D& c) {
 
 Color Lerp(const Color& a, const Color& b, float t) {
     return a * (1 - t) + b * t;
+}
+
+TextureWrap ToWrap(aiTextureMapMode mode) {
+    switch (mode) {
+        case aiTextureMapMode_Clamp:
+        case aiTextureMapMode_Decal: return TextureWrap::Clamp;
+        case aiTextureMapMode_Mirror: return TextureWrap::Mirror;
+        default: return TextureWrap::Repeat;
+    }
+}
+
+/// The folder of `path`, with a trailing '/', or "" for a bare file name.
+std::string FolderOf(const std::string& path) {
+    const size_t slash = path.find_last_of('/');
+    return slash == std::string::npos ? std::string() : path.substr(0, slash + 1);
+}
+
+/// The image a material's texture slot of `type` names, appended to *textures: the bytes
+/// the file embeds ("*N", or a name the scene's embedded textures carry), else a file
+/// beside the model (Windows separators turned; tried as written, then by its base name in
+/// the model's folder). Returns its index, or -1 when the slot is empty.
+int FindTexture(const aiMaterial& am, aiTextureType type, const aiScene& scene, const std::string& modelPath,
+                std::vector<TextureSource>* textures, TextureWrap* wrapU, TextureWrap* wrapV) {
+    if (am.GetTextureCount(type) == 0) return -1;
+    aiString apath;
+    aiTextureMapMode modes[2] = {aiTextureMapMode_Wrap, aiTextureMapMode_Wrap};
+    if (am.GetTexture(type, 0, &apath, nullptr, nullptr, nullptr, nullptr, modes) != AI_SUCCESS) return -1;
+    std::string path = apath.C_Str();
+    if (path.empty()) return -1;
+    if (wrapU) *wrapU = ToWrap(modes[0]);
+    if (wrapV) *wrapV = ToWrap(modes[1]);
+    TextureSource source;
+    if (const aiTexture* embedded = scene.GetEmbeddedTexture(path.c_str())) {
+        source.name = path[0] == '*' ? "embedded image " + path.substr(1) : path;
+        if (embedded->mHeight == 0) {
+            source.bytes.assign(reinterpret_cast<const char*>(embedded->pcData), embedded->mWidth);
+        } else if (embedded->pcData) {
+            source.rawWidth = static_cast<int>(embedded->mWidth);
+            source.rawHeight = static_cast<int>(embedded->mHeight);
+            source.bytes.assign(reinterpret_cast<const char*>(embedded->pcData),
+                                static_cast<size_t>(embedded->mWidth) * embedded->mHeight * 4);
+        }
+    } else {
+        source.name = path;
+        for (char& c : path)
+            if (c == '\\') c = '/';
+        if (path.rfind("file://", 0) == 0) path = path.substr(7);
+        const std::string folder = FolderOf(modelPath);
+        std::string file = !path.empty() && path[0] == '/' ? path : folder + path;
+        if (access(file.c_str(), F_OK) != 0) {
+            const std::string base = path.substr(path.find_last_of('/') + 1);
+            if (access((folder + base).c_str(), F_OK) == 0) file = folder + base;
+        }
+        source.file = file;
+    }
+    for (size_t i = 0; i < textures->size(); ++i) {
+        const TextureSource& t = (*textures)[i];
+        if (t.file == source.file && t.name == source.name) return static_cast<int>(i);
+    }
+    textures->push_back(std::move(source));
+    return static_cast<int>(textures->size() - 1);
 }
 
 }  // namespace
@@ -43,9 +108,16 @@ Color Lerp(const Color& a, const Color& b, float t) {
 //  - Assimp's stand-in for files without materials (PLY, STL, an OBJ without .mtl; glTF's
 //    default material) becomes our default grey (kd 0.8, no specular) rather than
 //    Assimp's 0.6 grey, white, or glTF's black-diffuse "white metal".
-//  Transparency, emission, textures and vertex colours are ignored; negative or
-//  non-finite values become 0.
-Material MaterialFromFile(const aiMaterial& am) {
+//  - The base-colour texture (aiTextureType_BASE_COLOR, else DIFFUSE: glTF's
+//    baseColorTexture, MTL's map_Kd, ...; the first UV channel) makes the diffuse
+//    reflectance textureScale × texel: glTF's factor × (1 − metallic), 1 for the others
+//    (exporters write a default Kd beside map_Kd). kd stays the flat colour used where the
+//    image cannot be read.
+//  Transparency, emission and vertex colours are ignored; negative or non-finite values
+//  become 0.
+Material MaterialFromFile(const aiMaterial& am, const aiScene& scene, const std::string& modelPath,
+                          std::vector<TextureSource>* textures, std::vector<std::string>* warnings) {
+    (void)warnings;
     Material m;
     aiString aname;
     const std::string name =
@@ -61,14 +133,18 @@ Material MaterialFromFile(const aiMaterial& am) {
     const bool standIn =
         (name.empty() || name == AI_DEFAULT_MATERIAL_NAME) &&
         (!pbr || (base.r == 1 && base.g == 1 && base.b == 1 && metallic == 1 && roughness == 1));
-    if (standIn) return m;  // the default grey
+    int texture = FindTexture(am, aiTextureType_BASE_COLOR, scene, modelPath, textures, &m.wrapU, &m.wrapV);
+    if (texture < 0) texture = FindTexture(am, aiTextureType_DIFFUSE, scene, modelPath, textures, &m.wrapU, &m.wrapV);
+    if (standIn && texture < 0) return m;  // the default grey
     m.name = name.empty() ? "unnamed" : name;
+    m.texture = texture;
 
     const Color kd = ToColor(base);
     if (pbr) {
         metallic = std::isfinite(metallic) ? std::clamp(metallic, 0.0f, 1.0f) : 0.0f;
         roughness = std::isfinite(roughness) ? std::clamp(roughness, 0.0f, 1.0f) : 1.0f;
         m.kd = kd * (1 - metallic);
+        m.textureScale = m.kd;
         m.ks = Lerp(Color(0.04f), kd, metallic) * (1 - roughness);
         const float alpha2 = std::max(roughness * roughness * roughness * roughness, 1e-6f);
         m.phong = std::clamp(2.0f / alpha2 - 2.0f, 1.0f, 1000.0f);

@@ -79,6 +79,8 @@ Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options,
     Scene scene;
     scene.name = spec;
     scene.report.sources.push_back(spec);
+    TextureCache textureCache;
+    AttachTextures(r, spec, options.textures, &textureCache, &loaded, &scene);
     scene.mesh = std::move(loaded.mesh);
     scene.materials = std::move(loaded.materials);
     const CleanReport clean = CleanMesh(&scene.mesh);

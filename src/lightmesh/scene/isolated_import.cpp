@@ -176,6 +176,7 @@ void WriteMeshResult(int fd, const LoadedMesh& m) {
     w.Pod<uint8_t>(kResultMesh);
     w.Vec(m.mesh.positions);
     w.Vec(m.mesh.normals);
+    w.Vec(m.mesh.uvs);
     w.Vec(m.mesh.triangles);
     w.Vec(m.mesh.materialIds);
     w.Pod<uint64_t>(m.materials.size());
@@ -185,6 +186,18 @@ void WriteMeshResult(int fd, const LoadedMesh& m) {
         w.Pod(mat.ks);
         w.Pod(mat.phong);
         w.Pod(mat.mirror);
+        w.Pod(mat.texture);
+        w.Pod(mat.textureScale);
+        w.Pod(mat.wrapU);
+        w.Pod(mat.wrapV);
+    }
+    w.Pod<uint64_t>(m.textures.size());
+    for (const TextureSource& t : m.textures) {
+        w.Str(t.file);
+        w.Str(t.name);
+        w.Str(t.bytes);
+        w.Pod(t.rawWidth);
+        w.Pod(t.rawHeight);
     }
     w.Pod<uint64_t>(m.meshesPlaced);
     w.Pod<uint64_t>(m.meshesExcluded);
@@ -207,6 +220,7 @@ LoadedMesh ReadResult(const std::string& path, std::string_view bytes) {
     LoadedMesh m;
     m.mesh.positions = r.Vec<Vec3>();
     m.mesh.normals = r.Vec<Vec3>();
+    m.mesh.uvs = r.Vec<TexCoord>();
     m.mesh.triangles = r.Vec<std::array<uint32_t, 3>>();
     m.mesh.materialIds = r.Vec<uint32_t>();
     const uint64_t materials = r.Pod<uint64_t>();
@@ -217,8 +231,24 @@ LoadedMesh ReadResult(const std::string& path, std::string_view bytes) {
         mat.ks = r.Pod<Color>();
         mat.phong = r.Pod<float>();
         mat.mirror = r.Pod<Color>();
+        mat.texture = r.Pod<int>();
+        mat.textureScale = r.Pod<Color>();
+        mat.wrapU = r.Pod<TextureWrap>();
+        mat.wrapV = r.Pod<TextureWrap>();
         m.materials.push_back(std::move(mat));
     }
+    const uint64_t textures = r.Pod<uint64_t>();
+    for (uint64_t i = 0; i < textures; ++i) {
+        TextureSource t;
+        t.file = r.Str();
+        t.name = r.Str();
+        t.bytes = r.Str();
+        t.rawWidth = r.Pod<int>();
+        t.rawHeight = r.Pod<int>();
+        m.textures.push_back(std::move(t));
+    }
+    for (Material& mat : m.materials)
+        if (mat.texture >= static_cast<int>(m.textures.size())) throw std::runtime_error("bad texture index");
     m.meshesPlaced = r.Pod<uint64_t>();
     m.meshesExcluded = r.Pod<uint64_t>();
     m.excludeMaterialsMatched = r.Bools();

@@ -6,10 +6,12 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "lightmesh/scene/mesh_loader.h"
 
 struct aiMaterial;
+struct aiScene;
 
 namespace lm {
 namespace mesh_import {
@@ -41,8 +43,11 @@ extern int gResultFd;
 // assimp_material.cpp
 
 /// An Assimp material as a Phong material of formula (1); the mapping is written out above
-/// its definition.
-Material MaterialFromFile(const aiMaterial& am);
+/// its definition. Its base-colour image, if any, is appended to *textures (a file resolved
+/// against the folder of `modelPath`, or the bytes `scene` embeds) and the material's
+/// `texture` indexes it; problems with it go to *warnings.
+Material MaterialFromFile(const aiMaterial& am, const aiScene& scene, const std::string& modelPath,
+                          std::vector<TextureSource>* textures, std::vector<std::string>* warnings);
 
 // gltf_checks.cpp
 

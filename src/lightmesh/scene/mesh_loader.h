@@ -8,6 +8,7 @@
 #include "lightmesh/geometry/affine.h"  // Affine, TransformMesh: for this header's users
 #include "lightmesh/geometry/mesh.h"
 #include "lightmesh/scene/scene.h"
+#include "lightmesh/texture/texture_cache.h"
 #include "lightmesh/util/error.h"
 
 namespace lm {
@@ -59,8 +60,12 @@ struct LoadedMesh {
     /// units. Every instance of a shared mesh is expanded. Normals are kept only if every
     /// placed mesh has them.
     TriangleMesh mesh;
-    /// The materials the placed meshes use, indexed by mesh.materialIds.
+    /// The materials the placed meshes use, indexed by mesh.materialIds. Their `texture`
+    /// indexes `textures`.
     std::vector<Material> materials;
+    /// The images the materials name, found but not read (the scene reads each once:
+    /// TextureCache). mesh.uvs holds texture coordinates only when some material has one.
+    std::vector<TextureSource> textures;
     size_t meshesPlaced = 0;    ///< mesh instances placed (each node × mesh pair)
     size_t meshesExcluded = 0;  ///< mesh instances left out by the exclude patterns
     /// Per pattern of MeshLoadOptions: whether it excluded anything (to warn about typos).

@@ -1,11 +1,13 @@
 // scene.h -- what a scene is once loaded: triangles, materials, lights, camera, settings.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "lightmesh/geometry/mesh.h"
 #include "lightmesh/settings/options.h"
+#include "lightmesh/texture/texture.h"
 
 namespace lm {
 
@@ -17,6 +19,14 @@ struct Material {
     Color ks{0.0f};      ///< Phong specular reflectance
     float phong = 32.0f; ///< Phong exponent
     Color mirror{0.0f};  ///< mirror reflectance: weight of the reflected ray
+    /// The base-colour texture: an index into Scene::textures (LoadedMesh::textures before
+    /// the scene takes it), -1 for none. Where the mesh has texture coordinates, the
+    /// diffuse reflectance is textureScale × the texel's colour (glTF: baseColorFactor ×
+    /// baseColorTexture, times 1 − metallic; MTL's map_Kd alone); kd stays the flat colour
+    /// used without one.
+    int texture = -1;
+    Color textureScale{1.0f};
+    TextureWrap wrapU = TextureWrap::Repeat, wrapV = TextureWrap::Repeat;
 };
 
 /// How a point light's intensity falls off with distance d.
@@ -57,6 +67,8 @@ struct Scene {
     std::string name;   ///< file name or builtin:NAME, used in messages
     TriangleMesh mesh;  ///< every triangle in world space, ground plane included
     std::vector<Material> materials;  ///< indexed by TriangleMesh::materialIds
+    /// The images the materials use (Material::texture), each read once.
+    std::vector<std::shared_ptr<const Texture>> textures;
     std::vector<PointLight> lights;
     Camera camera;
     Color ambient{0.05f};

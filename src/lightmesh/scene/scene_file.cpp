@@ -250,6 +250,11 @@ Affine ReadTransform(const Reader& r, const Json& j, const std::string& path) {
     return result;
 }
 
+bool Bool(const Reader& r, const Json& j, const std::string& path) {
+    if (!j.is_boolean()) r.Fail(path, "expected true or false, got " + Describe(j));
+    return j.get<bool>();
+}
+
 void ReadRender(const Reader& r, const Json& j, RenderOptions* ro) {
     Object o(r, j, "/render");
     // The knobs' ranges and choices come from the settings table (the CLI checks the same rows).
@@ -289,6 +294,7 @@ void ReadRender(const Reader& r, const Json& j, RenderOptions* ro) {
     if (const Json* v = o.Find("thin_check")) ro->lightMesh.thinCheck = choice(*v, "thin_check");
     if (const Json* v = o.Find("samples")) ro->areaLight.samples = integer(*v, "samples");
     if (const Json* v = o.Find("soft_samples")) ro->soft.samples = integer(*v, "soft_samples");
+    if (const Json* v = o.Find("textures")) ro->textures = Bool(r, *v, o.Child("textures"));
     // Where each value came from, for the messages of the factories that read it.
     for (const RenderSetting& s : RenderSettings())
         if (o.Find(s.key)) ro->origins[s.key] = SourceLoc(r.File(), 0, 0, o.Child(s.key));
@@ -485,6 +491,7 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
     for (const MeshEntry& e : entries) ++importsLeft[importKey(e)];
     std::unordered_map<std::string, LoadedMesh> imported;
     std::unordered_set<std::string> said;  // the clean-up's warnings, once per file and message
+    TextureCache textureCache;  // each image read once, however many models name it
     for (const MeshEntry& e : entries) {
         const std::string filePath = e.path + "/file";
         const std::string key = importKey(e);
@@ -541,6 +548,8 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
         scene.report.duplicatesRemoved += clean.duplicate;
         if (clean.degenerate || clean.duplicate)
             if (const std::string w = e.resolved + ": " + DroppedMessage(clean); said.insert(w).second) r.Warn(w);
+        AttachTextures(r, e.resolved, options.textures && scene.render.textures && e.material < 0, &textureCache,
+                       &loaded, &scene);
         if (e.material >= 0) {
             std::fill(loaded.mesh.materialIds.begin(), loaded.mesh.materialIds.end(),
                       static_cast<uint32_t>(e.material));

@@ -22,6 +22,10 @@ struct SceneLoadOptions {
     /// parsed instead of reading `spec`, which still names it in messages and locates its
     /// mesh files.
     std::optional<std::string> text = std::nullopt;
+    /// Whether the materials' images are read and used (--no-textures: false; a scene
+    /// file's "render": {"textures": false} turns them off as well). Off, no image is read
+    /// and the scene is shaded with the materials' flat colours, as without textures.
+    bool textures = true;
     /// For tests and fuzzing: loads the mesh files of a JSON scene instead of LoadMeshFile.
     std::function<LoadedMesh(const std::string& path, const MeshLoadOptions&)> loadMesh = nullptr;
 };

@@ -39,6 +39,15 @@ std::string NoTrianglesMessage(const SceneReport& report, const TriangleMesh& me
 /// Checks that hold for every scene, whatever its source.
 void Validate(const Scene& scene);
 
+// ---- Textures (scene_textures.cpp) -----------------------------------------------------
+/// Reads the images of `loaded`'s materials through `cache` into scene->textures (each
+/// once) and points the materials' `texture` at them; an image that cannot be read gets a
+/// warning (through `r`) and its material the flat colour. With `enabled` false, or when no
+/// material keeps an image, the materials lose their textures and the mesh its texture
+/// coordinates (an untextured scene carries none).
+void AttachTextures(const json::Reader& r, const std::string& model, bool enabled, TextureCache* cache,
+                    LoadedMesh* loaded, Scene* scene);
+
 // ---- Ground slab and framing (framing.cpp) ---------------------------------------------
 /// A thin closed slab under `box` whose top face is the ground at `height` along `axis`.
 void AddGround(Scene* scene, const Bounds3& box, int axis, float height, float sizeFactor, uint32_t material);

@@ -7,6 +7,7 @@ namespace lm {
 
 uint32_t ShapeBuilder::Vertex(const Vec3& p) {
     mesh_->positions.push_back(p);
+    if (!mesh_->uvs.empty()) mesh_->uvs.resize(mesh_->positions.size());
     return static_cast<uint32_t>(mesh_->positions.size() - 1);
 }
 

@@ -107,6 +107,9 @@ struct RenderOptions {
     LightMeshOptions lightMesh;
     AreaLightOptions areaLight;
     SoftShadowOptions soft;
+    /// Whether materials use their images (a scene file's "textures"; --no-textures
+    /// reaches the loader instead: SceneLoadOptions::textures).
+    bool textures = true;
     /// Where each knob's value came from, by scene-file key: "scene.json /render/ki" or
     /// "--ki" (the CLI's value replaces the file's); a knob left at its default is absent.
     std::map<std::string, SourceLoc> origins;

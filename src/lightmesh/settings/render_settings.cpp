@@ -66,6 +66,10 @@ const std::vector<RenderSetting>& RenderSettings() {
          "Soft shadows: directions per light where a triangle is in a point's cone to it, a multiple of 16 (a "
          "quarter first; the rest only in a penumbra; default 64)",
          "shadows", {"soft"}},
+        {"textures", "--no-textures", K::Bool, 0, 0, {},
+         "Leave the materials' images out (colour textures and alpha cut-outs): flat colours and solid "
+         "surfaces (default: textures on)",
+         nullptr, {}},
     };
     return rows;
 }

@@ -23,7 +23,7 @@ inline constexpr const char* kDefaultAccelerator = "grid";
 #endif
 
 struct RenderSetting {
-    enum class Kind { Int, Float, String, Choice };
+    enum class Kind { Int, Float, String, Choice, Bool };  ///< Bool: a JSON true/false, a flag that turns it off
     const char* key;   ///< in the scene file's "render" object
     const char* flag;  ///< of `lightmesh render`
     Kind kind;

@@ -1,0 +1,37 @@
+// texturing.cpp -- a material's diffuse colour at a hit (texturing.h).
+#include "lightmesh/render/texturing.h"
+
+#include <cmath>
+
+namespace lm {
+
+Color TexturedDiffuse(const Scene& scene, const Material& mat, const Ray& ray, const Hit& hit, float spread) {
+    const TriangleMesh& mesh = scene.mesh;
+    if (mesh.uvs.empty() || mat.texture < 0) return mat.kd;
+    const Texture& tex = *scene.textures[static_cast<size_t>(mat.texture)];
+    const auto& t = mesh.triangles[hit.prim];
+    const TexCoord &t0 = mesh.uvs[t[0]], &t1 = mesh.uvs[t[1]], &t2 = mesh.uvs[t[2]];
+    const float b0 = 1.0f - hit.b1 - hit.b2;
+    const float u = t0.u * b0 + t1.u * hit.b1 + t2.u * hit.b2;
+    const float v = t0.v * b0 + t1.v * hit.b1 + t2.v * hit.b2;
+
+    // The footprint: texels per unit of surface (the triangle's texture area over its
+    // world area), times the cone's width at the hit over the incidence's cosine.
+    const Vec3 &p0 = mesh.positions[t[0]], &p1 = mesh.positions[t[1]], &p2 = mesh.positions[t[2]];
+    const Vec3 normal = Cross(p1 - p0, p2 - p0);
+    const float worldArea = Length(normal);
+    const float texArea = std::abs((t1.u - t0.u) * (t2.v - t0.v) - (t2.u - t0.u) * (t1.v - t0.v)) *
+                          static_cast<float>(tex.Width()) * static_cast<float>(tex.Height());
+    // lod = ½·log2(texArea / worldArea) + log2(width / cos), as one log2: with
+    // width = t·|d|·spread and cos = |n·d| / (|n|·|d|) (|n| = worldArea),
+    // (width / cos)² = (t·spread·|d|²·|n|)² / (n·d)².
+    const float d2 = Dot(ray.d, ray.d), nd = Dot(normal, ray.d);
+    const float ts = hit.t * spread * d2 * worldArea;
+    const float cos2 = std::max(nd * nd, 1e-6f * d2 * worldArea * worldArea);  // |cos| ≥ 1e-3
+    const float ratio = texArea / worldArea * ts * ts / cos2;
+    float lod = ratio > 0 ? 0.5f * std::log2(ratio) : 0.0f;
+    if (!std::isfinite(lod)) lod = 0;
+    return mat.textureScale * tex.Sample(u, v, lod, mat.wrapU, mat.wrapV).Rgb();
+}
+
+}  // namespace lm

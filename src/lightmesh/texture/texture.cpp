@@ -1,0 +1,272 @@
+// texture.cpp -- images in memory with their mip-maps, their lookups, and their decoding.
+#include "lightmesh/texture/texture.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+
+#include "lightmesh/io/image.h"
+#include "lightmesh/util/error.h"
+
+// A second, private instance of stb's decoder (image_io.cpp's reads PNG only): the formats
+// textures come in.
+#define STB_IMAGE_IMPLEMENTATION
+#define STB_IMAGE_STATIC
+#define STBI_ONLY_PNG
+#define STBI_ONLY_JPEG
+#define STBI_ONLY_TGA
+#define STBI_ONLY_BMP
+#define STBI_NO_STDIO
+#define STBI_FAILURE_USERMSG
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
+#pragma GCC diagnostic ignored "-Wunused-function"
+#pragma GCC diagnostic ignored "-Wsign-compare"
+#pragma GCC diagnostic ignored "-Wunused-but-set-variable"
+#include <stb_image.h>
+#pragma GCC diagnostic pop
+
+namespace lm {
+namespace {
+
+/// The linear value of each sRGB byte.
+const std::array<float, 256>& SrgbTable() {
+    static const std::array<float, 256> table = [] {
+        std::array<float, 256> t{};
+        for (int i = 0; i < 256; ++i) t[static_cast<size_t>(i)] = DecodeSrgb8(static_cast<unsigned char>(i));
+        return t;
+    }();
+    return table;
+}
+
+int WrapIndex(int i, int n, TextureWrap wrap) {
+    switch (wrap) {
+        case TextureWrap::Clamp: return std::clamp(i, 0, n - 1);
+        case TextureWrap::Mirror: {
+            int m = i % (2 * n);
+            if (m < 0) m += 2 * n;
+            return m < n ? m : 2 * n - 1 - m;
+        }
+        case TextureWrap::Repeat:
+        default: {
+            const int m = i % n;
+            return m < 0 ? m + n : m;
+        }
+    }
+}
+
+/// A texture coordinate as a finite value whose texel index stays in int range (a huge or
+/// NaN coordinate would overflow the index arithmetic).
+float Tame(float u) {
+    if (!std::isfinite(u)) return 0.0f;
+    if (!(std::abs(u) < 1e6f)) return std::fmod(u, 1.0f);
+    return u;
+}
+
+}  // namespace
+
+Texture::Texture(int width, int height, std::vector<uint8_t> rgba8) {
+    Level l;
+    l.w = width;
+    l.h = height;
+    l.ldr = std::move(rgba8);
+    for (size_t i = 3; i < l.ldr.size(); i += 4) hasAlpha_ = hasAlpha_ || l.ldr[i] < 255;
+    levels_.push_back(std::move(l));
+    BuildMipMaps();
+}
+
+Texture::Texture(int width, int height, std::vector<float> rgba) {
+    Level l;
+    l.w = width;
+    l.h = height;
+    l.hdr = std::move(rgba);
+    for (float& x : l.hdr)
+        if (!std::isfinite(x)) x = 0;
+    for (size_t i = 3; i < l.hdr.size(); i += 4) hasAlpha_ = hasAlpha_ || l.hdr[i] < 1;
+    levels_.push_back(std::move(l));
+    BuildMipMaps();
+}
+
+size_t Texture::Bytes() const {
+    size_t n = 0;
+    for (const Level& l : levels_) n += l.ldr.size() + l.hdr.size() * sizeof(float);
+    return n;
+}
+
+// Each level from the one above by a 2 × 2 box in linear space (an odd side's last texel
+// is taken twice), colour re-encoded to sRGB bytes for 8-bit images.
+void Texture::BuildMipMaps() {
+    while (levels_.back().w > 1 || levels_.back().h > 1) {
+        const Level& up = levels_.back();
+        Level l;
+        l.w = std::max(1, (up.w + 1) / 2);
+        l.h = std::max(1, (up.h + 1) / 2);
+        const bool ldr = !up.ldr.empty();
+        if (ldr)
+            l.ldr.resize(static_cast<size_t>(l.w) * l.h * 4);
+        else
+            l.hdr.resize(static_cast<size_t>(l.w) * l.h * 4);
+        for (int y = 0; y < l.h; ++y)
+            for (int x = 0; x < l.w; ++x) {
+                Texel sum;
+                sum.a = 0;
+                for (int dy = 0; dy < 2; ++dy)
+                    for (int dx = 0; dx < 2; ++dx) {
+                        const Texel t = Fetch(up, std::min(2 * x + dx, up.w - 1), std::min(2 * y + dy, up.h - 1));
+                        sum.r += t.r, sum.g += t.g, sum.b += t.b, sum.a += t.a;
+                    }
+                const size_t i = (static_cast<size_t>(y) * l.w + x) * 4;
+                if (ldr) {
+                    l.ldr[i + 0] = EncodeSrgb8(sum.r * 0.25f);
+                    l.ldr[i + 1] = EncodeSrgb8(sum.g * 0.25f);
+                    l.ldr[i + 2] = EncodeSrgb8(sum.b * 0.25f);
+                    l.ldr[i + 3] = static_cast<uint8_t>(std::lround(std::clamp(sum.a * 0.25f, 0.0f, 1.0f) * 255.0f));
+                } else {
+                    l.hdr[i + 0] = sum.r * 0.25f;
+                    l.hdr[i + 1] = sum.g * 0.25f;
+                    l.hdr[i + 2] = sum.b * 0.25f;
+                    l.hdr[i + 3] = sum.a * 0.25f;
+                }
+            }
+        levels_.push_back(std::move(l));
+    }
+}
+
+Texel Texture::Fetch(const Level& level, int x, int y) const {
+    const size_t i = (static_cast<size_t>(y) * static_cast<size_t>(level.w) + static_cast<size_t>(x)) * 4;
+    if (!level.ldr.empty()) {
+        const auto& srgb = SrgbTable();
+        return {srgb[level.ldr[i]], srgb[level.ldr[i + 1]], srgb[level.ldr[i + 2]],
+                static_cast<float>(level.ldr[i + 3]) * (1.0f / 255.0f)};
+    }
+    return {level.hdr[i], level.hdr[i + 1], level.hdr[i + 2], level.hdr[i + 3]};
+}
+
+Texel Texture::Bilinear(const Level& level, float u, float v, TextureWrap wrapU, TextureWrap wrapV) const {
+    const float x = Tame(u) * static_cast<float>(level.w) - 0.5f;
+    const float y = (1.0f - Tame(v)) * static_cast<float>(level.h) - 0.5f;
+    // floor without a libm call (x is within ±2^24 after Tame)
+    int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+    x0 -= static_cast<float>(x0) > x;
+    y0 -= static_cast<float>(y0) > y;
+    const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
+    // One wrap per axis; the neighbour is the next texel unless that leaves the image.
+    const int xa = WrapIndex(x0, level.w, wrapU), ya = WrapIndex(y0, level.h, wrapV);
+    // (Repeat: x0 + 1 wraps to xa + 1 below the edge; Clamp and Mirror: where x0 is in
+    // the image itself.)
+    const int xb = (wrapU == TextureWrap::Repeat || x0 == xa) && xa + 1 < level.w ? xa + 1
+                                                                                   : WrapIndex(x0 + 1, level.w, wrapU);
+    const int yb = (wrapV == TextureWrap::Repeat || y0 == ya) && ya + 1 < level.h ? ya + 1
+                                                                                   : WrapIndex(y0 + 1, level.h, wrapV);
+    const float w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+    const size_t row0 = static_cast<size_t>(ya) * static_cast<size_t>(level.w),
+                 row1 = static_cast<size_t>(yb) * static_cast<size_t>(level.w);
+    const size_t at[4] = {(row0 + static_cast<size_t>(xa)) * 4, (row0 + static_cast<size_t>(xb)) * 4,
+                          (row1 + static_cast<size_t>(xa)) * 4, (row1 + static_cast<size_t>(xb)) * 4};
+    Texel t;
+    t.a = 0;
+    if (!level.ldr.empty()) {
+        const auto& srgb = SrgbTable();
+        const uint8_t* p = level.ldr.data();
+        for (int k = 0; k < 4; ++k) {
+            const uint8_t* q = p + at[k];
+            t.r += srgb[q[0]] * w[k];
+            t.g += srgb[q[1]] * w[k];
+            t.b += srgb[q[2]] * w[k];
+            t.a += static_cast<float>(q[3]) * w[k];
+        }
+        t.a *= 1.0f / 255.0f;
+    } else {
+        const float* p = level.hdr.data();
+        for (int k = 0; k < 4; ++k) {
+            const float* q = p + at[k];
+            t.r += q[0] * w[k];
+            t.g += q[1] * w[k];
+            t.b += q[2] * w[k];
+            t.a += q[3] * w[k];
+        }
+    }
+    return t;
+}
+
+Texel Texture::Sample(float u, float v, float lod, TextureWrap wrapU, TextureWrap wrapV) const {
+    const float top = static_cast<float>(levels_.size() - 1);
+    if (!(lod > 0)) return Bilinear(levels_[0], u, v, wrapU, wrapV);
+    if (lod >= top) return Bilinear(levels_.back(), u, v, wrapU, wrapV);
+    return Bilinear(levels_[static_cast<size_t>(lod)], u, v, wrapU, wrapV);
+}
+
+Texel Texture::SampleTrilinear(float u, float v, float lod, TextureWrap wrapU, TextureWrap wrapV) const {
+    const float top = static_cast<float>(levels_.size() - 1);
+    if (!(lod > 0)) return Bilinear(levels_[0], u, v, wrapU, wrapV);
+    if (lod >= top) return Bilinear(levels_.back(), u, v, wrapU, wrapV);
+    const int l = static_cast<int>(lod);
+    const float f = lod - static_cast<float>(l);
+    const Texel a = Bilinear(levels_[static_cast<size_t>(l)], u, v, wrapU, wrapV);
+    if (f == 0) return a;
+    const Texel b = Bilinear(levels_[static_cast<size_t>(l) + 1], u, v, wrapU, wrapV);
+    return {a.r + (b.r - a.r) * f, a.g + (b.g - a.g) * f, a.b + (b.b - a.b) * f, a.a + (b.a - a.a) * f};
+}
+
+float Texture::Alpha(float u, float v, TextureWrap wrapU, TextureWrap wrapV) const {
+    return Bilinear(levels_[0], u, v, wrapU, wrapV).a;
+}
+
+std::shared_ptr<const Texture> DecodeTexture(const std::string& bytes) {
+    const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
+    if (bytes.empty()) ThrowError("the image is empty");
+    if (bytes.size() > static_cast<size_t>(INT32_MAX)) ThrowError("the image is larger than 2 GiB");
+    const int size = static_cast<int>(bytes.size());
+    int w = 0, h = 0, n = 0;
+    if (!stbi_info_from_memory(data, size, &w, &h, &n))
+        ThrowError("cannot decode the image (%s)", stbi_failure_reason());
+    if (w < 1 || h < 1 || w > kMaxTextureSize || h > kMaxTextureSize)
+        ThrowError("the image is %d x %d, beyond the %d x %d textures may have", w, h, kMaxTextureSize,
+                   kMaxTextureSize);
+    const size_t texels = static_cast<size_t>(w) * static_cast<size_t>(h);
+    if (stbi_is_16_bit_from_memory(data, size)) {
+        stbi_us* p = stbi_load_16_from_memory(data, size, &w, &h, &n, 4);
+        if (!p) ThrowError("cannot decode the image (%s)", stbi_failure_reason());
+        std::vector<float> rgba(texels * 4);
+        for (size_t i = 0; i < texels * 4; ++i) {
+            const float x = static_cast<float>(p[i]) / 65535.0f;
+            rgba[i] = i % 4 == 3 ? x : SrgbDecode(x);
+        }
+        stbi_image_free(p);
+        return std::make_shared<Texture>(w, h, std::move(rgba));
+    }
+    stbi_uc* p = stbi_load_from_memory(data, size, &w, &h, &n, 4);
+    if (!p) ThrowError("cannot decode the image (%s)", stbi_failure_reason());
+    std::vector<uint8_t> rgba(p, p + texels * 4);
+    stbi_image_free(p);
+    return std::make_shared<Texture>(w, h, std::move(rgba));
+}
+
+std::shared_ptr<const Texture> ReadTextureFile(const std::string& path) {
+    std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : "";
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (ext == ".exr") {
+        const Image image = ReadImage(path);
+        if (image.width > kMaxTextureSize || image.height > kMaxTextureSize)
+            ThrowError("the image is %d x %d, beyond the %d x %d textures may have", image.width, image.height,
+                       kMaxTextureSize, kMaxTextureSize);
+        std::vector<float> rgba(image.pixels.size() * 4);
+        for (size_t i = 0; i < image.pixels.size(); ++i) {
+            rgba[4 * i] = image.pixels[i].r;
+            rgba[4 * i + 1] = image.pixels[i].g;
+            rgba[4 * i + 2] = image.pixels[i].b;
+            rgba[4 * i + 3] = 1;
+        }
+        return std::make_shared<Texture>(image.width, image.height, std::move(rgba));
+    }
+    std::ifstream in(path, std::ios::binary);
+    if (!in) ThrowError("cannot open it");
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (in.bad()) ThrowError("cannot read it");
+    return DecodeTexture(bytes);
+}
+
+}  // namespace lm

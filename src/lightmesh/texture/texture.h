@@ -1,0 +1,78 @@
+// texture.h -- an image a material samples: its mip-map pyramid in memory, bilinear and
+// trilinear lookups with wrap modes, and the decoding of the files it comes from (PNG, JPEG,
+// TGA and BMP through stb_image, OpenEXR). Loading each image once is texture_cache.h's.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "lightmesh/math/vec.h"
+
+namespace lm {
+
+/// What a lookup outside [0, 1] reads (glTF's samplers, Assimp's aiTextureMapMode).
+enum class TextureWrap : uint8_t { Repeat, Clamp, Mirror };
+
+/// A colour and its coverage, linear.
+struct Texel {
+    float r = 0, g = 0, b = 0, a = 1;
+    Color Rgb() const { return {r, g, b}; }
+};
+
+/// An image in memory with its mip-maps (each level half the last, rounded up, down to
+/// 1 × 1; box-filtered in linear space). 8-bit images keep their sRGB bytes (4 per texel,
+/// decoded by a table at lookup: a quarter of the memory of floats); EXR and 16-bit images
+/// keep linear floats. Immutable once built: shared between materials and threads.
+class Texture {
+  public:
+    /// From 8-bit RGBA texels, row 0 at the top; colour sRGB-encoded, alpha linear.
+    Texture(int width, int height, std::vector<uint8_t> rgba8);
+    /// From linear float RGBA texels, row 0 at the top.
+    Texture(int width, int height, std::vector<float> rgba);
+
+    int Width() const { return levels_[0].w; }
+    int Height() const { return levels_[0].h; }
+    int Levels() const { return static_cast<int>(levels_.size()); }
+    /// Whether some texel of the image has alpha below 1 (a cut-out can use it).
+    bool HasAlpha() const { return hasAlpha_; }
+    /// Bytes of all levels.
+    size_t Bytes() const;
+
+    /// The texel at texture coordinates (u, v) (v grows upwards: row 0 of the image is at
+    /// v = 1, Assimp's convention for every format), filtered bilinearly on mip level
+    /// floor(`lod`) (0: the full image; clamped to the pyramid), as pbrt-v4's default
+    /// "bilinear" filter: half the lookups of trilinear filtering.
+    Texel Sample(float u, float v, float lod, TextureWrap wrapU, TextureWrap wrapV) const;
+    /// The same, blended linearly between levels floor(lod) and floor(lod) + 1.
+    Texel SampleTrilinear(float u, float v, float lod, TextureWrap wrapU, TextureWrap wrapV) const;
+    /// The alpha at (u, v), bilinear on the full image: the cut-out test's lookup, the same
+    /// for every ray query.
+    float Alpha(float u, float v, TextureWrap wrapU, TextureWrap wrapV) const;
+
+  private:
+    struct Level {
+        int w = 0, h = 0;
+        std::vector<uint8_t> ldr;  // 4 bytes a texel, or empty
+        std::vector<float> hdr;    // 4 floats a texel, or empty
+    };
+    Texel Fetch(const Level& level, int x, int y) const;
+    Texel Bilinear(const Level& level, float u, float v, TextureWrap wrapU, TextureWrap wrapV) const;
+    void BuildMipMaps();
+
+    std::vector<Level> levels_;
+    bool hasAlpha_ = false;
+};
+
+/// Decodes an image file's bytes (PNG, JPEG, TGA, BMP; 8 or 16 bits per channel; grey,
+/// grey+alpha, RGB or RGBA). Throws Error with the decoder's reason.
+std::shared_ptr<const Texture> DecodeTexture(const std::string& bytes);
+/// Reads an image file: OpenEXR by its extension (.exr), else DecodeTexture. Throws Error
+/// naming the problem (not the file: the caller names it).
+std::shared_ptr<const Texture> ReadTextureFile(const std::string& path);
+
+/// The largest width or height accepted (8192² RGBA8 texels are 341 MiB with the mips).
+inline constexpr int kMaxTextureSize = 8192;
+
+}  // namespace lm

@@ -1,0 +1,142 @@
+// texture_test.cpp -- images in memory: lookups, wrap modes, mip-maps, decoding, the cache.
+#include "lightmesh/texture/texture.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <iterator>
+#include <limits>
+
+#include "lightmesh/io/image.h"
+#include "lightmesh/texture/texture_cache.h"
+#include "lightmesh/util/error.h"
+
+namespace lm {
+namespace {
+
+const std::string DataDir = std::string(LIGHTMESH_TEST_DATA) + "/textures";
+
+std::string ReadBytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// texels.png: red, green (top row), blue, white (bottom row).
+TEST(Texture, DecodesPngAndLooksUpEachTexelInLinearColour) {
+    const auto tex = DecodeTexture(ReadBytes(DataDir + "/texels.png"));
+    ASSERT_EQ(tex->Width(), 2);
+    ASSERT_EQ(tex->Height(), 2);
+    EXPECT_EQ(tex->Levels(), 2);
+    EXPECT_FALSE(tex->HasAlpha());
+    // v grows upwards: the top row is at v = 0.75, the bottom row at v = 0.25.
+    const Texel red = tex->Sample(0.25f, 0.75f, 0, TextureWrap::Clamp, TextureWrap::Clamp);
+    const Texel green = tex->Sample(0.75f, 0.75f, 0, TextureWrap::Clamp, TextureWrap::Clamp);
+    const Texel blue = tex->Sample(0.25f, 0.25f, 0, TextureWrap::Clamp, TextureWrap::Clamp);
+    EXPECT_EQ(red.Rgb(), Color(1, 0, 0));
+    EXPECT_EQ(green.Rgb(), Color(0, 1, 0));
+    EXPECT_EQ(blue.Rgb(), Color(0, 0, 1));
+    EXPECT_EQ(red.a, 1.0f);
+    // Half-way between red and green: the linear mean (bilinear in linear space).
+    const Texel mid = tex->Sample(0.5f, 0.75f, 0, TextureWrap::Clamp, TextureWrap::Clamp);
+    EXPECT_FLOAT_EQ(mid.r, 0.5f);
+    EXPECT_FLOAT_EQ(mid.g, 0.5f);
+    // The last level is the mean of the four, in linear space, stored as sRGB bytes.
+    const Texel mean = tex->Sample(0.3f, 0.6f, 5, TextureWrap::Repeat, TextureWrap::Repeat);
+    EXPECT_NEAR(mean.r, 0.5f, 0.005f);
+    EXPECT_NEAR(mean.g, 0.5f, 0.005f);
+    EXPECT_NEAR(mean.b, 0.5f, 0.005f);
+}
+
+TEST(Texture, SrgbBytesAreDecodedToLinear) {
+    const Texture tex(1, 1, std::vector<uint8_t>{128, 64, 255, 128});
+    const Texel t = tex.Sample(0.5f, 0.5f, 0, TextureWrap::Repeat, TextureWrap::Repeat);
+    EXPECT_FLOAT_EQ(t.r, DecodeSrgb8(128));
+    EXPECT_FLOAT_EQ(t.g, DecodeSrgb8(64));
+    EXPECT_FLOAT_EQ(t.b, 1.0f);
+    EXPECT_NEAR(t.a, 128.0f / 255.0f, 1e-6f);  // alpha is linear
+    EXPECT_TRUE(tex.HasAlpha());
+}
+
+TEST(Texture, WrapModesRepeatClampAndMirror) {
+    // One row of four texels: 0, 1/3, 2/3, 1 in linear floats (red channel).
+    std::vector<float> rgba;
+    for (int x = 0; x < 4; ++x) rgba.insert(rgba.end(), {x / 3.0f, 0, 0, 1});
+    const Texture tex(4, 1, rgba);
+    auto red = [&](float u, TextureWrap w) { return tex.Sample(u, 0.5f, 0, w, TextureWrap::Clamp).r; };
+    EXPECT_FLOAT_EQ(red(0.125f, TextureWrap::Repeat), 0.0f);
+    EXPECT_FLOAT_EQ(red(1.125f, TextureWrap::Repeat), 0.0f);   // the next copy's first texel
+    EXPECT_FLOAT_EQ(red(-0.875f, TextureWrap::Repeat), 0.0f);
+    EXPECT_FLOAT_EQ(red(1.375f, TextureWrap::Clamp), 1.0f);    // the last texel, held
+    EXPECT_FLOAT_EQ(red(-3.0f, TextureWrap::Clamp), 0.0f);
+    EXPECT_FLOAT_EQ(red(1.125f, TextureWrap::Mirror), 1.0f);   // mirrored: the last texel first
+    EXPECT_FLOAT_EQ(red(1.875f, TextureWrap::Mirror), 0.0f);
+    // Non-finite and huge coordinates stay in the image.
+    EXPECT_GE(red(std::numeric_limits<float>::quiet_NaN(), TextureWrap::Repeat), 0.0f);
+    EXPECT_LE(red(std::numeric_limits<float>::infinity(), TextureWrap::Repeat), 1.0f);
+    EXPECT_LE(red(3e9f, TextureWrap::Mirror), 1.0f);
+}
+
+TEST(Texture, MipLevelsAverageAndLodBlendsThem) {
+    // An 8 x 8 checker of black and white: every level but the first is grey.
+    std::vector<uint8_t> rgba;
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x) {
+            const uint8_t c = (x + y) % 2 ? 255 : 0;
+            rgba.insert(rgba.end(), {c, c, c, 255});
+        }
+    const Texture tex(8, 8, rgba);
+    EXPECT_EQ(tex.Levels(), 4);
+    const float at0 = tex.Sample(1.5f / 8, 1.5f / 8, 0, TextureWrap::Repeat, TextureWrap::Repeat).r;
+    const float at1 = tex.Sample(1.5f / 8, 1.5f / 8, 1, TextureWrap::Repeat, TextureWrap::Repeat).r;
+    const float atHalf = tex.SampleTrilinear(1.5f / 8, 1.5f / 8, 0.5f, TextureWrap::Repeat, TextureWrap::Repeat).r;
+    EXPECT_EQ(tex.Sample(1.5f / 8, 1.5f / 8, 0.99f, TextureWrap::Repeat, TextureWrap::Repeat).r, at0);
+    EXPECT_TRUE(at0 == 0.0f || at0 == 1.0f);
+    EXPECT_NEAR(at1, 0.5f, 0.005f);  // the linear mean, not sRGB's 0.5 byte
+    EXPECT_NEAR(atHalf, 0.5f * (at0 + at1), 1e-5f);
+}
+
+TEST(Texture, BadImagesAreErrorsNotCrashes) {
+    EXPECT_THROW(DecodeTexture(""), Error);
+    EXPECT_THROW(DecodeTexture("not an image at all"), Error);
+    std::string truncated = ReadBytes(DataDir + "/texels.png");
+    truncated.resize(truncated.size() / 2);
+    EXPECT_THROW(DecodeTexture(truncated), Error);
+    EXPECT_THROW(ReadTextureFile(DataDir + "/no_such_image.png"), Error);
+}
+
+TEST(TextureCache, ReadsEachImageOnceAndWarnsOnceForAMissingOne) {
+    TextureCache cache;
+    std::vector<std::shared_ptr<const Texture>> textures;
+    std::vector<std::string> warnings;
+    auto warn = [&](const std::string& w) { warnings.push_back(w); };
+    TextureSource a;
+    a.file = DataDir + "/texels.png";
+    a.name = "texels.png";
+    TextureSource b = a;
+    b.file = DataDir + "/../textures/texels.png";  // the same file by another path
+    EXPECT_EQ(cache.Get(a, "m.obj", &textures, warn), 0);
+    EXPECT_EQ(cache.Get(b, "n.obj", &textures, warn), 0);
+    EXPECT_EQ(textures.size(), 1u);
+    TextureSource missing;
+    missing.file = DataDir + "/missing.png";
+    missing.name = "missing.png";
+    EXPECT_EQ(cache.Get(missing, "m.obj", &textures, warn), -1);
+    EXPECT_EQ(cache.Get(missing, "m.obj", &textures, warn), -1);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("m.obj: texture \"missing.png\": no such file; the material's flat colour is used"),
+              std::string::npos)
+        << warnings[0];
+    // Embedded bytes, and raw B, G, R, A texels.
+    TextureSource embedded;
+    embedded.bytes = ReadBytes(DataDir + "/texels.png");
+    EXPECT_EQ(cache.Get(embedded, "m.glb", &textures, warn), 1);
+    TextureSource raw;
+    raw.rawWidth = raw.rawHeight = 1;
+    raw.bytes = std::string("\x00\x00\xff\xff", 4);  // red
+    const int r = cache.Get(raw, "m.fbx", &textures, warn);
+    ASSERT_EQ(r, 2);
+    EXPECT_EQ(textures[2]->Sample(0.5f, 0.5f, 0, TextureWrap::Repeat, TextureWrap::Repeat).Rgb(), Color(1, 0, 0));
+}
+
+}  // namespace
+}  // namespace lm
