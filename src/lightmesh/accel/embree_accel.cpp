@@ -4,6 +4,7 @@
 #include <embree3/rtcore.h>
 #include <tbb/task_arena.h>
 
+#include <array>
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -11,6 +12,7 @@
 #include <mutex>
 #include <string>
 
+#include "lightmesh/geometry/cutouts.h"
 #include "lightmesh/geometry/triangle.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/log.h"
@@ -109,6 +111,24 @@ struct EmbreeAccel::Impl {
     RTCScene countScene = nullptr;
     float pad = 0;  // box padding of the count scene
 
+    // Alpha cut-outs (TriangleMesh::cutouts): the cut-out triangles in a geometry of their
+    // own (id 1) whose intersection and occlusion filters reject the holes, so that the
+    // opaque ones (id 0) pay nothing. Without cut-outs, one geometry of the mesh's own
+    // buffers, as before. ids[g][primID] is the mesh's triangle.
+    const CutoutMask* cut = nullptr;
+    std::vector<std::array<uint32_t, 3>> split[2];
+    std::vector<uint32_t> ids[2];
+    uint32_t Prim(unsigned geomID, unsigned primID) const { return cut ? ids[geomID][primID] : primID; }
+    static void CutoutFilter(const RTCFilterFunctionNArguments* args) {
+        const Impl& m = *static_cast<const Impl*>(args->geometryUserPtr);
+        for (unsigned i = 0; i < args->N; ++i) {
+            if (args->valid[i] == 0) continue;
+            const uint32_t prim = m.ids[1][RTCHitN_primID(args->hit, args->N, i)];
+            if (!m.cut->Solid(m.mesh, prim, RTCHitN_u(args->hit, args->N, i), RTCHitN_v(args->hit, args->N, i)))
+                args->valid[i] = 0;
+        }
+    }
+
     explicit Impl(const TriangleMesh& m) : mesh(m) {}
     ~Impl() {
         if (countScene) rtcReleaseScene(countScene);
@@ -152,7 +172,8 @@ struct EmbreeAccel::Impl {
             const uint32_t prim = args->primID;
             TriangleHit th;
             if (IntersectTriangle(*c->ray, c->mesh->Vertex(prim, 0), c->mesh->Vertex(prim, 1),
-                                  c->mesh->Vertex(prim, 2), &th))
+                                  c->mesh->Vertex(prim, 2), &th) &&
+                (!c->mesh->cutouts || c->mesh->cutouts->Solid(*c->mesh, prim, th.b1, th.b2)))
                 c->hits->push_back(prim);
         }
     }
@@ -205,15 +226,32 @@ EmbreeAccel::EmbreeAccel(const TriangleMesh& mesh) : impl_(std::make_unique<Impl
             m.vertices[4 * i + 1] = mesh.positions[i].y;
             m.vertices[4 * i + 2] = mesh.positions[i].z;
         }
-        RTCGeometry geom = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                   m.vertices.data(), 0, 4 * sizeof(float), mesh.positions.size());
-        rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                   mesh.triangles.data(), 0, 3 * sizeof(uint32_t),
-                                   mesh.triangles.size());
-        rtcCommitGeometry(geom);
-        rtcAttachGeometry(m.scene, geom);  // geometry id 0
-        rtcReleaseGeometry(geom);          // the scene holds it now
+        m.cut = mesh.cutouts && mesh.cutouts->Count() > 0 ? mesh.cutouts.get() : nullptr;
+        if (m.cut) {
+            for (uint32_t i = 0; i < mesh.triangles.size(); ++i) {
+                const int g = m.cut->IsCutout(i) ? 1 : 0;
+                m.split[g].push_back(mesh.triangles[i]);
+                m.ids[g].push_back(i);
+            }
+        }
+        for (unsigned g = 0; g < (m.cut ? 2u : 1u); ++g) {
+            const auto& tris = m.cut ? m.split[g] : mesh.triangles;
+            RTCGeometry geom = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+            rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                       m.vertices.data(), 0, 4 * sizeof(float), mesh.positions.size());
+            // (An empty buffer's pointer may be null; Embree wants one anyway.)
+            rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                       tris.empty() ? static_cast<const void*>(m.vertices.data()) : tris.data(), 0,
+                                       3 * sizeof(uint32_t), tris.size());
+            if (g == 1) {
+                rtcSetGeometryUserData(geom, &m);
+                rtcSetGeometryIntersectFilterFunction(geom, &Impl::CutoutFilter);
+                rtcSetGeometryOccludedFilterFunction(geom, &Impl::CutoutFilter);
+            }
+            rtcCommitGeometry(geom);
+            rtcAttachGeometry(m.scene, geom);  // geometry id g
+            rtcReleaseGeometry(geom);          // the scene holds it now
+        }
     }
     rtcCommitScene(m.scene);  // builds the BVH
     m.CheckError("building the scene");
@@ -241,7 +279,7 @@ bool EmbreeAccel::Intersect(const Ray& ray, Hit* hit) const {
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(impl_->scene, &context, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
-    *hit = Hit{rh.ray.tfar + r.shift, rh.hit.primID, rh.hit.u, rh.hit.v};
+    *hit = Hit{rh.ray.tfar + r.shift, impl_->Prim(rh.hit.geomID, rh.hit.primID), rh.hit.u, rh.hit.v};
     return true;
 }
 
@@ -289,8 +327,8 @@ void OccludedPacket(RTCScene scene, const Ray* rays, size_t count, bool* occlude
 
 
 // Closest hits of up to N rays as one packet (RTCRayHit4/8/16), into hits[0 … count-1].
-template <int N, typename PacketHit, typename Trace>
-void IntersectPacket(RTCScene scene, const Ray* rays, size_t count, Hit* hits, Trace trace) {
+template <int N, typename PacketHit, typename Trace, typename Prim>
+void IntersectPacket(RTCScene scene, const Ray* rays, size_t count, Hit* hits, Trace trace, const Prim& prim) {
     alignas(64) int valid[N];
     alignas(64) PacketHit packet;
     float shift[N];
@@ -305,7 +343,8 @@ void IntersectPacket(RTCScene scene, const Ray* rays, size_t count, Hit* hits, T
     trace(valid, scene, &context, &packet);
     for (size_t k = 0; k < count; ++k)
         hits[k] = valid[k] && packet.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID
-                      ? Hit{packet.ray.tfar[k] + shift[k], packet.hit.primID[k], packet.hit.u[k], packet.hit.v[k]}
+                      ? Hit{packet.ray.tfar[k] + shift[k], prim(packet.hit.geomID[k], packet.hit.primID[k]),
+                            packet.hit.u[k], packet.hit.v[k]}
                       : Hit{};
 }
 }  // namespace
@@ -315,17 +354,19 @@ void EmbreeAccel::IntersectMany(const Ray* rays, size_t count, Hit* hits) const 
         Accelerator::IntersectMany(rays, count, hits);
         return;
     }
+    const Impl& m = *impl_;
+    auto prim = [&m](unsigned geomID, unsigned primID) { return m.Prim(geomID, primID); };
     for (size_t first = 0; first < count;) {
         const size_t n = std::min<size_t>(count - first, impl_->packets16 ? 16 : 8);
         if (n > 8) {
-            IntersectPacket<16, RTCRayHit16>(impl_->scene, rays + first, n, hits + first, rtcIntersect16);
+            IntersectPacket<16, RTCRayHit16>(impl_->scene, rays + first, n, hits + first, rtcIntersect16, prim);
         } else if (n == 1) {
             hits[first] = Hit{};
             Intersect(rays[first], &hits[first]);
         } else if (n <= 4) {
-            IntersectPacket<4, RTCRayHit4>(impl_->scene, rays + first, n, hits + first, rtcIntersect4);
+            IntersectPacket<4, RTCRayHit4>(impl_->scene, rays + first, n, hits + first, rtcIntersect4, prim);
         } else {
-            IntersectPacket<8, RTCRayHit8>(impl_->scene, rays + first, n, hits + first, rtcIntersect8);
+            IntersectPacket<8, RTCRayHit8>(impl_->scene, rays + first, n, hits + first, rtcIntersect8, prim);
         }
         first += n;
     }
@@ -385,7 +426,10 @@ AccelFigures EmbreeAccel::Figures() const {
     const size_t bytes = m.vertices.size() * sizeof(float);
     return {
         {"embree version", RTC_VERSION_STRING},
-        {"embree scene", "1 triangle geometry, robust, default build quality"},
+        {"embree scene", m.cut ? StringPrintf("2 triangle geometries (%zu opaque, %zu cut-out with intersection and "
+                                              "occlusion filters), robust, default build quality",
+                                              m.ids[0].size(), m.ids[1].size())
+                               : std::string("1 triangle geometry, robust, default build quality")},
         {"embree bytes", StringPrintf("%lld (%.1f per triangle): BVH and Embree's other allocations %lld, "
                                       "vertex copy %zu",
                                       static_cast<long long>(m.bvhBytes + int64_t(bytes)),

@@ -16,6 +16,7 @@
 #include <immintrin.h>
 #endif
 
+#include "lightmesh/geometry/cutouts.h"
 #include "lightmesh/geometry/triangle.h"
 #include "lightmesh/math/simd.h"
 
@@ -280,7 +281,24 @@ struct CellSpan {
     NestedGridAccel::BlockFilter nearestFilter;  // t, b0, b1, b2 (closest hit)
     NestedGridAccel::BlockFilter anyFilter;      // t only, up to the first block with a hit (occlusion)
     float tCellExit;
+    const CutoutMask* cut = nullptr;  // the mesh's cut-outs (null: none; every hit is solid)
+    const TriangleMesh* mesh = nullptr;
 };
+
+// Whether the hit of triangle `id` (lane k of `blocks`) is solid: always without cut-outs;
+// for a cut-out triangle the alpha test at IntersectPrepared's barycentrics (brute force's
+// IntersectTriangle's, bit for bit). `th` carries them already when `bary` says so.
+[[gnu::always_inline]] inline bool SolidHit(const CellSpan& c, const NestedGridAccel::TriBlock* blocks, uint32_t k,
+                                            const detail::PreparedRay& ray, TriangleHit th, bool bary) {
+    const uint32_t id = blocks[k / 8].id[k % 8];
+    if (!c.cut->IsCutout(id)) return true;
+    if (!bary) {
+        float v[9];
+        for (int row = 0; row < 9; ++row) v[row] = blocks[k / 8].v[row][k % 8];
+        if (!detail::IntersectPrepared(ray, v, &th)) return false;
+    }
+    return c.cut->Solid(*c.mesh, id, th.b1, th.b2);
+}
 
 // Calls test(id, hit) for triangles of the cell the ray hits (IntersectPrepared's answer on
 // the block's copy of its vertices), in the cell's order, until test returns true (then
@@ -313,7 +331,15 @@ template <bool kNearestOnly, bool kAnyHit = false, typename Test>
         const uint64_t lo = begin > base ? begin - base : 0, hi = stop - base;
         const uint64_t own = (hi == 64 ? ~uint64_t(0) : (uint64_t(1) << hi) - 1) & ~((uint64_t(1) << lo) - 1);
         if constexpr (kAnyHit) {
-            if (hits) return true;  // any hit ends an occlusion query
+            if (hits && !c.cut) return true;  // any hit ends an occlusion query
+            // With cut-outs, any solid hit (a neighbouring cell's lane too: every lane is a
+            // triangle of the mesh).
+            for (uint64_t m = hits; m; m &= m - 1) {
+                TriangleHit th;
+                th.t = t[__builtin_ctzll(m)];
+                if (SolidHit(c, blocks, static_cast<uint32_t>(__builtin_ctzll(m)), ray, th, false)) return true;
+            }
+            hits = 0;
         }
         hits &= own;
         ties &= own;
@@ -322,10 +348,11 @@ template <bool kNearestOnly, bool kAnyHit = false, typename Test>
             float v[9];
             for (int row = 0; row < 9; ++row) v[row] = block.v[row][k % 8];
             TriangleHit th;
-            return detail::IntersectPrepared(ray, v, &th) && test(block.id[k % 8], th);
+            return detail::IntersectPrepared(ray, v, &th) && (!c.cut || SolidHit(c, blocks, k, ray, th, true)) &&
+                   test(block.id[k % 8], th);
         };
         if constexpr (kNearestOnly) {
-            if (hits) {
+            while (hits) {
                 // Lanes are in id order, so the first of equal t has the lowest id.
                 uint32_t nearest = static_cast<uint32_t>(__builtin_ctzll(hits));
                 for (uint64_t m = hits & (hits - 1); m; m &= m - 1) {
@@ -333,13 +360,20 @@ template <bool kNearestOnly, bool kAnyHit = false, typename Test>
                     if (t[k] < t[nearest]) nearest = k;
                 }
                 const TriangleHit th{t[nearest], bary[nearest], bary[64 + nearest], bary[128 + nearest]};
+                // A hole of a cut-out triangle: the next nearest.
+                if (c.cut && !SolidHit(c, blocks, nearest, ray, th, true)) {
+                    hits &= ~(uint64_t(1) << nearest);
+                    continue;
+                }
                 if (test(blocks[nearest / 8].id[nearest % 8], th)) return true;
+                break;
             }
         } else {
             for (; hits; hits &= hits - 1) {
                 const uint32_t k = static_cast<uint32_t>(__builtin_ctzll(hits));
                 TriangleHit th;
                 th.t = t[k];
+                if (c.cut && !SolidHit(c, blocks, k, ray, th, false)) continue;
                 if (test(blocks[k / 8].id[k % 8], th)) return true;
             }
         }
@@ -532,7 +566,8 @@ bool NestedGridAccel::Walk(uint32_t nodeIndex, const Ray& ray, const Vec3& invD,
             } else if (ref.count & kChildBit) {
                 if (Walk(ref.count & ~kChildBit, ray, invD, tCell, tCellExit, query)) return true;
             } else {
-                const CellSpan span{blocks_.get(), ref.first, ref.count, filter_, nearestFilter_, anyFilter_, tCellExit};
+                const CellSpan span{blocks_.get(), ref.first, ref.count, filter_,     nearestFilter_,
+                                    anyFilter_,    tCellExit, mesh_.cutouts.get(), &mesh_};
                 if (query.Cell(span)) return true;
             }
         } else if (empty && empty[idx] > 2) {
@@ -834,12 +869,15 @@ void InPackets(const Ray* rays, size_t count, Trace&& trace, Answer&& answer) {
 }  // namespace
 
 void NestedGridAccel::IntersectMany(const Ray* rays, size_t count, Hit* hits) const {
+    // Cut-outs: ray by ray (the packet leaf test keeps one nearest hit per ray).
+    if (mesh_.cutouts) return Accelerator::IntersectMany(rays, count, hits);
     InPackets<ClosestQuery>(
         rays, count, [&](const Ray* r, size_t n, ClosestQuery* q) { TraceMany(r, n, q); },
         [&](size_t i, const ClosestQuery& q) { hits[i] = q.found ? q.best : Hit{}; });
 }
 
 void NestedGridAccel::OccludedMany(const Ray* rays, size_t count, bool* occluded) const {
+    if (mesh_.cutouts) return Accelerator::OccludedMany(rays, count, occluded);
     InPackets<AnyQuery>(
         rays, count, [&](const Ray* r, size_t n, AnyQuery* q) { TraceMany(r, n, q); },
         [&](size_t i, const AnyQuery& q) { occluded[i] = q.found; });

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <unordered_map>
 
+#include "lightmesh/geometry/cutouts.h"
 #include "lightmesh/geometry/triangle.h"
 
 namespace lm {
@@ -166,8 +167,10 @@ EdgeReport AnalyzeEdges(const TriangleMesh& mesh) {
 int CountCrossings(const TriangleMesh& mesh, const Ray& ray) {
     TriangleHit th;
     int n = 0;
+    const CutoutMask* cut = mesh.cutouts.get();
     for (uint32_t i = 0; i < mesh.triangles.size(); ++i)
-        n += IntersectTriangle(ray, mesh.Vertex(i, 0), mesh.Vertex(i, 1), mesh.Vertex(i, 2), &th);
+        n += IntersectTriangle(ray, mesh.Vertex(i, 0), mesh.Vertex(i, 1), mesh.Vertex(i, 2), &th) &&
+             (!cut || cut->Solid(mesh, i, th.b1, th.b2));
     return n;
 }
 

@@ -3,12 +3,15 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "lightmesh/math/bounds.h"
 #include "lightmesh/math/ray.h"
 
 namespace lm {
+
+class CutoutMask;
 
 /// Texture coordinates of a vertex (glTF's convention: v grows downwards in the image).
 struct TexCoord {
@@ -28,6 +31,11 @@ struct TriangleMesh {
     std::vector<std::array<uint32_t, 3>> triangles;
     /// Material index per triangle (same length as `triangles`).
     std::vector<uint32_t> materialIds;
+    /// The alpha cut-outs of the triangles (geometry/cutouts.h), built last by the scene
+    /// loader; null when no triangle is cut out. Every ray query applies its Solid test to a
+    /// hit of a cut-out triangle. (Append keeps it; triangles beyond those it was built for
+    /// are opaque.)
+    std::shared_ptr<const CutoutMask> cutouts;
 
     size_t TriangleCount() const { return triangles.size(); }
     Bounds3 Bounds() const;

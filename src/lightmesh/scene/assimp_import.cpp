@@ -294,7 +294,8 @@ class SceneWalker {
         }
         const uint32_t material = MaterialIndex(am.mMaterialIndex);
         // Texture coordinates only where a texture reads them: untextured models carry none.
-        if (out_->materials[material].texture >= 0 && am.HasTextureCoords(0)) {
+        if ((out_->materials[material].texture >= 0 || out_->materials[material].alphaTexture >= 0) &&
+            am.HasTextureCoords(0)) {
             mesh.uvs.resize(am.mNumVertices);
             for (unsigned v = 0; v < am.mNumVertices; ++v) {
                 const aiVector3D& t = am.mTextureCoords[0][v];

@@ -2,6 +2,7 @@
 // formula (1) (MaterialFromFile; the mapping is written out above it).
 #include "lightmesh/scene/mesh_import_internal.h"
 
+#include <assimp/GltfMaterial.h>
 #include <assimp/material.h>
 #include <assimp/scene.h>
 #include <assimp/texture.h>
@@ -113,11 +114,14 @@ int FindTexture(const aiMaterial& am, aiTextureType type, const aiScene& scene, 
 //    reflectance textureScale × texel: glTF's factor × (1 − metallic), 1 for the others
 //    (exporters write a default Kd beside map_Kd). kd stays the flat colour used where the
 //    image cannot be read.
-//  Transparency, emission and vertex colours are ignored; negative or non-finite values
-//  become 0.
+//  - Alpha cut-outs: glTF's alphaMode MASK (at alphaCutoff) and BLEND (as a mask at 0.5, with
+//    a warning) on the base-colour image's alpha times baseColorFactor's; elsewhere an
+//    opacity map (MTL map_d: its alpha, or its grey level) times the opacity (MTL d), else
+//    the base-colour image's alpha channel where it has one.
+//  Partial transparency, emission and vertex colours are ignored; negative or non-finite
+//  values become 0.
 Material MaterialFromFile(const aiMaterial& am, const aiScene& scene, const std::string& modelPath,
                           std::vector<TextureSource>* textures, std::vector<std::string>* warnings) {
-    (void)warnings;
     Material m;
     aiString aname;
     const std::string name =
@@ -138,6 +142,44 @@ Material MaterialFromFile(const aiMaterial& am, const aiScene& scene, const std:
     if (standIn && texture < 0) return m;  // the default grey
     m.name = name.empty() ? "unnamed" : name;
     m.texture = texture;
+
+    // Alpha cut-outs (geometry/cutouts.h).
+    aiString alphaMode;
+    if (am.Get(AI_MATKEY_GLTF_ALPHAMODE, alphaMode) == AI_SUCCESS) {
+        // glTF: MASK cuts at alphaCutoff (default 0.5); BLEND is rendered as a mask at 0.5;
+        // OPAQUE ignores alpha. The opacity is baseColorFactor's alpha × the image's.
+        const std::string mode = alphaMode.C_Str();
+        if ((mode == "MASK" || mode == "BLEND") && texture >= 0) {
+            float cutoff = 0.5f;
+            if (mode == "MASK") am.Get(AI_MATKEY_GLTF_ALPHACUTOFF, cutoff);
+            aiColor4D base4(1, 1, 1, 1);
+            if (am.Get(AI_MATKEY_BASE_COLOR, base4) != AI_SUCCESS) am.Get(AI_MATKEY_COLOR_DIFFUSE, base4);
+            m.alphaTexture = texture;
+            m.alphaSource = Material::AlphaSource::Alpha;
+            m.alphaCutoff = std::isfinite(cutoff) ? std::clamp(cutoff, 0.0f, 1.0f) : 0.5f;
+            m.alphaScale = std::isfinite(base4.a) ? std::clamp(base4.a, 0.0f, 1.0f) : 1.0f;
+            if (mode == "BLEND")
+                warnings->push_back(modelPath + ": material \"" + m.name +
+                                    "\": alphaMode BLEND is rendered as a cut-out at alpha 0.5 (lightmesh has no "
+                                    "partial transparency)");
+        }
+    } else {
+        // Others: an opacity map (MTL map_d) cuts at 0.5, times the opacity (MTL d); else a
+        // base-colour image with an alpha channel does. A constant opacity alone (d < 1
+        // without a map) is not a cut-out.
+        float opacity = 1;
+        am.Get(AI_MATKEY_OPACITY, opacity);
+        TextureWrap wu, wv;
+        const int map = FindTexture(am, aiTextureType_OPACITY, scene, modelPath, textures, &wu, &wv);
+        if (map >= 0) {
+            m.alphaTexture = map;
+            m.alphaSource = Material::AlphaSource::OpacityMap;
+            m.alphaScale = std::isfinite(opacity) ? std::clamp(opacity, 0.0f, 1.0f) : 1.0f;
+        } else if (texture >= 0) {
+            m.alphaTexture = texture;
+            m.alphaSource = Material::AlphaSource::AlphaIfAny;
+        }
+    }
 
     const Color kd = ToColor(base);
     if (pbr) {

@@ -192,6 +192,7 @@ Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options,
             r.Fail("", "automatic framing: " + p +
                            " (the model is too large to frame: scale it down or write a .json scene)");
     if (std::string p = SpanProblem(scene); !p.empty()) r.Fail("", p);
+    BuildCutouts(&scene);
     return scene;
 }
 

@@ -190,6 +190,10 @@ void WriteMeshResult(int fd, const LoadedMesh& m) {
         w.Pod(mat.textureScale);
         w.Pod(mat.wrapU);
         w.Pod(mat.wrapV);
+        w.Pod(mat.alphaTexture);
+        w.Pod(mat.alphaSource);
+        w.Pod(mat.alphaCutoff);
+        w.Pod(mat.alphaScale);
     }
     w.Pod<uint64_t>(m.textures.size());
     for (const TextureSource& t : m.textures) {
@@ -235,6 +239,10 @@ LoadedMesh ReadResult(const std::string& path, std::string_view bytes) {
         mat.textureScale = r.Pod<Color>();
         mat.wrapU = r.Pod<TextureWrap>();
         mat.wrapV = r.Pod<TextureWrap>();
+        mat.alphaTexture = r.Pod<int>();
+        mat.alphaSource = r.Pod<Material::AlphaSource>();
+        mat.alphaCutoff = r.Pod<float>();
+        mat.alphaScale = r.Pod<float>();
         m.materials.push_back(std::move(mat));
     }
     const uint64_t textures = r.Pod<uint64_t>();
@@ -248,7 +256,9 @@ LoadedMesh ReadResult(const std::string& path, std::string_view bytes) {
         m.textures.push_back(std::move(t));
     }
     for (Material& mat : m.materials)
-        if (mat.texture >= static_cast<int>(m.textures.size())) throw std::runtime_error("bad texture index");
+        if (mat.texture >= static_cast<int>(m.textures.size()) || mat.alphaTexture >= static_cast<int>(m.textures.size()) ||
+            static_cast<uint8_t>(mat.alphaSource) > static_cast<uint8_t>(Material::AlphaSource::OpacityMap))
+            throw std::runtime_error("bad texture index");
     m.meshesPlaced = r.Pod<uint64_t>();
     m.meshesExcluded = r.Pod<uint64_t>();
     m.excludeMaterialsMatched = r.Bools();

@@ -1,6 +1,7 @@
 // scene.h -- what a scene is once loaded: triangles, materials, lights, camera, settings.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -27,6 +28,20 @@ struct Material {
     int texture = -1;
     Color textureScale{1.0f};
     TextureWrap wrapU = TextureWrap::Repeat, wrapV = TextureWrap::Repeat;
+    /// Alpha cut-out: an image (index like `texture`; -1: none) whose opacity, times
+    /// alphaScale, below alphaCutoff makes a hole in the surface (geometry/cutouts.h).
+    /// Which channel is the opacity: AlphaSource.
+    enum class AlphaSource : uint8_t {
+        None,
+        Alpha,        ///< the alpha channel (glTF alphaMode MASK, or BLEND as a mask)
+        AlphaIfAny,   ///< the alpha channel if the image has one below 1, else no cut-out (a
+                      ///< base-colour image's alpha outside glTF)
+        OpacityMap,   ///< the alpha channel if the image has one, else its red channel (MTL map_d)
+    };
+    int alphaTexture = -1;
+    AlphaSource alphaSource = AlphaSource::None;
+    float alphaCutoff = 0.5f;
+    float alphaScale = 1.0f;
 };
 
 /// How a point light's intensity falls off with distance d.

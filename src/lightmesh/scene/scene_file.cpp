@@ -608,6 +608,7 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
                                 double(reach), double(kMaxCoordinate)));
         }
     }
+    BuildCutouts(&scene);  // before the inside test: a cut-out surface is not a wall
     if (std::string p = SpanProblem(scene); !p.empty()) r.Fail("", p);
     CheckLightsOutsideSolids(r, scene);
     SizeUnsizedLights(&scene, unsized);

@@ -48,6 +48,10 @@ void Validate(const Scene& scene);
 void AttachTextures(const json::Reader& r, const std::string& model, bool enabled, TextureCache* cache,
                     LoadedMesh* loaded, Scene* scene);
 
+/// The mesh's cut-outs (TriangleMesh::cutouts) from the materials' alpha images: called
+/// once the mesh is final (ground included). No cut-out material, no mask.
+void BuildCutouts(Scene* scene);
+
 // ---- Ground slab and framing (framing.cpp) ---------------------------------------------
 /// A thin closed slab under `box` whose top face is the ground at `height` along `axis`.
 void AddGround(Scene* scene, const Bounds3& box, int axis, float height, float sizeFactor, uint32_t material);

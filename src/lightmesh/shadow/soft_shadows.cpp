@@ -6,6 +6,7 @@
 #include <bit>
 #include <cmath>
 
+#include "lightmesh/geometry/cutouts.h"
 #include "lightmesh/geometry/triangle.h"
 #include "lightmesh/shadow/area_light.h"
 #include "lightmesh/settings/render_settings.h"
@@ -314,9 +315,11 @@ std::unique_ptr<SoftShadows::Receiver> SoftShadows::BuildReceiver(const CellList
     // (its grown box, the origins' offset), which moves a crossing point by at most as
     // much: the cones are widened to cover it.
     const float slide = 2 * offset + 2 * grow;
+    const CutoutMask* cut = scene_.mesh.cutouts.get();
     for (size_t e = 0; e < rec->entries.size() && e < 8 && side != 0 && !rec->dark; ++e) {
         const uint32_t code = rec->entries[e] >> kSideShift;
         if (!code) continue;
+        if (cut && cut->IsCutout(rec->entries[e] & kPrimMask)) continue;  // holes let light through
         const Triangle& t = tris_[rec->entries[e] & kPrimMask];
         const Vec3 n = V3(t.n) * (code == kInFront ? 1.0f : -1.0f), v0 = V3(t.v0), v1 = V3(t.v1), v2 = V3(t.v2);
         const float lenT = Length(n);
@@ -596,10 +599,12 @@ float SoftShadows::HardLight(const ShadingPoint& sp, size_t light, Each&& each) 
     if (!(d > 0)) return 1.0f;
     const PointCone cone{sp.origin, (L - sp.origin) / d, d, 0.0f, 1.0f};
     bool blocked = false;
+    const CutoutMask* cut = scene_.mesh.cutouts.get();
     each(cone, [&](uint32_t prim) {
         const Triangle& t = tris_[prim];
         TriangleHit hit;
-        blocked = IntersectTriangle(ray, V3(t.v0), V3(t.v1), V3(t.v2), &hit);
+        blocked = IntersectTriangle(ray, V3(t.v0), V3(t.v1), V3(t.v2), &hit) &&
+                  (!cut || cut->Solid(scene_.mesh, prim, hit.b1, hit.b2));
         return !blocked;
     });
     return blocked ? 0.0f : 1.0f;
@@ -634,6 +639,26 @@ inline void MarkBlocked(const Candidate& c, const float* wx, const float* wy, co
         const __m128 before = _mm_cmplt_ps(num, _mm_mul_ps(dn, _mm_load_ps(tk + s)));
         blocked[s >> 6] |= static_cast<uint64_t>(_mm_movemask_ps(_mm_and_ps(inside, before))) << (s & 63);
     }
+}
+
+/// MarkBlocked for a cut-out triangle `prim`: a direction that meets it is blocked only
+/// where the point it meets is solid (CutoutMask::Solid at that point's barycentrics: the
+/// edge planes' values along w are proportional to them, d1 : d2 : d0 for vertices 0, 1, 2).
+void MarkBlockedCutout(const Candidate& c, const TriangleMesh& mesh, const CutoutMask& cut, uint32_t prim,
+                       const float* wx, const float* wy, const float* wz, const float* tk, int s0, int s1,
+                       uint64_t* blocked) {
+    uint64_t hit[kMaxSamples / 64] = {};
+    MarkBlocked(c, wx, wy, wz, tk, s0, s1, hit);
+    for (int word = s0 >> 6; word <= (s1 - 1) >> 6; ++word)
+        for (uint64_t m = hit[word]; m; m &= m - 1) {
+            const int s = word * 64 + __builtin_ctzll(m);
+            const Vec3 w(wx[s], wy[s], wz[s]);
+            const float d0 = Dot(Vec3(c.m0[0], c.m0[1], c.m0[2]), w), d1 = Dot(Vec3(c.m1[0], c.m1[1], c.m1[2]), w),
+                        d2 = Dot(Vec3(c.m2[0], c.m2[1], c.m2[2]), w);
+            const float sum = d0 + d1 + d2;
+            const float b1 = sum > 0 ? d2 / sum : 0.0f, b2 = sum > 0 ? d0 / sum : 0.0f;
+            if (cut.Solid(mesh, prim, b1, b2)) blocked[word] |= uint64_t(1) << (s & 63);
+        }
 }
 
 int CountBits(const uint64_t* words, int s0, int s1) {
@@ -674,6 +699,9 @@ float SoftShadows::SampleLight(const ShadingPoint& sp, size_t light, Each&& each
     // pass (a quarter of the directions, spread over the whole disc): once the first pass is
     // wholly blocked the point is in the umbra, and the rest of the list is never looked at.
     Candidate cand[kMaxCandidates];
+    uint32_t candPrim[kMaxCandidates];  // the triangle of a cut-out candidate, else UINT32_MAX
+    const CutoutMask* cut = scene_.mesh.cutouts.get();
+    bool anyCut = false;
     int nc = 0;
     uint64_t blocked[kMaxSamples / 64] = {};
     bool umbra = false;
@@ -697,7 +725,13 @@ float SoftShadows::SampleLight(const ShadingPoint& sp, size_t light, Each&& each
         if (num < 0) n = -n, num = -num;
         if (nc == 0) directions(0, first);
         cand[nc] = Candidate{{m0.x, m0.y, m0.z}, {m1.x, m1.y, m1.z}, {m2.x, m2.y, m2.z}, {n.x, n.y, n.z}, num};
-        MarkBlocked(cand[nc], wx, wy, wz, tk, 0, first, blocked);
+        candPrim[nc] = cut && cut->IsCutout(prim) ? prim : UINT32_MAX;
+        if (candPrim[nc] != UINT32_MAX) {
+            anyCut = true;
+            MarkBlockedCutout(cand[nc], scene_.mesh, *cut, prim, wx, wy, wz, tk, 0, first, blocked);
+        } else {
+            MarkBlocked(cand[nc], wx, wy, wz, tk, 0, first, blocked);
+        }
         ++nc;
         if (CountBits(blocked, 0, first) == first) {
             umbra = true;
@@ -713,11 +747,17 @@ float SoftShadows::SampleLight(const ShadingPoint& sp, size_t light, Each&& each
     counters.method[kSoftCandidates] += static_cast<uint64_t>(nc);
     if (umbra) return 0.0f;
     // The first pass wholly clear: the candidates only graze the cone between its
-    // directions; otherwise the other three passes decide with it.
-    if (CountBits(blocked, 0, first) == 0) return 1.0f;
+    // directions (unless one is a cut-out, whose holes may have let that pass through);
+    // otherwise the other three passes decide with it.
+    if (CountBits(blocked, 0, first) == 0 && !anyCut) return 1.0f;
     ++counters.method[kSoftFull];
     directions(first, N);
-    for (int ci = 0; ci < nc; ++ci) MarkBlocked(cand[ci], wx, wy, wz, tk, first, N, blocked);
+    for (int ci = 0; ci < nc; ++ci) {
+        if (candPrim[ci] != UINT32_MAX)
+            MarkBlockedCutout(cand[ci], scene_.mesh, *cut, candPrim[ci], wx, wy, wz, tk, first, N, blocked);
+        else
+            MarkBlocked(cand[ci], wx, wy, wz, tk, first, N, blocked);
+    }
     return 1.0f - static_cast<float>(CountBits(blocked, 0, N)) / static_cast<float>(N);
 }
 

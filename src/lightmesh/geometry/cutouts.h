@@ -1,0 +1,51 @@
+// cutouts.h -- alpha cut-outs: which points of a triangle are surface and which are holes
+// (foliage cards, fences), the one test every ray query of every back-end and shadow
+// method applies to a hit, so that they all agree on where a cut-out surface is.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "lightmesh/texture/texture.h"
+
+namespace lm {
+
+struct TriangleMesh;
+
+/// How a material cuts its surface: a point is solid where scale × its alpha (the image's
+/// alpha channel, or its red channel for a grey opacity map without one) is at least
+/// `cutoff`.
+struct CutoutMaterial {
+    std::shared_ptr<const Texture> image;
+    float cutoff = 0.5f;
+    float scale = 1.0f;
+    TextureWrap wrapU = TextureWrap::Repeat, wrapV = TextureWrap::Repeat;
+    bool fromRed = false;  ///< the opacity is the image's red channel (a grey map_d)
+};
+
+/// The cut-out triangles of a mesh and their materials. Held by the mesh it was built for
+/// (TriangleMesh::cutouts), which every back-end and shadow method sees; a mesh without
+/// cut-outs holds none and pays one null test per candidate hit.
+class CutoutMask {
+  public:
+    /// `materialOf[prim]` is an index into `materials` for a cut-out triangle, -1 for an
+    /// opaque one (one entry per triangle of the mesh).
+    CutoutMask(const std::vector<int32_t>& materialOf, std::vector<CutoutMaterial> materials);
+
+    /// Whether triangle `prim` is a cut-out one (its hits need Solid).
+    bool IsCutout(uint32_t prim) const { return prim < entry_.size() && entry_[prim] != 0; }
+    /// Whether the point of triangle `prim` at barycentrics (b1, b2) is surface (true) or a
+    /// hole: the material's opacity at the point's texture coordinates, bilinear on the full
+    /// image (Texture::Alpha). True for opaque triangles. The same answer for every caller.
+    bool Solid(const TriangleMesh& mesh, uint32_t prim, float b1, float b2) const;
+    /// The number of cut-out triangles.
+    size_t Count() const { return count_; }
+
+  private:
+    std::vector<uint16_t> entry_;  // per triangle: 1 + index into materials_, 0 opaque
+    std::vector<CutoutMaterial> materials_;
+    size_t count_ = 0;
+};
+
+}  // namespace lm

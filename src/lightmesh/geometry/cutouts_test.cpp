@@ -1,0 +1,124 @@
+// cutouts_test.cpp -- alpha cut-outs: the mask's test, and every back-end's queries on a
+// cut-out checker against brute force's (the grid bit for bit, Embree by its own
+// barycentrics through its filter functions).
+#include "lightmesh/geometry/cutouts.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "lightmesh/accel/accelerator.h"
+#include "lightmesh/geometry/mesh.h"
+#include "lightmesh/scene/scene_file.h"
+
+namespace lm {
+namespace {
+
+const std::string DataDir = std::string(LIGHTMESH_TEST_DATA) + "/textures";
+
+/// checker_mask.gltf (a 4 × 4 quad at y = 1 whose alpha is an 8 × 8 checker, MASK at 0.5)
+/// above a ground slab.
+Scene CheckerScene(bool textures = true) {
+    SceneLoadOptions o;
+    o.textures = textures;
+    o.text = R"({"camera": {"position": [0, 10, 10], "look_at": [0, 0, 0]},
+                 "lights": [{"position": [0, 50, 0], "intensity": 2500, "radius": 0.3}],
+                 "meshes": [{"file": "checker_mask.gltf"}],
+                 "ground": {"height": 0, "size": 3}})";
+    std::vector<std::string> warnings;
+    return LoadScene(DataDir + "/checker_scene.json", o, &warnings);
+}
+
+TEST(Cutouts, TheCheckerQuadIsACutOutAndItsHolesAreHoles) {
+    const Scene s = CheckerScene();
+    ASSERT_TRUE(s.mesh.cutouts);
+    EXPECT_EQ(s.mesh.cutouts->Count(), 2u);  // the quad's two triangles, not the ground's
+    const auto brute = CreateAccelerator("brute", s.mesh);
+    // Texel (0, 0) of the image (its top left) is solid (alpha 255), its neighbours are
+    // holes. The glTF's texture coordinates put the image's top-left corner at the quad's
+    // corner (-2, 1, -2): texel column = (x + 2) / 0.5, row from the top = (z + 2) / 0.5.
+    auto solidAt = [&](float x, float z) {
+        Hit hit;
+        EXPECT_TRUE(brute->Intersect(Ray{Vec3(x, 5, z), Vec3(0, -1, 0), 0, Infinity}, &hit));
+        return hit.t < 4.5f;  // the quad (t = 4), not the ground (t = 5)
+    };
+    for (int row = 0; row < 8; ++row)
+        for (int col = 0; col < 8; ++col) {
+            const float x = -2 + 0.5f * (col + 0.5f), z = -2 + 0.5f * (row + 0.5f);
+            EXPECT_EQ(solidAt(x, z), (row + col) % 2 == 0) << "texel " << col << ", " << row;
+        }
+    // Without textures the quad is solid everywhere, as before cut-outs.
+    const Scene flat = CheckerScene(false);
+    EXPECT_FALSE(flat.mesh.cutouts);
+}
+
+TEST(Cutouts, EveryBackEndAgreesWithBruteForce) {
+    const Scene s = CheckerScene();
+    const auto brute = CreateAccelerator("brute", s.mesh);
+    std::mt19937 rng(46);
+    std::uniform_real_distribution<float> u(-2.5f, 2.5f), tilt(-0.4f, 0.4f);
+    std::vector<Ray> rays;
+    for (int i = 0; i < 4000; ++i) {
+        const Vec3 o(u(rng), 3.0f, u(rng));
+        rays.push_back(Ray{o, Normalize(Vec3(tilt(rng), -1, tilt(rng))), 0, i % 3 == 0 ? 2.5f : Infinity});
+    }
+    size_t holes = 0;
+    for (const std::string& name : AcceleratorNames()) {
+        if (name == "brute") continue;
+        SCOPED_TRACE(name);
+        const auto accel = CreateAccelerator(name, s.mesh);
+        std::vector<Hit> many(rays.size());
+        accel->IntersectMany(rays.data(), rays.size(), many.data());
+        std::unique_ptr<bool[]> occludedMany(new bool[rays.size()]);
+        accel->OccludedMany(rays.data(), rays.size(), occludedMany.get());
+        size_t differ = 0;
+        for (size_t i = 0; i < rays.size(); ++i) {
+            Hit want, got;
+            const bool w = brute->Intersect(rays[i], &want), g = accel->Intersect(rays[i], &got);
+            const bool wo = brute->Occluded(rays[i]);
+            holes += w && s.mesh.materialIds[want.prim] != s.mesh.materialIds[0] && rays[i].tMax == Infinity;
+            if (name == "grid") {
+                // The same triangle test and the same alpha test: the same answers, bit for bit.
+                ASSERT_EQ(w, g) << i;
+                EXPECT_EQ(want.prim, got.prim) << i;
+                EXPECT_EQ(want.t, got.t) << i;
+                EXPECT_EQ(want.b1, got.b1) << i;
+                EXPECT_EQ(want.b2, got.b2) << i;
+                EXPECT_EQ(wo, accel->Occluded(rays[i])) << i;
+                EXPECT_EQ(brute->CountCrossings(rays[i]), accel->CountCrossings(rays[i])) << i;
+            } else {
+                // Embree's own triangle test and barycentrics: the same answers but for rays
+                // within rounding of a texel's edge or a triangle's.
+                differ += w != g || (w && want.prim != got.prim) || wo != accel->Occluded(rays[i]) ||
+                          brute->CountCrossings(rays[i]) != accel->CountCrossings(rays[i]);
+                if (w && g && want.prim == got.prim) EXPECT_NEAR(want.t, got.t, 1e-4f) << i;
+            }
+            // The batched queries give each ray its own answer.
+            EXPECT_EQ(many[i].prim, g ? got.prim : UINT32_MAX) << i;
+            EXPECT_EQ(occludedMany[i], accel->Occluded(rays[i])) << i;
+        }
+        EXPECT_LE(differ, rays.size() / 500) << name;
+    }
+    // The test saw holes: rays through the quad that reached the ground.
+    EXPECT_GT(holes, 100u);
+}
+
+TEST(Cutouts, CrossingCountsSkipTheHoles) {
+    const Scene s = CheckerScene();
+    // Down through a solid texel and through a hole: the quad counts only where solid; the
+    // ground slab (closed) twice either way.
+    const auto brute = CreateAccelerator("brute", s.mesh);
+    const float solidX = -2 + 0.25f, solidZ = -2 + 0.25f;  // texel (0, 0)
+    const float holeX = -2 + 0.75f;                               // texel (1, 0)
+    const Ray solid{Vec3(solidX, 5, solidZ), Vec3(0, -1, 0), 0, 20};
+    const Ray hole{Vec3(holeX, 5, solidZ), Vec3(0, -1, 0), 0, 20};
+    for (const std::string& name : AcceleratorNames()) {
+        const auto accel = CreateAccelerator(name, s.mesh);
+        EXPECT_EQ(accel->CountCrossings(solid), 3) << name;
+        EXPECT_EQ(accel->CountCrossings(hole), 2) << name;
+    }
+    EXPECT_EQ(CountCrossings(s.mesh, hole), 2);
+}
+
+}  // namespace
+}  // namespace lm

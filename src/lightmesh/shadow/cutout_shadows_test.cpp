@@ -1,0 +1,70 @@
+// cutout_shadows_test.cpp -- the shadow of an alpha cut-out checker is a checker: the lit
+// fraction under it is about a half for hard shadows, the area-light reference and the
+// default soft shadows, on every back-end (a solid quad's is none).
+#include <gtest/gtest.h>
+
+#include "lightmesh/accel/accelerator.h"
+#include "lightmesh/geometry/cutouts.h"
+#include "lightmesh/render/whitted.h"
+#include "lightmesh/scene/scene_file.h"
+#include "lightmesh/shadow/shadow.h"
+
+namespace lm {
+namespace {
+
+const std::string DataDir = std::string(LIGHTMESH_TEST_DATA) + "/textures";
+
+Scene CheckerScene(bool textures) {
+    SceneLoadOptions o;
+    o.textures = textures;
+    o.text = R"({"camera": {"position": [0, 10, 10], "look_at": [0, 0, 0]},
+                 "lights": [{"position": [0, 50, 0], "intensity": 2500, "radius": 0.3}],
+                 "meshes": [{"file": "checker_mask.gltf"}],
+                 "ground": {"height": 0, "size": 3}})";
+    std::vector<std::string> warnings;
+    return LoadScene(DataDir + "/checker_scene.json", o, &warnings);
+}
+
+/// The mean visibility of the light over a 40 × 40 grid of ground points under the quad's
+/// middle (its shadow spans ±2.04 on the ground).
+double LitFraction(const Scene& s, const Accelerator& accel, const std::string& method) {
+    RenderOptions o = s.render;
+    o.shadows = method;
+    o.areaLight.samples = 64;
+    const auto shadows = CreateShadowMethod(method, s, accel, o);
+    RenderCounters counters;
+    double sum = 0;
+    int n = 0;
+    for (int j = 0; j < 40; ++j)
+        for (int i = 0; i < 40; ++i) {
+            const Ray ray{Vec3(-1.5f + 3.0f * (i + 0.5f) / 40, 0.5f, -1.5f + 3.0f * (j + 0.5f) / 40), Vec3(0, -1, 0), 0,
+                          Infinity};
+            Hit hit;
+            if (!accel.Intersect(ray, &hit)) continue;
+            const ShadingPoint sp = WhittedRenderer::MakeShadingPoint(s.mesh, ray, hit);
+            bool needed[1] = {true};
+            float vis[1] = {0};
+            shadows->Visibility(sp, needed, vis, counters);
+            sum += vis[0];
+            ++n;
+        }
+    EXPECT_EQ(n, 1600);
+    return sum / n;
+}
+
+TEST(CutoutShadows, ACheckersShadowIsACheckerForEveryMethodOnEveryBackEnd) {
+    const Scene cut = CheckerScene(true), solid = CheckerScene(false);
+    ASSERT_TRUE(cut.mesh.cutouts);
+    for (const std::string& accelName : AcceleratorNames()) {
+        const auto accel = CreateAccelerator(accelName, cut.mesh);
+        const auto solidAccel = CreateAccelerator(accelName, solid.mesh);
+        for (const char* method : {"rt", "area", "soft"}) {
+            SCOPED_TRACE(accelName + " " + method);
+            EXPECT_NEAR(LitFraction(cut, *accel, method), 0.5, 0.04);
+            EXPECT_LT(LitFraction(solid, *solidAccel, method), 0.01);
+        }
+    }
+}
+
+}  // namespace
+}  // namespace lm
