@@ -29,6 +29,7 @@
 #include "lightmesh/accel/accelerator.h"
 #include "support/accel_scenes.h"
 #include "lightmesh/io/compare.h"
+#include "lightmesh/geometry/cutouts.h"
 #include "lightmesh/io/image.h"
 #include "lightmesh/render/render_job.h"
 #include "lightmesh/render/texturing.h"
@@ -311,6 +312,69 @@ TEST(RealTextures, NoTexturesLeavesTheCastleFlat) {
     const Image a = Render(scene, "rt"), b = Render(flat, "rt");
     const ImageMetrics m = CompareImages(a, b);
     EXPECT_LT(m.psnr, 30.0) << "the textures change the image";
+}
+
+// scenes/foliage/foliage.json (in the repository, made by scripts/make-foliage-scene.py):
+// leaf cards cut out by a grey opacity map (MTL map_d). Light reaches the ground through
+// the crowns' holes: the mean hard-shadow visibility over the ground under the trees is
+// well above the solid cards' (--no-textures), and every back-end sees the same holes
+// (the grid as brute force bit for bit).
+TEST(RealCutouts, FoliageCardsLetLightThroughTheirHoles) {
+    const std::string spec = (fs::path(LIGHTMESH_SOURCE_DIR) / "scenes" / "foliage" / "foliage.json").string();
+    std::vector<std::string> warnings;
+    const Scene cut = LoadScene(spec, SceneLoadOptions{}, &warnings);
+    SceneLoadOptions off;
+    off.textures = false;
+    const Scene solid = LoadScene(spec, off, &warnings);
+    ASSERT_TRUE(cut.mesh.cutouts);
+    EXPECT_EQ(cut.mesh.cutouts->Count(), 3072u);
+    EXPECT_FALSE(solid.mesh.cutouts);
+    auto meanVisibility = [](const Scene& s, const Accelerator& accel) {
+        RenderOptions o = s.render;
+        const auto rt = CreateShadowMethod("rt", s, accel, o);
+        RenderCounters counters;
+        double sum = 0;
+        int n = 0;
+        for (int j = 0; j < 60; ++j)
+            for (int i = 0; i < 60; ++i) {
+                const Ray ray{Vec3(-9.0f + 18.0f * (i + 0.5f) / 60, 0.05f, -9.0f + 18.0f * (j + 0.5f) / 60),
+                              Vec3(0, -1, 0), 0, Infinity};
+                Hit hit;
+                if (!accel.Intersect(ray, &hit)) continue;
+                const ShadingPoint sp = WhittedRenderer::MakeShadingPoint(s.mesh, ray, hit);
+                bool needed[2] = {true, false};
+                float vis[2] = {0, 0};
+                rt->Visibility(sp, needed, vis, counters);
+                sum += vis[0];
+                ++n;
+            }
+        EXPECT_EQ(n, 3600);
+        return sum / n;
+    };
+    const auto cutAccel = CreateAccelerator("embree", cut.mesh), solidAccel = CreateAccelerator("embree", solid.mesh);
+    const double through = meanVisibility(cut, *cutAccel), blocked = meanVisibility(solid, *solidAccel);
+    EXPECT_GT(through, blocked + 0.1) << "cut-outs " << through << ", solid cards " << blocked;
+    EXPECT_LT(through, 0.95);
+    // Camera rays: the grid as brute force, bit for bit; Embree the same triangles.
+    const auto brute = CreateAccelerator("brute", cut.mesh), grid = CreateAccelerator("grid", cut.mesh);
+    const CameraRays camera(cut.camera, 96, 72);
+    size_t differ = 0, throughHoles = 0;
+    for (int y = 0; y < 72; ++y)
+        for (int x = 0; x < 96; ++x) {
+            const Ray ray = camera.Generate(x + 0.5f, y + 0.5f);
+            Hit b, g, e;
+            const bool hb = brute->Intersect(ray, &b), hg = grid->Intersect(ray, &g), he = cutAccel->Intersect(ray, &e);
+            ASSERT_EQ(hb, hg);
+            if (hb) {
+                EXPECT_EQ(b.prim, g.prim);
+                EXPECT_EQ(b.t, g.t);
+            }
+            differ += hb != he || (hb && b.prim != e.prim);
+            Hit s;
+            throughHoles += solidAccel->Intersect(ray, &s) && hb && s.prim != b.prim;
+        }
+    EXPECT_LE(differ, 96u * 72u / 200);
+    EXPECT_GT(throughHoles, 200u) << "camera rays that pass a card's hole";
 }
 
 }  // namespace

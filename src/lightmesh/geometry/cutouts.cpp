@@ -21,14 +21,8 @@ CutoutMask::CutoutMask(const std::vector<int32_t>& materialOf, std::vector<Cutou
 
 bool CutoutMask::Solid(const TriangleMesh& mesh, uint32_t prim, float b1, float b2) const {
     if (prim >= entry_.size() || entry_[prim] == 0 || mesh.uvs.empty()) return true;
-    const CutoutMaterial& m = materials_[entry_[prim] - 1u];
     const auto& t = mesh.triangles[prim];
-    const TexCoord &t0 = mesh.uvs[t[0]], &t1 = mesh.uvs[t[1]], &t2 = mesh.uvs[t[2]];
-    const float b0 = 1.0f - b1 - b2;
-    const float u = t0.u * b0 + t1.u * b1 + t2.u * b2;
-    const float v = t0.v * b0 + t1.v * b1 + t2.v * b2;
-    const float alpha = m.fromRed ? m.image->Sample(u, v, 0, m.wrapU, m.wrapV).r : m.image->Alpha(u, v, m.wrapU, m.wrapV);
-    return alpha * m.scale >= m.cutoff;
+    return SolidAt(materials_[entry_[prim] - 1u], mesh.uvs[t[0]], mesh.uvs[t[1]], mesh.uvs[t[2]], b1, b2);
 }
 
 }  // namespace lm

@@ -7,15 +7,15 @@
 #include <memory>
 #include <vector>
 
+#include "lightmesh/geometry/mesh.h"
 #include "lightmesh/texture/texture.h"
 
 namespace lm {
 
-struct TriangleMesh;
 
 /// How a material cuts its surface: a point is solid where scale × its alpha (the image's
-/// alpha channel, or its red channel for a grey opacity map without one) is at least
-/// `cutoff`.
+/// alpha channel, or its red channel for a grey opacity map without one; bytes / 255, not
+/// sRGB-decoded) is at least `cutoff`.
 struct CutoutMaterial {
     std::shared_ptr<const Texture> image;
     float cutoff = 0.5f;
@@ -41,6 +41,20 @@ class CutoutMask {
     bool Solid(const TriangleMesh& mesh, uint32_t prim, float b1, float b2) const;
     /// The number of cut-out triangles.
     size_t Count() const { return count_; }
+
+    /// Solid's parts, for a caller that tests many points of one triangle (the soft
+    /// shadows' directions): the triangle's material (null: opaque), its vertices' texture
+    /// coordinates, and the test at barycentrics (b1, b2), Solid's arithmetic exactly.
+    const CutoutMaterial* MaterialOf(uint32_t prim) const {
+        return prim < entry_.size() && entry_[prim] ? &materials_[entry_[prim] - 1u] : nullptr;
+    }
+    static bool SolidAt(const CutoutMaterial& m, const TexCoord& t0, const TexCoord& t1, const TexCoord& t2, float b1,
+                        float b2) {
+        const float b0 = 1.0f - b1 - b2;
+        const float u = t0.u * b0 + t1.u * b1 + t2.u * b2;
+        const float v = t0.v * b0 + t1.v * b1 + t2.v * b2;
+        return m.image->Opacity(u, v, m.wrapU, m.wrapV, m.fromRed ? 0 : 3) * m.scale >= m.cutoff;
+    }
 
   private:
     std::vector<uint16_t> entry_;  // per triangle: 1 + index into materials_, 0 opaque

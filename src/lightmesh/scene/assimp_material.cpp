@@ -52,7 +52,9 @@ int FindTexture(const aiMaterial& am, aiTextureType type, const aiScene& scene, 
     aiTextureMapMode modes[2] = {aiTextureMapMode_Wrap, aiTextureMapMode_Wrap};
     if (am.GetTexture(type, 0, &apath, nullptr, nullptr, nullptr, nullptr, modes) != AI_SUCCESS) return -1;
     std::string path = apath.C_Str();
-    if (path.empty()) return -1;
+    // Assimp's Blender reader names a procedural texture (marble, clouds, ...) so: not an
+    // image, and nothing lightmesh draws; the material keeps its flat colour.
+    if (path.empty() || path.rfind("Procedural,", 0) == 0) return -1;
     if (wrapU) *wrapU = ToWrap(modes[0]);
     if (wrapV) *wrapV = ToWrap(modes[1]);
     TextureSource source;
@@ -71,6 +73,7 @@ int FindTexture(const aiMaterial& am, aiTextureType type, const aiScene& scene, 
         for (char& c : path)
             if (c == '\\') c = '/';
         if (path.rfind("file://", 0) == 0) path = path.substr(7);
+        if (path.rfind("//", 0) == 0) path = path.substr(2);  // Blender's "relative to the .blend file"
         const std::string folder = FolderOf(modelPath);
         std::string file = !path.empty() && path[0] == '/' ? path : folder + path;
         if (access(file.c_str(), F_OK) != 0) {

@@ -66,5 +66,14 @@ TEST(CutoutShadows, ACheckersShadowIsACheckerForEveryMethodOnEveryBackEnd) {
     }
 }
 
+// The paper's light mesh interpolates its nodes' visibility (through the back-end's rays,
+// which honour the holes): the checker's shadow is blurred over the interpolation radius,
+// its mean kept.
+TEST(CutoutShadows, TheLightMeshSeesTheHolesToo) {
+    const Scene cut = CheckerScene(true);
+    const auto accel = CreateAccelerator("grid", cut.mesh);
+    EXPECT_NEAR(LitFraction(cut, *accel, "lmm"), 0.5, 0.08);
+}
+
 }  // namespace
 }  // namespace lm

@@ -209,7 +209,10 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
     // A point's segments end at nodes within r of its snapped sub-position.
     pointReach_ = lattice_.r + 0.87f * lattice_.h / static_cast<float>(std::max(templates_.templates.ns, 1)) + reachMargin_;
     planeSlab_ = pointReach_ + 4 * planeDelta_;
-    summaries_ = variant_.enumeration == SphereEnumeration::Templates &&
+    // (Not with alpha cut-outs: the summaries' exact segment tests read the triangles
+    // themselves; without them every segment goes through the back-end, which honours the
+    // holes. The images are the summaries' own otherwise: only the time differs.)
+    summaries_ = !scene.mesh.cutouts && variant_.enumeration == SphereEnumeration::Templates &&
                  (variant_.local == LocalVisibility::Consensus
                       ? cellSummaries != "off"
                       : cellSummaries == "on" && (variant_.local == LocalVisibility::None ||

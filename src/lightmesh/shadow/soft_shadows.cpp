@@ -644,11 +644,16 @@ inline void MarkBlocked(const Candidate& c, const float* wx, const float* wy, co
 /// MarkBlocked for a cut-out triangle `prim`: a direction that meets it is blocked only
 /// where the point it meets is solid (CutoutMask::Solid at that point's barycentrics: the
 /// edge planes' values along w are proportional to them, d1 : d2 : d0 for vertices 0, 1, 2).
-void MarkBlockedCutout(const Candidate& c, const TriangleMesh& mesh, const CutoutMask& cut, uint32_t prim,
+/// Returns whether some direction met a hole.
+bool MarkBlockedCutout(const Candidate& c, const TriangleMesh& mesh, const CutoutMask& cut, uint32_t prim,
                        const float* wx, const float* wy, const float* wz, const float* tk, int s0, int s1,
                        uint64_t* blocked) {
+    bool hole = false;
     uint64_t hit[kMaxSamples / 64] = {};
     MarkBlocked(c, wx, wy, wz, tk, s0, s1, hit);
+    const CutoutMaterial* material = cut.MaterialOf(prim);
+    const auto& tri = mesh.triangles[prim];
+    const TexCoord t0 = mesh.uvs[tri[0]], t1 = mesh.uvs[tri[1]], t2 = mesh.uvs[tri[2]];
     for (int word = s0 >> 6; word <= (s1 - 1) >> 6; ++word)
         for (uint64_t m = hit[word]; m; m &= m - 1) {
             const int s = word * 64 + __builtin_ctzll(m);
@@ -657,8 +662,12 @@ void MarkBlockedCutout(const Candidate& c, const TriangleMesh& mesh, const Cutou
                         d2 = Dot(Vec3(c.m2[0], c.m2[1], c.m2[2]), w);
             const float sum = d0 + d1 + d2;
             const float b1 = sum > 0 ? d2 / sum : 0.0f, b2 = sum > 0 ? d0 / sum : 0.0f;
-            if (cut.Solid(mesh, prim, b1, b2)) blocked[word] |= uint64_t(1) << (s & 63);
+            if (CutoutMask::SolidAt(*material, t0, t1, t2, b1, b2))
+                blocked[word] |= uint64_t(1) << (s & 63);
+            else
+                hole = true;
         }
+    return hole;
 }
 
 int CountBits(const uint64_t* words, int s0, int s1) {
@@ -701,7 +710,7 @@ float SoftShadows::SampleLight(const ShadingPoint& sp, size_t light, Each&& each
     Candidate cand[kMaxCandidates];
     uint32_t candPrim[kMaxCandidates];  // the triangle of a cut-out candidate, else UINT32_MAX
     const CutoutMask* cut = scene_.mesh.cutouts.get();
-    bool anyCut = false;
+    bool holeSeen = false;  // a direction of the first pass met a cut-out candidate's hole
     int nc = 0;
     uint64_t blocked[kMaxSamples / 64] = {};
     bool umbra = false;
@@ -727,8 +736,7 @@ float SoftShadows::SampleLight(const ShadingPoint& sp, size_t light, Each&& each
         cand[nc] = Candidate{{m0.x, m0.y, m0.z}, {m1.x, m1.y, m1.z}, {m2.x, m2.y, m2.z}, {n.x, n.y, n.z}, num};
         candPrim[nc] = cut && cut->IsCutout(prim) ? prim : UINT32_MAX;
         if (candPrim[nc] != UINT32_MAX) {
-            anyCut = true;
-            MarkBlockedCutout(cand[nc], scene_.mesh, *cut, prim, wx, wy, wz, tk, 0, first, blocked);
+            holeSeen |= MarkBlockedCutout(cand[nc], scene_.mesh, *cut, prim, wx, wy, wz, tk, 0, first, blocked);
         } else {
             MarkBlocked(cand[nc], wx, wy, wz, tk, 0, first, blocked);
         }
@@ -747,9 +755,9 @@ float SoftShadows::SampleLight(const ShadingPoint& sp, size_t light, Each&& each
     counters.method[kSoftCandidates] += static_cast<uint64_t>(nc);
     if (umbra) return 0.0f;
     // The first pass wholly clear: the candidates only graze the cone between its
-    // directions (unless one is a cut-out, whose holes may have let that pass through);
-    // otherwise the other three passes decide with it.
-    if (CountBits(blocked, 0, first) == 0 && !anyCut) return 1.0f;
+    // directions (unless the pass went through a cut-out's holes: the other directions may
+    // meet its solid parts); otherwise the other three passes decide with it.
+    if (CountBits(blocked, 0, first) == 0 && !holeSeen) return 1.0f;
     ++counters.method[kSoftFull];
     directions(first, N);
     for (int ci = 0; ci < nc; ++ci) {

@@ -62,7 +62,7 @@ int WrapIndex(int i, int n, TextureWrap wrap) {
 /// NaN coordinate would overflow the index arithmetic).
 float Tame(float u) {
     if (!std::isfinite(u)) return 0.0f;
-    if (!(std::abs(u) < 1e6f)) return std::fmod(u, 1.0f);
+    if (!(std::abs(u) < 1e5f)) return std::fmod(u, 1.0f);  // texel indices stay within int
     return u;
 }
 
@@ -211,8 +211,43 @@ Texel Texture::SampleTrilinear(float u, float v, float lod, TextureWrap wrapU, T
     return {a.r + (b.r - a.r) * f, a.g + (b.g - a.g) * f, a.b + (b.b - a.b) * f, a.a + (b.a - a.a) * f};
 }
 
-float Texture::Alpha(float u, float v, TextureWrap wrapU, TextureWrap wrapV) const {
-    return Bilinear(levels_[0], u, v, wrapU, wrapV).a;
+float Texture::Opacity(float u, float v, TextureWrap wrapU, TextureWrap wrapV, int channel) const {
+    const Level& level = levels_[0];
+    const float x = Tame(u) * static_cast<float>(level.w) - 0.5f;
+    const float y = (1.0f - Tame(v)) * static_cast<float>(level.h) - 0.5f;
+    int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+    x0 -= static_cast<float>(x0) > x;
+    y0 -= static_cast<float>(y0) > y;
+    const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
+    int xa, xb, ya, yb;
+    // Repeat on a side of 2^k texels (most images): a mask instead of a division.
+    if (wrapU == TextureWrap::Repeat && (level.w & (level.w - 1)) == 0) {
+        xa = x0 & (level.w - 1), xb = (x0 + 1) & (level.w - 1);
+    } else {
+        xa = WrapIndex(x0, level.w, wrapU);
+        xb = (wrapU == TextureWrap::Repeat || x0 == xa) && xa + 1 < level.w ? xa + 1 : WrapIndex(x0 + 1, level.w, wrapU);
+    }
+    if (wrapV == TextureWrap::Repeat && (level.h & (level.h - 1)) == 0) {
+        ya = y0 & (level.h - 1), yb = (y0 + 1) & (level.h - 1);
+    } else {
+        ya = WrapIndex(y0, level.h, wrapV);
+        yb = (wrapV == TextureWrap::Repeat || y0 == ya) && ya + 1 < level.h ? ya + 1 : WrapIndex(y0 + 1, level.h, wrapV);
+    }
+    const size_t w = static_cast<size_t>(level.w), c = static_cast<size_t>(channel);
+    const size_t i00 = (static_cast<size_t>(ya) * w + static_cast<size_t>(xa)) * 4 + c,
+                 i10 = (static_cast<size_t>(ya) * w + static_cast<size_t>(xb)) * 4 + c,
+                 i01 = (static_cast<size_t>(yb) * w + static_cast<size_t>(xa)) * 4 + c,
+                 i11 = (static_cast<size_t>(yb) * w + static_cast<size_t>(xb)) * 4 + c;
+    float a00, a10, a01, a11;
+    if (!level.ldr.empty()) {
+        const uint8_t* p = level.ldr.data();
+        a00 = p[i00], a10 = p[i10], a01 = p[i01], a11 = p[i11];
+        return ((a00 * (1 - fx) + a10 * fx) * (1 - fy) + (a01 * (1 - fx) + a11 * fx) * fy) * (1.0f / 255.0f);
+    } else {
+        const float* p = level.hdr.data();
+        a00 = p[i00], a10 = p[i10], a01 = p[i01], a11 = p[i11];
+    }
+    return (a00 * (1 - fx) + a10 * fx) * (1 - fy) + (a01 * (1 - fx) + a11 * fx) * fy;
 }
 
 std::shared_ptr<const Texture> DecodeTexture(const std::string& bytes) {

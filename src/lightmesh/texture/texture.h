@@ -49,7 +49,10 @@ class Texture {
     Texel SampleTrilinear(float u, float v, float lod, TextureWrap wrapU, TextureWrap wrapV) const;
     /// The alpha at (u, v), bilinear on the full image: the cut-out test's lookup, the same
     /// for every ray query.
-    float Alpha(float u, float v, TextureWrap wrapU, TextureWrap wrapV) const;
+    float Alpha(float u, float v, TextureWrap wrapU, TextureWrap wrapV) const { return Opacity(u, v, wrapU, wrapV, 3); }
+    /// Channel `channel` (0 red … 3 alpha) at (u, v), bilinear on the full image, as stored:
+    /// an 8-bit byte / 255 with no sRGB decoding (an opacity map is data, not colour).
+    float Opacity(float u, float v, TextureWrap wrapU, TextureWrap wrapV, int channel) const;
 
   private:
     struct Level {
