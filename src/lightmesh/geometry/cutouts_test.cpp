@@ -5,15 +5,20 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <random>
 
 #include "lightmesh/accel/accelerator.h"
 #include "lightmesh/geometry/mesh.h"
+#include "lightmesh/io/image.h"
 #include "lightmesh/scene/scene_file.h"
 
 namespace lm {
 namespace {
 
+namespace fs = std::filesystem;
 const std::string DataDir = std::string(LIGHTMESH_TEST_DATA) + "/textures";
 
 /// checker_mask.gltf (a 4 × 4 quad at y = 1 whose alpha is an 8 × 8 checker, MASK at 0.5)
@@ -118,6 +123,49 @@ TEST(Cutouts, CrossingCountsSkipTheHoles) {
         EXPECT_EQ(accel->CountCrossings(hole), 2) << name;
     }
     EXPECT_EQ(CountCrossings(s.mesh, hole), 2);
+}
+
+// MTL: map_d, a grey opacity map without alpha (its grey level is the opacity), times d;
+// a map_Kd image without alpha cuts nothing.
+TEST(Cutouts, AnMtlOpacityMapCutsByItsGreyLevel) {
+    const fs::path dir = fs::temp_directory_path() / "lightmesh_cutouts_map_d";
+    fs::create_directories(dir);
+    Image mask(2, 1);
+    mask.At(0, 0) = Color(0.0f);  // the left half a hole
+    mask.At(1, 0) = Color(1.0f);
+    WriteImage((dir / "mask.png").string(), mask);
+    std::ofstream(dir / "m.mtl") << "newmtl cut\nKd 0.3 0.6 0.2\nd 1\nmap_d mask.png\n";
+    std::ofstream(dir / "m.obj") << "mtllib m.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
+                                    "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl cut\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n";
+    std::vector<std::string> warnings;
+    const Scene s = LoadScene((dir / "m.obj").string(), SceneLoadOptions{}, &warnings);
+    ASSERT_TRUE(s.mesh.cutouts);
+    const auto accel = CreateAccelerator("brute", s.mesh);
+    Hit hit;
+    ASSERT_TRUE(accel->Intersect(Ray{Vec3(0.6f, 0, 5), Vec3(0, 0, -1), 0, Infinity}, &hit));
+    EXPECT_NEAR(hit.t, 5.0f, 1e-5f);  // the solid half
+    const bool behind = accel->Intersect(Ray{Vec3(-0.6f, 0, 5), Vec3(0, 0, -1), 0, Infinity}, &hit);
+    EXPECT_TRUE(!behind || hit.t > 5.0f) << "the left half is a hole";  // (the ground slab lies below)
+    // The same quad with map_Kd of an image without alpha: solid.
+    const Scene plain = LoadScene(DataDir + "/quad.obj", SceneLoadOptions{}, &warnings);
+    EXPECT_FALSE(plain.mesh.cutouts);
+    fs::remove_all(dir);
+}
+
+TEST(Cutouts, GltfBlendIsAMaskAtOneHalfWithAWarning) {
+    const fs::path dir = fs::temp_directory_path() / "lightmesh_cutouts_blend";
+    fs::create_directories(dir);
+    std::ifstream in(DataDir + "/checker_mask.gltf");
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    text.replace(text.find("\"MASK\""), 6, "\"BLEND\"");
+    std::ofstream(dir / "blend.gltf") << text;
+    std::vector<std::string> warnings;
+    const Scene s = LoadScene((dir / "blend.gltf").string(), SceneLoadOptions{}, &warnings);
+    EXPECT_TRUE(s.mesh.cutouts);
+    size_t said = 0;
+    for (const std::string& w : warnings) said += w.find("alphaMode BLEND is rendered as a cut-out at alpha 0.5") != std::string::npos;
+    EXPECT_EQ(said, 1u);
+    fs::remove_all(dir);
 }
 
 }  // namespace
