@@ -2,6 +2,7 @@
 #include "commands.h"
 
 #include "lightmesh/accel/accelerator.h"
+#include "lightmesh/geometry/cutouts.h"
 #include "lightmesh/util/log.h"
 
 namespace lm::cli {
@@ -42,9 +43,23 @@ int RunInfo(const CommonOptions& common, const std::string& accelName, int grid)
     std::printf("materials  %zu\n", scene.materials.size());
     for (size_t i = 0; i < scene.materials.size(); ++i) {
         const lm::Material& m = scene.materials[i];
-        std::printf("  %-12s kd [%g %g %g], ks [%g %g %g], phong %g, mirror [%g %g %g]; %s triangles\n",
+        std::string images;
+        if (m.texture >= 0) images += lm::StringPrintf(", texture %d", m.texture);
+        if (m.alphaTexture >= 0 && m.alphaSource != lm::Material::AlphaSource::None)
+            images += lm::StringPrintf(", cut-out by image %d below %g", m.alphaTexture, static_cast<double>(m.alphaCutoff));
+        std::printf("  %-12s kd [%g %g %g], ks [%g %g %g], phong %g, mirror [%g %g %g]%s; %s triangles\n",
                     m.name.c_str(), m.kd.r, m.kd.g, m.kd.b, m.ks.r, m.ks.g, m.ks.b, m.phong,
-                    m.mirror.r, m.mirror.g, m.mirror.b, Count(uses[i]).c_str());
+                    m.mirror.r, m.mirror.g, m.mirror.b, images.c_str(), Count(uses[i]).c_str());
+    }
+    if (!scene.textures.empty()) {
+        size_t bytes = 0;
+        for (const auto& t : scene.textures) bytes += t->Bytes();
+        std::printf("textures   %zu image%s, %s with mip-maps; %s cut-out triangles\n", scene.textures.size(),
+                    scene.textures.size() == 1 ? "" : "s", lm::FormatBytes(bytes).c_str(),
+                    Count(scene.mesh.cutouts ? scene.mesh.cutouts->Count() : 0).c_str());
+        for (size_t i = 0; i < scene.textures.size(); ++i)
+            std::printf("  image %zu  %d x %d%s\n", i, scene.textures[i]->Width(), scene.textures[i]->Height(),
+                        scene.textures[i]->HasAlpha() ? ", with alpha" : "");
     }
     const lm::Camera& cam = scene.camera;
     std::printf("camera     at [%g %g %g] looking at [%g %g %g], fov %g\n", cam.position.x,

@@ -9,6 +9,7 @@
 
 #include "lightmesh/render/render_job.h"
 #include "lightmesh/scene/scene_file.h"
+#include "lightmesh/util/error.h"
 
 namespace lm {
 namespace {
@@ -76,6 +77,28 @@ TEST(Texturing, AScenesRenderTexturesKeyTurnsThemOff) {
     const std::string json = (dir / "scene.json").string();
     std::ofstream(json) << R"({"lights": [{"position": [0, 0, 5]}], "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0]},
         "meshes": [{"file": ")" << DataDir << R"(/quad.obj"}], "render": {"textures": false}})";
+    const Scene scene = Load(json);
+    EXPECT_TRUE(scene.textures.empty());
+    EXPECT_TRUE(scene.mesh.uvs.empty());
+    // Anything but true or false is an error at its JSON path.
+    std::ofstream(json) << R"({"lights": [{"position": [0, 0, 5]}], "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0]},
+        "meshes": [{"file": ")" << DataDir << R"(/quad.obj"}], "render": {"textures": "off"}})";
+    try {
+        Load(json);
+        ADD_FAILURE() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("/render/textures: expected true or false"), std::string::npos) << e.what();
+    }
+    fs::remove_all(dir);
+}
+
+// A file material the scene file replaces by name reads no image.
+TEST(Texturing, AMaterialTheSceneReplacesReadsNoImage) {
+    const fs::path dir = fs::temp_directory_path() / "lightmesh_texturing_replaced";
+    fs::create_directories(dir);
+    const std::string json = (dir / "scene.json").string();
+    std::ofstream(json) << R"({"lights": [{"position": [0, 0, 5]}], "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0]},
+        "materials": {"texels": {"kd": 0.5}}, "meshes": [{"file": ")" << DataDir << R"(/quad.obj"}]})";
     const Scene scene = Load(json);
     EXPECT_TRUE(scene.textures.empty());
     EXPECT_TRUE(scene.mesh.uvs.empty());

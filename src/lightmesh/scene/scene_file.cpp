@@ -548,6 +548,10 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
         scene.report.duplicatesRemoved += clean.duplicate;
         if (clean.degenerate || clean.duplicate)
             if (const std::string w = e.resolved + ": " + DroppedMessage(clean); said.insert(w).second) r.Warn(w);
+        // A file material the scene replaces by name reads no image (its look is the scene's).
+        for (Material& m : loaded.materials)
+            if (std::find(materialNames.begin(), materialNames.end(), m.name) != materialNames.end())
+                m.texture = m.alphaTexture = -1;
         AttachTextures(r, e.resolved, options.textures && scene.render.textures && e.material < 0, &textureCache,
                        &loaded, &scene);
         if (e.material >= 0) {
