@@ -423,7 +423,8 @@ int EmbreeAccel::CountCrossings(const Ray& ray) const {
 AccelFigures EmbreeAccel::Figures() const {
     const Impl& m = *impl_;
     const size_t tris = std::max<size_t>(m.mesh.triangles.size(), 1);
-    const size_t bytes = m.vertices.size() * sizeof(float);
+    const size_t bytes = m.vertices.size() * sizeof(float) +
+                         (m.split[0].size() + m.split[1].size()) * (3 * sizeof(uint32_t) + sizeof(uint32_t));
     return {
         {"embree version", RTC_VERSION_STRING},
         {"embree scene", m.cut ? StringPrintf("2 triangle geometries (%zu opaque, %zu cut-out with intersection and "
@@ -431,10 +432,11 @@ AccelFigures EmbreeAccel::Figures() const {
                                               m.ids[0].size(), m.ids[1].size())
                                : std::string("1 triangle geometry, robust, default build quality")},
         {"embree bytes", StringPrintf("%lld (%.1f per triangle): BVH and Embree's other allocations %lld, "
-                                      "vertex copy %zu",
+                                      "vertex copy%s %zu",
                                       static_cast<long long>(m.bvhBytes + int64_t(bytes)),
                                       double(m.bvhBytes + int64_t(bytes)) / double(tris),
-                                      static_cast<long long>(m.bvhBytes), bytes)},
+                                      static_cast<long long>(m.bvhBytes),
+                                      m.cut ? " and the two geometries' indices" : "", bytes)},
         {"embree build ms", StringPrintf("%.1f", m.buildMs)},
     };
 }
