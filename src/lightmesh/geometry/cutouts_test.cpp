@@ -108,6 +108,46 @@ TEST(Cutouts, EveryBackEndAgreesWithBruteForce) {
     EXPECT_GT(holes, 100u);
 }
 
+// Coherent rays (a camera's, as the renderer batches them): the grid's packet leaf test
+// hands cut-out hits to the scalar test and the alpha test; each ray gets Intersect's and
+// Occluded's answer, whatever its companions.
+TEST(Cutouts, BatchesOfCoherentRaysGetEachRaysAnswer) {
+    const Scene s = CheckerScene();
+    const auto brute = CreateAccelerator("brute", s.mesh);
+    for (const std::string& name : AcceleratorNames()) {
+        SCOPED_TRACE(name);
+        const auto accel = CreateAccelerator(name, s.mesh);
+        size_t holes = 0;
+        for (int tile = 0; tile < 16; ++tile) {
+            std::vector<Ray> rays;
+            for (int k = 0; k < 64; ++k) {
+                const float x = -2.2f + 4.4f * ((tile % 4) * 8 + k % 8 + 0.5f) / 32,
+                            z = -2.2f + 4.4f * ((tile / 4) * 8 + k / 8 + 0.5f) / 32;
+                rays.push_back(Ray{Vec3(0.3f, 6, 0.2f), Vec3(x, 1, z) - Vec3(0.3f, 6, 0.2f), 0, Infinity});
+            }
+            std::vector<Hit> hits(rays.size());
+            accel->IntersectMany(rays.data(), rays.size(), hits.data());
+            std::unique_ptr<bool[]> occluded(new bool[rays.size()]);
+            std::vector<Ray> shadow;
+            for (const Ray& r : rays) shadow.push_back(Ray{r.o, r.d, 0, 1.1f});  // to between the quad (t = 1) and the ground (t = 1.2)
+            accel->OccludedMany(shadow.data(), shadow.size(), occluded.get());
+            for (size_t i = 0; i < rays.size(); ++i) {
+                Hit want;
+                const bool w = brute->Intersect(rays[i], &want);
+                ASSERT_EQ(w, hits[i].prim != UINT32_MAX) << tile << " " << i;
+                if (name == "grid") {
+                    EXPECT_EQ(want.prim, hits[i].prim);
+                    EXPECT_EQ(want.t, hits[i].t);
+                    EXPECT_EQ(brute->Occluded(shadow[i]), occluded[i]);
+                }
+                EXPECT_EQ(accel->Occluded(shadow[i]), occluded[i]);
+                holes += w && want.t > 1.1f;
+            }
+        }
+        EXPECT_GT(holes, 100u);
+    }
+}
+
 TEST(Cutouts, CrossingCountsSkipTheHoles) {
     const Scene s = CheckerScene();
     // Down through a solid texel and through a hole: the quad counts only where solid; the
