@@ -192,6 +192,21 @@ TEST(Cutouts, AnMtlOpacityMapCutsByItsGreyLevel) {
     fs::remove_all(dir);
 }
 
+// A binary glTF (.glb) whose image lies in a buffer view: the same cut-out.
+TEST(Cutouts, AGlbsImageInABufferViewIsRead) {
+    std::vector<std::string> warnings;
+    const Scene s = LoadScene(DataDir + "/checker_mask.glb", SceneLoadOptions{}, &warnings);
+    ASSERT_EQ(s.textures.size(), 1u);
+    ASSERT_TRUE(s.mesh.cutouts);
+    EXPECT_EQ(s.mesh.cutouts->Count(), 2u);
+    const auto brute = CreateAccelerator("brute", s.mesh);
+    Hit hit;
+    ASSERT_TRUE(brute->Intersect(Ray{Vec3(-1.75f, 5, -1.75f), Vec3(0, -1, 0), 0, Infinity}, &hit));
+    EXPECT_EQ(hit.t, 4.0f);  // texel (0, 0): solid
+    const bool below = brute->Intersect(Ray{Vec3(-1.25f, 5, -1.75f), Vec3(0, -1, 0), 0, Infinity}, &hit);
+    EXPECT_TRUE(!below || hit.t > 4.0f);  // texel (1, 0): a hole
+}
+
 TEST(Cutouts, GltfBlendIsAMaskAtOneHalfWithAWarning) {
     const fs::path dir = fs::temp_directory_path() / "lightmesh_cutouts_blend";
     fs::create_directories(dir);

@@ -5,6 +5,7 @@
   checker_mask.gltf               a 4 x 4 unit quad in the XZ plane at y = 1 facing +y, its
                                   base colour's alpha an 8 x 8 checker, alphaMode MASK at 0.5;
                                   buffer and image embedded as data: URIs
+  checker_mask.glb                the same as binary glTF, the image in a buffer view
 """
 import base64, json, struct, zlib
 
@@ -62,3 +63,18 @@ gltf = {
 with open("checker_mask.gltf", "w") as f:
     json.dump(gltf, f, indent=1)
     f.write("\n")
+
+# The same as .glb: one binary buffer holding the geometry and the PNG (a buffer view).
+glb = json.loads(json.dumps(gltf))
+pad = (4 - len(data) % 4) % 4
+binary = data + b"\0" * pad + image
+binary += b"\0" * ((4 - len(binary) % 4) % 4)
+glb["buffers"] = [{"byteLength": len(binary)}]
+glb["bufferViews"].append({"buffer": 0, "byteOffset": len(data) + pad, "byteLength": len(image)})
+glb["images"] = [{"bufferView": 3, "mimeType": "image/png"}]
+text = json.dumps(glb).encode()
+text += b" " * ((4 - len(text) % 4) % 4)
+with open("checker_mask.glb", "wb") as f:
+    f.write(struct.pack("<III", 0x46546C67, 2, 12 + 8 + len(text) + 8 + len(binary)))
+    f.write(struct.pack("<I4s", len(text), b"JSON") + text)
+    f.write(struct.pack("<I4s", len(binary), b"BIN\0") + binary)
