@@ -207,6 +207,27 @@ TEST(Cutouts, AGlbsImageInABufferViewIsRead) {
     EXPECT_TRUE(!below || hit.t > 4.0f);  // texel (1, 0): a hole
 }
 
+// A MASK material whose image is solid under a triangle leaves it opaque (no alpha test,
+// no second Embree geometry); an image without alpha (all solid) leaves no cut-outs at all.
+TEST(Cutouts, TrianglesWhollySolidUnderTheirImageAreOpaque) {
+    const fs::path dir = fs::temp_directory_path() / "lightmesh_cutouts_opaque";
+    fs::create_directories(dir);
+    Image grey(8, 8);
+    for (Color& c : grey.pixels) c = Color(0.5f);
+    WriteImage((dir / "opaque.png").string(), grey);
+    std::ifstream in(DataDir + "/checker_mask.gltf");
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const size_t uri = text.find("data:image/png;base64,");
+    ASSERT_NE(uri, std::string::npos);
+    text.replace(uri, text.find('"', uri) - uri, "opaque.png");
+    std::ofstream(dir / "opaque.gltf") << text;
+    std::vector<std::string> warnings;
+    const Scene s = LoadScene((dir / "opaque.gltf").string(), SceneLoadOptions{}, &warnings);
+    ASSERT_EQ(s.textures.size(), 1u);
+    EXPECT_FALSE(s.mesh.cutouts);
+    fs::remove_all(dir);
+}
+
 TEST(Cutouts, GltfBlendIsAMaskAtOneHalfWithAWarning) {
     const fs::path dir = fs::temp_directory_path() / "lightmesh_cutouts_blend";
     fs::create_directories(dir);

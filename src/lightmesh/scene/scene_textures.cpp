@@ -1,5 +1,6 @@
 // scene_textures.cpp -- a model's images read into the scene (scene_load.h: AttachTextures).
 #include <algorithm>
+#include <cmath>
 
 #include "lightmesh/scene/scene_load.h"
 
@@ -23,6 +24,33 @@ void AttachTextures(const json::Reader& r, const std::string& model, bool enable
     }
     if (!any) loaded->mesh.uvs.clear();
 }
+
+namespace {
+
+/// Whether every texel the bilinear lookups on triangle `t` can read (its texture
+/// coordinates' box, a texel more each way) is solid: then so is every value between them,
+/// and the triangle is opaque. False past 65,536 texels (not looked at).
+bool WhollySolid(const TriangleMesh& mesh, uint32_t t, const CutoutMaterial& m) {
+    const auto& tri = mesh.triangles[t];
+    float u0 = Infinity, u1 = -Infinity, v0 = Infinity, v1 = -Infinity;
+    for (uint32_t k : tri) {
+        u0 = std::min(u0, mesh.uvs[k].u), u1 = std::max(u1, mesh.uvs[k].u);
+        v0 = std::min(v0, mesh.uvs[k].v), v1 = std::max(v1, mesh.uvs[k].v);
+    }
+    const int w = m.image->Width(), h = m.image->Height();
+    if (!(u1 - u0 < 64.0f && v1 - v0 < 64.0f)) return false;
+    const float x0 = std::floor(u0 * static_cast<float>(w) - 0.5f) - 1, x1 = std::floor(u1 * static_cast<float>(w) - 0.5f) + 2;
+    const float y0 = std::floor((1 - v1) * static_cast<float>(h) - 0.5f) - 1,
+                y1 = std::floor((1 - v0) * static_cast<float>(h) - 0.5f) + 2;
+    if (!((x1 - x0 + 1) * (y1 - y0 + 1) <= 65536.0f)) return false;
+    for (int y = static_cast<int>(y0); y <= static_cast<int>(y1); ++y)
+        for (int x = static_cast<int>(x0); x <= static_cast<int>(x1); ++x)
+            if (!(m.image->TexelOpacity(x, y, m.wrapU, m.wrapV, m.fromRed ? 0 : 3) * m.scale >= m.cutoff))
+                return false;
+    return true;
+}
+
+}  // namespace
 
 void BuildCutouts(Scene* scene) {
     scene->mesh.cutouts.reset();
@@ -49,6 +77,11 @@ void BuildCutouts(Scene* scene) {
     for (size_t t = 0; t < perTriangle.size(); ++t) {
         const uint32_t m = scene->mesh.materialIds[t];
         if (m < entryOf.size()) perTriangle[t] = entryOf[m];
+        // A triangle whose image is solid under all of it is opaque: no alpha test on its
+        // hits, and it may certify umbrae.
+        if (perTriangle[t] >= 0 && WhollySolid(scene->mesh, static_cast<uint32_t>(t),
+                                               entries[static_cast<size_t>(perTriangle[t])]))
+            perTriangle[t] = -1;
         any = any || perTriangle[t] >= 0;
     }
     if (any) scene->mesh.cutouts = std::make_shared<const CutoutMask>(perTriangle, std::move(entries));

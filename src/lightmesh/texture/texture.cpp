@@ -211,6 +211,13 @@ Texel Texture::SampleTrilinear(float u, float v, float lod, TextureWrap wrapU, T
     return {a.r + (b.r - a.r) * f, a.g + (b.g - a.g) * f, a.b + (b.b - a.b) * f, a.a + (b.a - a.a) * f};
 }
 
+float Texture::TexelOpacity(int x, int y, TextureWrap wrapU, TextureWrap wrapV, int channel) const {
+    const Level& level = levels_[0];
+    const size_t i = (static_cast<size_t>(WrapIndex(y, level.h, wrapV)) * static_cast<size_t>(level.w) +
+                      static_cast<size_t>(WrapIndex(x, level.w, wrapU))) * 4 + static_cast<size_t>(channel);
+    return !level.ldr.empty() ? static_cast<float>(level.ldr[i]) * (1.0f / 255.0f) : level.hdr[i];
+}
+
 float Texture::Opacity(float u, float v, TextureWrap wrapU, TextureWrap wrapV, int channel) const {
     const Level& level = levels_[0];
     const float x = Tame(u) * static_cast<float>(level.w) - 0.5f;
