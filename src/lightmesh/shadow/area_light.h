@@ -29,6 +29,24 @@ uint64_t AreaLightSeed(const ShadingPoint& sp, uint32_t light);
 float SphereLightVisibility(const Accelerator& accel, const Vec3& origin, const Vec3& center,
                             float radius, int samples, uint64_t seed, int* rays = nullptr);
 
+/// The shadow rays SphereLightVisibility traces, one by one, for a caller that needs more
+/// than whether they are blocked (the shadow denoiser reads where they are blocked): ray
+/// `index` of `samples` goes from `origin` to the near side of the sphere; each ray's
+/// direction ends at t = 1 − 1e-5 (ray.d spans the segment).
+class SphereLightRays {
+  public:
+    SphereLightRays(const Vec3& origin, const Vec3& center, float radius, int samples, uint64_t seed);
+    /// The origin lies inside the light: V = 1 without rays.
+    bool Inside() const { return inside_; }
+    Ray Get(int index) const;
+
+  private:
+    Vec3 origin_, oc_, axis_, e1_, e2_;
+    float r2_ = 0, oneMinusCosMax_ = 0, shift0_ = 0, shift1_ = 0;
+    int samples_ = 1;
+    bool inside_ = false;
+};
+
 /// A cheaper estimate of the same fraction, for the light mesh's narrow penumbrae: the
 /// light as the disc of radius `radius` it shows `origin` (centred on `center`, facing it;
 /// for radius << distance the sphere's silhouette), sampled at the centres of 2·perRing
