@@ -66,7 +66,7 @@ void FilterPass(const DenoiseFrame& f, const DenoiseLayer& layer, const float* i
                 const float c0 = std::cos(turn), s0 = std::sin(turn);
                 for (int k = 0; k < kDenoiseTaps; ++k) {
                     const float dx = (taps.x[k] * c0 - taps.y[k] * s0) * r, dy = (taps.y[k] * c0 + taps.x[k] * s0) * r;
-                    const int qx = x + static_cast<int>(std::lround(dx)), qy = y + static_cast<int>(std::lround(dy));
+                    const int qx = x + static_cast<int>(std::floor(dx + 0.5f)), qy = y + static_cast<int>(std::floor(dy + 0.5f));
                     if (qx < 0 || qx >= w || qy < 0 || qy >= h) continue;
                     const size_t q = f.Index(qx, qy);
                     const float wq = layer.weight[q];
@@ -217,85 +217,66 @@ void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& co
             RenderCounters& c = tileCounters[static_cast<size_t>(t)];
             const int tx0 = (t % tilesX) * T, ty0 = ry0 + (t / tilesX) * T;
             const int tx1 = std::min(tx0 + T, width), ty1 = std::min(ty0 + T, ry1);
-            for (int y = ty0; y < ty1; ++y)
-                for (int x = tx0; x < tx1; ++x) {
-                    const size_t i = frame.Index(x, y - ry0);
+            // The camera rays of kPacketSize² pixels at a time, as RenderTile traces them.
+            constexpr int P = WhittedRenderer::kPacketSize;
+            for (int by = ty0; by < ty1; by += P)
+                for (int bx = tx0; bx < tx1; bx += P) {
+                    const int ex = std::min(bx + P, tx1), ey = std::min(by + P, ty1);
                     rays.clear();
-                    for (int sy = 0; sy < aa; ++sy)
-                        for (int sx = 0; sx < aa; ++sx) rays.push_back(renderer_.CameraRay(x, y, sx, sy));
+                    for (int y = by; y < ey; ++y)
+                        for (int x = bx; x < ex; ++x)
+                            for (int sy = 0; sy < aa; ++sy)
+                                for (int sx = 0; sx < aa; ++sx) rays.push_back(renderer_.CameraRay(x, y, sx, sy));
                     hits.resize(rays.size());
                     accel_.IntersectMany(rays.data(), rays.size(), hits.data());
                     c.cameraRays += rays.size();
-                    Color restSum;
-                    // Per light: Σ V·w, Σ w, Σ penumbra and its count over the pixel's hits.
-                    float num[kMaxLights] = {}, den[kMaxLights] = {}, penSum[kMaxLights] = {};
-                    int penCount[kMaxLights] = {};
-                    Color omegaSum[kMaxLights];
-                    for (size_t s = 0; s < rays.size(); ++s) {
-                        if (hits[s].prim == UINT32_MAX) {
-                            restSum += scene_.background;
-                            continue;
-                        }
-                        Color r;
-                        const ShadingPoint sp = renderer_.ShadeSplit(rays[s], hits[s], neededBuf, omegaBuf, &r, c);
-                        restSum += r;
-                        const float footprint = hits[s].t * pixelAngle_;
-                        if (s == 0) {
-                            frame.position[i] = sp.p;
-                            frame.normal[i] = sp.n;
-                            frame.footprint[i] = footprint;
-                        }
-                        for (size_t l = 0; l < lights; ++l) {
-                            if (!neededBuf[l]) continue;
-                            const Vec3& center = scene_.lights[l].position;
-                            const float R = radii_[l];
-                            float v = 1.0f;
-                            if (R == 0) {
-                                ++c.shadowRays;
-                                v = LightVisible(accel_, sp.origin, center) ? 1.0f : 0.0f;
-                            } else {
-                                const SphereLightRays sampler(sp.origin, center, R, samples,
-                                                              AreaLightSeed(sp, static_cast<uint32_t>(l)));
-                                if (!sampler.Inside()) {
-                                    for (int k = 0; k < samples; ++k) shadow[static_cast<size_t>(k)] = sampler.Get(k);
-                                    accel_.IntersectMany(shadow.data(), shadow.size(), blockers.data());
-                                    c.shadowRays += static_cast<uint64_t>(samples);
-                                    int visible = 0, blocked = 0;
-                                    float blockerSum = 0;
-                                    for (int k = 0; k < samples; ++k) {
-                                        const Hit& bh = blockers[static_cast<size_t>(k)];
-                                        if (bh.prim == UINT32_MAX) {
-                                            ++visible;
-                                        } else {
-                                            ++blocked;
-                                            blockerSum += bh.t * Length(shadow[static_cast<size_t>(k)].d);
-                                        }
-                                    }
-                                    v = static_cast<float>(visible) / static_cast<float>(samples);
-                                    if (blocked && footprint > 0) {
-                                        const float b = blockerSum / static_cast<float>(blocked);
-                                        const float d = Length(center - sp.origin);
-                                        const float halfWidth = R * b / std::max(d - b, 1e-6f * d);
-                                        penSum[l] += halfWidth / footprint;
+                    size_t first = 0;
+                    for (int y = by; y < ey; ++y)
+                        for (int x = bx; x < ex; ++x, first += static_cast<size_t>(aa * aa)) {
+                            const size_t i = frame.Index(x, y - ry0);
+                            Color restSum;
+                            // Per light: Σ V·w, Σ w, Σ penumbra and its count over the pixel's hits.
+                            float num[kMaxLights] = {}, den[kMaxLights] = {}, penSum[kMaxLights] = {};
+                            int penCount[kMaxLights] = {};
+                            Color omegaSum[kMaxLights];
+                            for (size_t s = first; s < first + static_cast<size_t>(aa * aa); ++s) {
+                                if (hits[s].prim == UINT32_MAX) {
+                                    restSum += scene_.background;
+                                    continue;
+                                }
+                                Color r;
+                                const ShadingPoint sp = renderer_.ShadeSplit(rays[s], hits[s], neededBuf, omegaBuf, &r, c);
+                                restSum += r;
+                                const float footprint = hits[s].t * pixelAngle_;
+                                if (s == first) {
+                                    frame.position[i] = sp.p;
+                                    frame.normal[i] = sp.n;
+                                    frame.footprint[i] = footprint;
+                                }
+                                for (size_t l = 0; l < lights; ++l) {
+                                    if (!neededBuf[l]) continue;
+                                    float penumbra = -1;
+                                    const float v = NoisyVisibility(sp, l, footprint, shadow.data(), blockers.data(), &penumbra, c);
+                                    if (penumbra >= 0) {
+                                        penSum[l] += penumbra;
                                         ++penCount[l];
                                     }
+                                    const float wgt = Luminance(omegaBuf[l]);
+                                    num[l] += v * wgt;
+                                    den[l] += wgt;
+                                    omegaSum[l] += omegaBuf[l];
                                 }
                             }
-                            const float wgt = Luminance(omegaBuf[l]);
-                            num[l] += v * wgt;
-                            den[l] += wgt;
-                            omegaSum[l] += omegaBuf[l];
+                            rest[i] = restSum * inv;
+                            for (size_t l = 0; l < lights; ++l) {
+                                omega[l * pixels + i] = omegaSum[l] * inv;
+                                if (den[l] > 0) {
+                                    layers[l].visibility[i] = std::clamp(num[l] / den[l], 0.0f, 1.0f);
+                                    layers[l].weight[i] = den[l] * inv;
+                                }
+                                if (penCount[l]) layers[l].penumbra[i] = penSum[l] / static_cast<float>(penCount[l]);
+                            }
                         }
-                    }
-                    rest[i] = restSum * inv;
-                    for (size_t l = 0; l < lights; ++l) {
-                        omega[l * pixels + i] = omegaSum[l] * inv;
-                        if (den[l] > 0) {
-                            layers[l].visibility[i] = std::clamp(num[l] / den[l], 0.0f, 1.0f);
-                            layers[l].weight[i] = den[l] * inv;
-                        }
-                        if (penCount[l]) layers[l].penumbra[i] = penSum[l] / static_cast<float>(penCount[l]);
-                    }
                 }
             if (progress && ty0 >= y0 && ty0 < y1) progress->Update(1);
         }
@@ -319,6 +300,40 @@ void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& co
     }
     for (int y = y0; y < y1; ++y)
         for (int x = 0; x < width; ++x) image->At(x, y) = sum[static_cast<size_t>(y - y0) * width + x];
+}
+
+float ShadowDenoiser::NoisyVisibility(const ShadingPoint& sp, size_t light, float footprint, Ray* rays, Hit* hits,
+                                      float* penumbra, RenderCounters& counters) const {
+    const Vec3& center = scene_.lights[light].position;
+    const float R = radii_[light];
+    if (R == 0) {  // a point light: rt's ray
+        ++counters.shadowRays;
+        return LightVisible(accel_, sp.origin, center) ? 1.0f : 0.0f;
+    }
+    const int samples = options_.areaLight.samples;
+    const SphereLightRays sampler(sp.origin, center, R, samples, AreaLightSeed(sp, static_cast<uint32_t>(light)));
+    if (sampler.Inside()) return 1.0f;
+    for (int k = 0; k < samples; ++k) rays[k] = sampler.Get(k);
+    // Closest hits, not just occlusion: the blockers' distance sizes the filter.
+    accel_.IntersectMany(rays, static_cast<size_t>(samples), hits);
+    counters.shadowRays += static_cast<uint64_t>(samples);
+    int visible = 0, blocked = 0;
+    float blockerSum = 0;
+    for (int k = 0; k < samples; ++k) {
+        if (hits[k].prim == UINT32_MAX) {
+            ++visible;
+        } else {
+            ++blocked;
+            blockerSum += hits[k].t * Length(rays[k].d);
+        }
+    }
+    if (blocked && footprint > 0) {
+        // The penumbra's half width on the receiver, R·b/(d − b), in pixels there.
+        const float b = blockerSum / static_cast<float>(blocked);
+        const float d = Length(center - sp.origin);
+        *penumbra = R * b / std::max(d - b, 1e-6f * d) / footprint;
+    }
+    return static_cast<float>(visible) / static_cast<float>(samples);
 }
 
 RenderResult ShadowDenoiser::Render(ProgressReporter* progress) const {

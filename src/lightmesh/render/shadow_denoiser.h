@@ -92,6 +92,12 @@ class ShadowDenoiser {
     size_t BytesPerPixel() const;
 
   private:
+    /// Light `light`'s visibility from sp by area's rays and seeds (rt's ray for a point
+    /// light); where some ray is blocked, *penumbra gets the penumbra's half width in
+    /// pixels of `footprint` (the world size of a pixel at sp). rays, hits: samples each.
+    float NoisyVisibility(const ShadingPoint& sp, size_t light, float footprint, Ray* rays, Hit* hits, float* penumbra,
+                          RenderCounters& counters) const;
+
     const Scene& scene_;
     const Accelerator& accel_;
     const WhittedRenderer& renderer_;

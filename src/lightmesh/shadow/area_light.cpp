@@ -240,9 +240,9 @@ namespace {
 class AreaLightShadows final : public ShadowMethod {
   public:
     AreaLightShadows(const Scene& scene, const Accelerator& accel, const AreaLightOptions& options,
-                     std::vector<float> radii)
-        : scene_(scene), accel_(accel), options_(options), radii_(std::move(radii)) {}
-    std::string_view Name() const override { return "area"; }
+                     std::vector<float> radii, std::string_view name)
+        : scene_(scene), accel_(accel), options_(options), radii_(std::move(radii)), name_(name) {}
+    std::string_view Name() const override { return name_; }
 
     void Visibility(const ShadingPoint& sp, const bool* needed, float* vis,
                     RenderCounters& counters) const override {
@@ -281,12 +281,14 @@ class AreaLightShadows final : public ShadowMethod {
     const Accelerator& accel_;
     const AreaLightOptions options_;
     const std::vector<float> radii_;  ///< per light, from LightRadii
+    const std::string_view name_;
 };
 
 }  // namespace
 
 std::unique_ptr<ShadowMethod> CreateAreaLightShadows(const Scene& scene, const Accelerator& accel,
-                                                     const AreaLightOptions& options, std::vector<float> radii) {
+                                                     const AreaLightOptions& options, std::vector<float> radii,
+                                                     std::string_view name) {
     ValidateAreaLightOptions(options);
     if (radii.size() != scene.lights.size())
         ThrowError("area lights: %zu radii for %zu lights", radii.size(), scene.lights.size());
@@ -294,7 +296,7 @@ std::unique_ptr<ShadowMethod> CreateAreaLightShadows(const Scene& scene, const A
         if (!(std::isfinite(radii[i]) && radii[i] >= 0))
             ThrowError("%s: light %zu: radius %g: must be a finite number >= 0", scene.name.c_str(), i,
                        static_cast<double>(radii[i]));
-    return std::make_unique<AreaLightShadows>(scene, accel, options, std::move(radii));
+    return std::make_unique<AreaLightShadows>(scene, accel, options, std::move(radii), name);
 }
 
 }  // namespace lm

@@ -103,8 +103,10 @@ Vec3 SampleConeStratified(const Vec3& axis, float oneMinusCosMax, int index, int
 /// radii[i] (LightRadii: the lights' own radii or the override). For a light of radius 0 it
 /// traces exactly the shadow ray of "rt", so with every radius 0 the images are
 /// bit-identical. Throws Error for bad options (ValidateAreaLightOptions) or radii (not one
-/// per light, negative or not finite).
+/// per light, negative or not finite). `name` is its Name(): "denoised" when the camera
+/// hits' visibility is filtered afterwards (render/shadow_denoiser.h), a string literal.
 std::unique_ptr<ShadowMethod> CreateAreaLightShadows(const Scene& scene, const Accelerator& accel,
-                                                     const AreaLightOptions& options, std::vector<float> radii);
+                                                     const AreaLightOptions& options, std::vector<float> radii,
+                                                     std::string_view name = "area");
 
 }  // namespace lm

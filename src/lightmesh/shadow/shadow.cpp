@@ -173,8 +173,9 @@ std::unique_ptr<ShadowMethod> CreateShadowMethod(std::string_view name, const Sc
     }
     // "denoised": area's rays per point; RenderJob filters the camera hits' visibility
     // (render/shadow_denoiser.h), the mirrors keep these.
-    if (name == "area" || name == "denoised")
-        return CreateAreaLightShadows(scene, accel, options.areaLight, LightRadii(scene, options));
+    if (name == "area") return CreateAreaLightShadows(scene, accel, options.areaLight, LightRadii(scene, options));
+    if (name == "denoised")
+        return CreateAreaLightShadows(scene, accel, options.areaLight, LightRadii(scene, options), "denoised");
     ThrowSettingError("shadows", "unknown shadow method \"%.*s\" (choose soft, none, rt, lmm, area or denoised)", static_cast<int>(name.size()),
                name.data());
 }
