@@ -283,9 +283,10 @@ TEST(RunBenchmark, DefaultAgainstCompetitors) {
     }
     EXPECT_EQ(rt, 1);
     EXPECT_EQ(lmm, 1);
-    ASSERT_EQ(c.rows.size(), 9u);
-    const std::vector<std::string> methods{"rt", "soft", "lmm", "area", "area", "area", "area", "area", "area"};
-    const std::vector<int> samples{0, 0, 0, 1, 2, 4, 8, 16, 64};
+    ASSERT_EQ(c.rows.size(), 12u);
+    const std::vector<std::string> methods{"rt",   "soft",     "lmm",      "area",     "area",     "area",
+                                           "area", "area",     "denoised", "denoised", "denoised", "area"};
+    const std::vector<int> samples{0, 0, 0, 1, 2, 4, 8, 16, 1, 2, 4, 64};
     for (size_t i = 0; i < c.rows.size(); ++i) {
         const CompetitorRow& row = c.rows[i];
         EXPECT_EQ(row.method, methods[i]) << i;
@@ -303,7 +304,9 @@ TEST(RunBenchmark, DefaultAgainstCompetitors) {
     for (size_t i = 4; i < 8; ++i) EXPECT_GT(c.rows[i].psnr, c.rows[i - 1].psnr) << c.rows[i].label;
     // The shadow totals of soft and of area are near the reference's, RT's too (a hard
     // shadow takes about the light a soft one does).
-    for (size_t i : {0, 1, 3, 7}) EXPECT_NEAR(c.rows[i].shadowRatio, 1.0, 0.05) << c.rows[i].label;
+    for (size_t i : {0, 1, 3, 7, 8, 9, 10}) EXPECT_NEAR(c.rows[i].shadowRatio, 1.0, 0.05) << c.rows[i].label;
+    // The denoiser beats its own noisy input: denoised N above area N, for N = 1, 2, 4.
+    for (size_t i = 0; i < 3; ++i) EXPECT_GT(c.rows[8 + i].psnr, c.rows[3 + i].psnr) << c.rows[8 + i].label;
     const EqualQuality& e = c.equal;
     EXPECT_TRUE(e.valid);
     EXPECT_DOUBLE_EQ(e.targetPsnr, c.rows[1].psnr);
@@ -321,6 +324,7 @@ TEST(RunBenchmark, DefaultAgainstCompetitors) {
     EXPECT_NE(md.find("| reference: area N=64 |"), std::string::npos) << md;
     EXPECT_NE(md.find("| soft (default) |"), std::string::npos) << md;
     EXPECT_NE(md.find("| area N=16 |"), std::string::npos) << md;
+    EXPECT_NE(md.find("| area N=1 + denoiser |"), std::string::npos) << md;
     EXPECT_NE(md.find("than area sampling at equal PSNR"), std::string::npos) << md;
     EXPECT_NE(md.find("every light of radius R = kI·h"), std::string::npos) << md;  // the old tables say theirs
     const std::string csv = BenchCsv(report.results);
@@ -337,7 +341,7 @@ TEST(RunBenchmark, DefaultAgainstCompetitors) {
     const BenchCompetitors& o = over.quality[0].competitors;
     EXPECT_TRUE(o.radiusOverride);
     EXPECT_EQ(o.lightRadii, (std::vector<float>{0.3f, 0.3f}));
-    EXPECT_EQ(o.rows.size(), 6u);
+    EXPECT_EQ(o.rows.size(), 9u);
     EXPECT_NE(BenchQualityMarkdown(over).find("every light of radius 0.3 (--light-radius)"), std::string::npos);
 }
 
