@@ -85,7 +85,8 @@ void FilterPass(const DenoiseFrame& f, const DenoiseLayer& layer, const float* i
 
 }  // namespace
 
-void FilterShadowLayer(const DenoiseFrame& f, const DenoiseLayer& layer, int outY0, int outY1, float* out) {
+void FilterShadowLayer(const DenoiseFrame& f, const DenoiseLayer& layer, int outY0, int outY1, float* out,
+                       float scale) {
     const int w = f.width, h = f.height, B = kDenoiseBlock;
     if (w <= 0 || h <= 0 || outY0 >= outY1) return;
     // Blocks on the image's grid: block row of region row y is (y + y0) / B.
@@ -141,7 +142,11 @@ void FilterShadowLayer(const DenoiseFrame& f, const DenoiseLayer& layer, int out
                         count += b.penumbraCount;
                     }
                 if (!mixed || count == 0) continue;
-                const float r = std::min(sum / static_cast<float>(count), kDenoiseMaxRadius);
+                // The neighbourhood's mean, halfway to the pixel's own estimate where it has one
+                // (contact shadows beside wide penumbrae keep more of their edge).
+                float r = sum / static_cast<float>(count);
+                if (layer.penumbra[i] >= 0) r = 0.5f * (r + layer.penumbra[i]);
+                r = std::min(r * scale, kDenoiseMaxRadius);
                 if (r >= 0.5f) radius[i] = r;
             }
         }
@@ -286,6 +291,8 @@ void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& co
     // The filter, light by light; the image is the rest plus each light's term times its
     // filtered visibility, the lights added in order.
     const int oy0 = y0 - ry0, oy1 = y1 - ry0;
+    // Less noise to remove, less blur: the footprint shrinks like the noise, 1/√N.
+    const float footprintScale = 1.0f / std::sqrt(static_cast<float>(samples));
     const size_t outPixels = static_cast<size_t>(width) * static_cast<size_t>(y1 - y0);
     std::vector<Color> sum(rest.begin() + static_cast<ptrdiff_t>(static_cast<size_t>(oy0) * width),
                            rest.begin() + static_cast<ptrdiff_t>(static_cast<size_t>(oy1) * width));
@@ -293,7 +300,7 @@ void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& co
     for (size_t l = 0; l < lights; ++l) {
         const DenoiseLayer& layer = layers[l];
         if (std::all_of(layer.weight.begin(), layer.weight.end(), [](float w) { return w <= 0; })) continue;
-        FilterShadowLayer(frame, layer, oy0, oy1, filtered.data());
+        FilterShadowLayer(frame, layer, oy0, oy1, filtered.data(), footprintScale);
         const Color* om = omega.data() + l * pixels + static_cast<size_t>(oy0) * width;
         for (size_t k = 0; k < outPixels; ++k)
             if (layer.weight[static_cast<size_t>(oy0) * width + k] > 0) sum[k] += om[k] * filtered[k];

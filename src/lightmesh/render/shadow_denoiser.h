@@ -33,8 +33,9 @@ namespace lm {
 inline constexpr int kDenoiseBlock = 8;              ///< pixels per side of the blocks that classify the image
 inline constexpr float kDenoiseMaxRadius = 32.0f;    ///< the widest footprint, in pixels (its radius)
 inline constexpr int kDenoiseTaps = 16;              ///< taps per pass besides the centre (two passes)
-/// Rows of noisy data above and below a band that its filtered pixels read: two passes of
-/// the widest footprint plus the blocks' neighbourhood, rounded up to whole tiles.
+/// Rows of noisy data computed above and below a band. Its filtered pixels read at most 48
+/// rows away (the second pass 16, the first 32, a pixel's blocks 15); the apron is kept at
+/// two full passes of the widest footprint plus the blocks, rounded up to whole tiles.
 inline constexpr int kDenoiseApron = 96;
 static_assert(kDenoiseApron >= 2 * 32 + 3 * kDenoiseBlock && kDenoiseApron % WhittedRenderer::kTileSize == 0);
 
@@ -62,13 +63,16 @@ struct DenoiseLayer {
 
 /// The denoised visibility of rows [outY0, outY1) of the region (region rows), row after
 /// row into out. Pixels whose 3 × 3 blocks (kDenoiseBlock, on the image's grid) hold only
-/// fully lit or only fully shadowed values, or whose penumbra is under half a pixel, keep
-/// their value bit for bit. The others: two passes (radius r, then r/2; r the mean
-/// penumbra of the blocked pixels in those blocks, at most kDenoiseMaxRadius) of a
+/// fully lit or only fully shadowed values, or whose footprint is under half a pixel, keep
+/// their value bit for bit. The others: two passes (radius r, then r/2; r = scale × the
+/// mean penumbra of the blocked pixels in those blocks, averaged with the pixel's own
+/// where it has one, at most kDenoiseMaxRadius) of a
 /// Gaussian-weighted disc of kDenoiseTaps taps turned per pixel, the ratio estimator
-/// Σ k·w·V / Σ k·w with the edge stops. A filtered pixel reads the noisy data within
-/// kDenoiseApron − kDenoiseBlock rows and columns.
-void FilterShadowLayer(const DenoiseFrame& frame, const DenoiseLayer& layer, int outY0, int outY1, float* out);
+/// Σ k·w·V / Σ k·w with the edge stops. A filtered pixel reads the noisy data within 48
+/// rows and columns.
+/// `scale`: ShadowDenoiser passes 1/√N for N rays per light (less noise, less blur).
+void FilterShadowLayer(const DenoiseFrame& frame, const DenoiseLayer& layer, int outY0, int outY1, float* out,
+                       float scale = 1.0f);
 
 /// Renders "--shadows denoised": the Whitted image with each camera hit's lights'
 /// visibility from options.areaLight.samples stratified rays per light (area's rays and
