@@ -125,8 +125,8 @@ ShadingPoint WhittedRenderer::ShadeSplit(const Ray& ray, const Hit& hit, bool* n
                                          RenderCounters& counters) const {
     Lighting lit;
     PrepareShading(ray, hit, &lit, counters);
-    const float none[kMaxLights] = {};
-    *rest = FinishShading(ray, lit, none, 0, counters);
+    static constexpr float kNone[kMaxLights] = {};
+    *rest = FinishShading(ray, lit, kNone, 0, counters);
     for (size_t i = 0; i < scene_.lights.size(); ++i) {
         needed[i] = lit.any && lit.needed[i];
         omega[i] = needed[i] ? lit.omega[i] : Color();
