@@ -772,7 +772,7 @@ std::vector<Case> Corpus() {
         {.name = "unused_option_warns",
          .args = kRender + " --shadows rt --light-radius 0.5",
          .expected = "lightmesh: warning: --light-radius is not used by --shadows rt (only by "
-                     "soft, area and lmm); ignored\n",
+                     "soft, area, denoised and lmm); ignored\n",
          .files = {{"scene.json", good}},
          .exitCode = 0},
         {.name = "thin_check_without_a_light_radius_warns",
