@@ -187,9 +187,10 @@ void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& co
     const uint64_t need = static_cast<uint64_t>(pixels) * BytesPerPixel();
     if (need > PhysicalMemoryBytes() / 2)
         ThrowErrorAt({scene_.name},
-                     "--shadows denoised: its buffers for %d x %d pixels and %zu lights would need %s, more than half "
+                     "--shadows denoised: its buffers for %dx%d pixels and %zu light%s would need %s, more than half "
                      "the memory budget (%s); render a smaller image or fewer lights",
-                     width, ry1 - ry0, lights, FormatBytes(need).c_str(), FormatBytes(PhysicalMemoryBytes()).c_str());
+                     width, ry1 - ry0, lights, lights == 1 ? "" : "s", FormatBytes(need).c_str(),
+                     FormatBytes(PhysicalMemoryBytes()).c_str());
 
     DenoiseFrame frame;
     frame.width = width;
