@@ -18,20 +18,27 @@ namespace {
 /// The weight of a light's unshadowed term (Rec. 709 luminance).
 inline float Luminance(const Color& c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
 
-/// A turn in [0, 2π) per pixel and pass (SplitMix64's finaliser on image coordinates).
-inline float TapTurn(int x, int y, int pass) {
+/// One of kTurns turns per pixel and pass (SplitMix64's finaliser on image coordinates).
+constexpr int kTurns = 256;
+inline int TapTurn(int x, int y, int pass) {
     uint64_t z = (static_cast<uint64_t>(static_cast<uint32_t>(x)) << 32 | static_cast<uint32_t>(y)) +
                  0x9E3779B97F4A7C15ull * static_cast<uint64_t>(pass + 1);
     z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
     z ^= z >> 31;
-    return static_cast<float>(z >> 40) * 0x1p-24f * 6.28318531f;
+    return static_cast<int>(z >> 56);
 }
 
-/// The unit-disc taps (Vogel's spiral: uniform in area) and their Gaussian weights.
+/// The unit-disc taps (Vogel's spiral: uniform in area), their Gaussian weights, and the
+/// cosines and sines of the turns.
 struct Taps {
     float x[kDenoiseTaps], y[kDenoiseTaps], weight[kDenoiseTaps];
+    float cosTurn[kTurns], sinTurn[kTurns];
     Taps() {
+        for (int t = 0; t < kTurns; ++t) {
+            cosTurn[t] = std::cos(6.28318531f * static_cast<float>(t) / kTurns);
+            sinTurn[t] = std::sin(6.28318531f * static_cast<float>(t) / kTurns);
+        }
         for (int k = 0; k < kDenoiseTaps; ++k) {
             const float r = std::sqrt((static_cast<float>(k) + 0.5f) / kDenoiseTaps);
             const float angle = static_cast<float>(k) * 2.39996323f;  // the golden angle
@@ -44,9 +51,19 @@ struct Taps {
 
 constexpr float kNormalStop = 0.9063078f;  // cos 25°
 
+/// What a tap reads of a pixel besides its value, in one 32-byte record: its point, its
+/// normal, and its weight (0 where the filter must not read it: no hit, or the light does
+/// not reach it).
+struct TapPixel {
+    Vec3 p;
+    float weight;
+    Vec3 n;
+    float footprint;
+};
+
 /// One pass over rows [y0, y1): in → out where `radius` (per pixel; < 0: keep) says so.
-void FilterPass(const DenoiseFrame& f, const DenoiseLayer& layer, const float* in, const std::vector<float>& radius,
-                float scale, int pass, int y0, int y1, float* out) {
+void FilterPass(const DenoiseFrame& f, const std::vector<TapPixel>& px, const float* in,
+                const std::vector<float>& radius, float scale, int pass, int y0, int y1, float* out) {
     static const Taps taps;
     const int w = f.width, h = f.height;
     ParallelFor(tbb::blocked_range<int>(y0, y1, 4), [&](const tbb::blocked_range<int>& rows) {
@@ -59,21 +76,25 @@ void FilterPass(const DenoiseFrame& f, const DenoiseLayer& layer, const float* i
                     *o = in[i];
                     continue;
                 }
-                const Vec3 p = f.position[i], n = f.normal[i];
-                const float tol = 2.0f * f.footprint[i];
-                float num = layer.weight[i] * in[i], den = layer.weight[i];
-                const float turn = TapTurn(x, y + f.y0, pass);
-                const float c0 = std::cos(turn), s0 = std::sin(turn);
+                const TapPixel& c = px[i];
+                const Vec3 p = c.p, n = c.n;
+                const float tol = 2.0f * c.footprint;
+                float num = c.weight * in[i], den = c.weight;
+                const int turn = TapTurn(x, y + f.y0, pass);
+                const float c0 = taps.cosTurn[turn], s0 = taps.sinTurn[turn];
                 for (int k = 0; k < kDenoiseTaps; ++k) {
                     const float dx = (taps.x[k] * c0 - taps.y[k] * s0) * r, dy = (taps.y[k] * c0 + taps.x[k] * s0) * r;
                     const int qx = x + static_cast<int>(std::floor(dx + 0.5f)), qy = y + static_cast<int>(std::floor(dy + 0.5f));
                     if (qx < 0 || qx >= w || qy < 0 || qy >= h) continue;
                     const size_t q = f.Index(qx, qy);
-                    const float wq = layer.weight[q];
-                    if (wq <= 0 || f.footprint[q] <= 0) continue;
-                    if (Dot(n, f.normal[q]) < kNormalStop) continue;
-                    const Vec3 d = f.position[q] - p;
-                    if (std::abs(Dot(n, d)) > tol + 0.02f * Length(d)) continue;
+                    const TapPixel& t = px[q];
+                    if (t.weight <= 0) continue;
+                    if (Dot(n, t.n) < kNormalStop) continue;
+                    // On the pixel's plane: |n·d| <= tol + 0.02·|d|, without the square root.
+                    const Vec3 d = t.p - p;
+                    const float off = std::abs(Dot(n, d)) - tol;
+                    if (off > 0 && off * off > 0.0004f * LengthSquared(d)) continue;
+                    const float wq = t.weight;
                     const float kw = taps.weight[k] * wq;
                     num += kw * in[q];
                     den += kw;
@@ -151,12 +172,24 @@ void FilterShadowLayer(const DenoiseFrame& f, const DenoiseLayer& layer, int out
             }
         }
     });
+    // The taps' records of the rows the passes read (pass 1 reads up to the widest
+    // footprint beyond its rows).
+    const int py0 = std::max(0, ry0 - reach), py1 = std::min(h, ry1 + reach);
+    std::vector<TapPixel> px(static_cast<size_t>(w) * static_cast<size_t>(h));
+    ParallelFor(tbb::blocked_range<int>(py0, py1, 16), [&](const tbb::blocked_range<int>& rows) {
+        for (int y = rows.begin(); y != rows.end(); ++y)
+            for (int x = 0; x < w; ++x) {
+                const size_t i = f.Index(x, y);
+                const bool readable = layer.weight[i] > 0 && f.footprint[i] > 0;
+                px[i] = TapPixel{f.position[i], readable ? layer.weight[i] : 0.0f, f.normal[i], f.footprint[i]};
+            }
+    });
     // Pass 1 over the rows pass 2 reads, pass 2 over the output rows.
     std::vector<float> first(static_cast<size_t>(w) * static_cast<size_t>(h));
     std::copy(layer.visibility.begin(), layer.visibility.end(), first.begin());
-    FilterPass(f, layer, layer.visibility.data(), radius, 1.0f, 0, ry0, ry1,
+    FilterPass(f, px, layer.visibility.data(), radius, 1.0f, 0, ry0, ry1,
                first.data() + static_cast<size_t>(ry0) * static_cast<size_t>(w));
-    FilterPass(f, layer, first.data(), radius, 0.5f, 1, outY0, outY1, out);
+    FilterPass(f, px, first.data(), radius, 0.5f, 1, outY0, outY1, out);
 }
 
 ShadowDenoiser::ShadowDenoiser(const Scene& scene, const Accelerator& accel, const WhittedRenderer& renderer,
