@@ -100,19 +100,21 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
     }
     lm::NamingOrigins(options, [&] {
         if (options.shadows == "lmm") lm::ParseLightMeshVariant(options.lightMesh.variant);
-        if (options.shadows == "area" || cmd.lightRadius || cmd.samples) lm::ValidateAreaLightOptions(options.areaLight);
+        if (options.shadows == "area" || options.shadows == "denoised" || cmd.lightRadius || cmd.samples) lm::ValidateAreaLightOptions(options.areaLight);
     });
     if (cmd.thinCheck && options.shadows == "lmm" && !(options.areaLight.radius.value_or(0.0f) > 0))
         lm::LogWarning("--thin-check is used only with a light radius (--light-radius > 0); ignored");
-    if (options.shadows == "area") {
+    if (options.shadows == "area" || options.shadows == "denoised") {
         // Only when no light has a size left: the lights' own radii, unless overridden.
         const std::vector<float> radii = lm::LightRadii(scene, options);
         if (std::all_of(radii.begin(), radii.end(), [](float r) { return r == 0; }))
             lm::LogWarning(options.areaLight.radius
-                               ? "--shadows area with light radius 0: point lights, the same image as --shadows rt "
-                                 "(set --light-radius > 0)"
-                               : "--shadows area with every light's radius 0: point lights, the same image as "
-                                 "--shadows rt (give the lights a \"radius\" or set --light-radius)");
+                               ? "--shadows " + options.shadows +
+                                     " with light radius 0: point lights, the same image as --shadows rt "
+                                     "(set --light-radius > 0)"
+                               : "--shadows " + options.shadows +
+                                     " with every light's radius 0: point lights, the same image as "
+                                     "--shadows rt (give the lights a \"radius\" or set --light-radius)");
     }
     // Check everything about the output before spending time on the render.
     std::string& output = prepared->output;
@@ -262,7 +264,9 @@ int RunRenderMpi(const RenderCommand& cmd, const lm::MpiSession& session) {
         lm::ProgressReporter progress(p->job->Renderer().TileCount(), "Rendering",
                                       root && !cmd.common.quiet && lm::ProgressReporter::StderrIsTerminal());
         if (root && !cmd.common.quiet) progress.AnnounceIfLong(kAnnouncedRenderSeconds, RenderWork(p->job->Options()));
-        d = lm::RenderDistributed(session, p->job->Renderer(), nodes, root ? &progress : nullptr);
+        d = p->job->Denoiser()
+                ? lm::RenderDistributedBands(session, p->job->Renderer(), *p->job->Denoiser(), root ? &progress : nullptr)
+                : lm::RenderDistributed(session, p->job->Renderer(), nodes, root ? &progress : nullptr);
     }
     if (d.errorRank >= 0) return fail(d.error, d.errorRank);
     if (!root) return 0;

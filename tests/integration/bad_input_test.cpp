@@ -603,6 +603,13 @@ std::vector<Case> Corpus() {
                      "radius), more than half of this machine's 64.0 MiB: lower CC\n",
          .files = {{"scene.json", good}},
          .env = "LIGHTMESH_MEMORY_LIMIT=64M"},
+        {.name = "denoiser_buffers_too_big_for_the_limit",
+         // 52 bytes per pixel and 24 per light (one light): 76 MiB, the image itself 12 MiB.
+         .args = "render $D/scene.json --shadows denoised --samples 1 --width 1024 --height 1024 -o $OUT",
+         .expected = "--shadows denoised: its buffers for 1024x1024 pixels and 1 light would need 76.0 MiB, "
+                     "more than half the memory budget (64.0 MiB); render a smaller image or fewer lights\n",
+         .files = {{"scene.json", good}},
+         .env = "LIGHTMESH_MEMORY_LIMIT=64M"},
         {.name = "image_too_big_for_the_limit",
          .args = "render $D/scene.json --width 4096 --height 4096 -o $OUT",
          .expected = "lightmesh: error: image 4096x4096 would need 192.0 MiB, more than half "
@@ -772,7 +779,7 @@ std::vector<Case> Corpus() {
         {.name = "unused_option_warns",
          .args = kRender + " --shadows rt --light-radius 0.5",
          .expected = "lightmesh: warning: --light-radius is not used by --shadows rt (only by "
-                     "soft, area and lmm); ignored\n",
+                     "soft, area, denoised and lmm); ignored\n",
          .files = {{"scene.json", good}},
          .exitCode = 0},
         {.name = "thin_check_without_a_light_radius_warns",

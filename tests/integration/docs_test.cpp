@@ -56,7 +56,7 @@ fs::path NewcomersReadme() {
 std::vector<fs::path> ManualPages() {
     std::vector<fs::path> pages;
     for (const char* name : {"cli.md", "scene-format.md", "method.md", "backends.md", "benchmarks.md",
-                             "robustness.md", "development.md", "soft-shadows.md"}) {
+                             "robustness.md", "development.md", "soft-shadows.md", "denoised-shadows.md"}) {
         const fs::path p = RepoRoot() / "docs" / name;
         if (fs::exists(p)) pages.push_back(p);
     }

@@ -17,7 +17,7 @@ identical)
     # Every shadow method and light-mesh variant (and the penumbra mode): 1, 2, 3 ranks x 1, 2 threads give the
     # bytes of a single-process render.
     methods=("--shadows soft" "--shadows soft --light-radius 0.4 --soft-samples 16" "--shadows rt"
-             "--shadows area --light-radius 0.15 --samples 4")
+             "--shadows area --light-radius 0.15 --samples 4" "--shadows denoised --light-radius 0.15 --samples 2")
     for v in grid templates reduced none inside object consensus; do methods+=("--shadows lmm --variant $v"); done
     methods+=("--shadows lmm --light-radius 0.3")  # contact-hardening penumbrae
     for m in "${methods[@]}"; do
@@ -34,6 +34,15 @@ identical)
             done
         done
         echo "ok: $m"
+    done
+    # Denoised shadows in bands taller than the denoiser's apron (400 rows: 3 ranks get 128,
+    # 128 and 144 rows, each with 96 rows of apron).
+    den=(builtin:gazebo --width 64 --height 400 --shadows denoised --light-radius 0.15 --samples 1 -q)
+    "$lightmesh" render "${den[@]}" -o "$work/ref.exr" >/dev/null || fail "single-process denoised"
+    for n in 2 3; do
+        mpi "$n" "$lightmesh" render "${den[@]}" -o "$work/mpi.exr" >/dev/null || fail "mpirun -np $n denoised"
+        cmp -s "$work/ref.exr" "$work/mpi.exr" || fail "denoised: $n ranks differ from one process"
+        rm -f "$work/mpi.exr"
     done
     # Linear float pixels (EXR), and an image smaller than the ranks' share (17x5: two
     # tiles for three ranks).

@@ -49,6 +49,9 @@ struct BenchMatrix {
     /// default back-end and timed round-robin with the matrix's cells, judged against an
     /// "area" reference of `refSamples` samples with the same light radii.
     std::vector<int> competitorSamples{1, 2, 4, 8, 16};
+    /// With --quality, also the competitor a renderer would pick today: "denoised" (N rays
+    /// per light, then the shadow denoiser) with these N, beside the area rows.
+    std::vector<int> denoisedSamples{1, 2, 4};
     /// The competitors table's light radii: unset, each light's own (the scene's, as
     /// `render` uses them); set (bench --light-radius), every light this radius. The
     /// paper's-table rows (QualityRadius) are not affected.
@@ -101,8 +104,8 @@ struct BenchResult {
 /// One row of the default-vs-competitors table.
 struct CompetitorRow {
     std::string label;   ///< "RT", "soft (default)", "LMM consensus CC 100 kI 2", "area N=4", "reference area N=256"
-    std::string method;  ///< "rt", "soft", "lmm", "area"
-    int samples = 0;     ///< "area": rays per light
+    std::string method;  ///< "rt", "soft", "lmm", "area", "denoised"
+    int samples = 0;     ///< "area", "denoised": rays per light
     bool reference = false;  ///< the reference itself (one run, not in the round-robin)
     double seconds = 0;  ///< median render time of the interleaved runs (the reference: its one run)
     size_t runs = 0;     ///< timed runs behind `seconds`
@@ -142,7 +145,7 @@ struct BenchCompetitors {
     bool radiusOverride = false;    ///< the radii come from --light-radius
     int refSamples = 0;
     int repeat = 0;                 ///< interleaved timed runs per row
-    std::vector<CompetitorRow> rows;  ///< RT, soft, LMM, area N…, then the reference
+    std::vector<CompetitorRow> rows;  ///< RT, soft, LMM, area N…, denoised N…, then the reference
     EqualQuality equal;
 };
 

@@ -193,20 +193,21 @@ TEST(RunBenchmark, QuickHtmlReport) {
     int calls = 0;
     double estimate = -1;
     const BenchReport report = RunBenchmarkReport(
-        m, [&](int done, int total, const BenchResult&) { EXPECT_EQ(done, ++calls); EXPECT_EQ(total, 16); },
+        m, [&](int done, int total, const BenchResult&) { EXPECT_EQ(done, ++calls); EXPECT_EQ(total, 19); },
         [&](double s) { estimate = s; });
-    EXPECT_EQ(calls, 16);
+    EXPECT_EQ(calls, 19);
     EXPECT_GE(estimate, 0);
     // none, RT, 2 variants × 2 kI, and with --quality the penumbra mode per kI; then the
     // competitors' cells: soft, the LMM default (the matrix has no consensus), area N = 1,
-    // 2, 4, 8, 16 (RT is the matrix's, on the default back-end) and their reference.
-    ASSERT_EQ(report.results.size(), 16u);
+    // 2, 4, 8, 16, denoised N = 1, 2, 4 (RT is the matrix's, on the default back-end) and
+    // their reference.
+    ASSERT_EQ(report.results.size(), 19u);
     int competitors = 0, references = 0;
     for (const BenchResult& r : report.results) {
         competitors += r.role == "competitor";
         references += r.role == "reference";
     }
-    EXPECT_EQ(competitors, 7);
+    EXPECT_EQ(competitors, 10);
     EXPECT_EQ(references, 1);
     int penumbrae = 0;
     for (const BenchResult& r : report.results)
@@ -240,8 +241,9 @@ TEST(RunBenchmark, QuickHtmlReport) {
     EXPECT_NE(html.find("area-light reference, R ="), std::string::npos);  // beside the reference
     EXPECT_TRUE(fs::exists(report.quality[0].refImage));
     // The competitors' rows, their images' captions and their reference's.
-    EXPECT_EQ(report.quality[0].competitors.rows.size(), 1u + 1u + 1u + 5u + 1u);
+    EXPECT_EQ(report.quality[0].competitors.rows.size(), 1u + 1u + 1u + 5u + 3u + 1u);
     EXPECT_NE(html.find("competitors' soft (default)"), std::string::npos);
+    EXPECT_NE(html.find("competitors' area N = 2 + shadow denoiser"), std::string::npos);
     EXPECT_NE(html.find("competitors' area N = 16"), std::string::npos);
     EXPECT_NE(html.find("competitors' reference: area N = 8"), std::string::npos);
     EXPECT_NE(html.find("The default (soft) against its competitors"), std::string::npos);
@@ -283,9 +285,10 @@ TEST(RunBenchmark, DefaultAgainstCompetitors) {
     }
     EXPECT_EQ(rt, 1);
     EXPECT_EQ(lmm, 1);
-    ASSERT_EQ(c.rows.size(), 9u);
-    const std::vector<std::string> methods{"rt", "soft", "lmm", "area", "area", "area", "area", "area", "area"};
-    const std::vector<int> samples{0, 0, 0, 1, 2, 4, 8, 16, 64};
+    ASSERT_EQ(c.rows.size(), 12u);
+    const std::vector<std::string> methods{"rt",   "soft",     "lmm",      "area",     "area",     "area",
+                                           "area", "area",     "denoised", "denoised", "denoised", "area"};
+    const std::vector<int> samples{0, 0, 0, 1, 2, 4, 8, 16, 1, 2, 4, 64};
     for (size_t i = 0; i < c.rows.size(); ++i) {
         const CompetitorRow& row = c.rows[i];
         EXPECT_EQ(row.method, methods[i]) << i;
@@ -303,7 +306,12 @@ TEST(RunBenchmark, DefaultAgainstCompetitors) {
     for (size_t i = 4; i < 8; ++i) EXPECT_GT(c.rows[i].psnr, c.rows[i - 1].psnr) << c.rows[i].label;
     // The shadow totals of soft and of area are near the reference's, RT's too (a hard
     // shadow takes about the light a soft one does).
-    for (size_t i : {0, 1, 3, 7}) EXPECT_NEAR(c.rows[i].shadowRatio, 1.0, 0.05) << c.rows[i].label;
+    for (size_t i : {0, 1, 3, 7, 8, 9, 10}) EXPECT_NEAR(c.rows[i].shadowRatio, 1.0, 0.05) << c.rows[i].label;
+    // The denoiser beats its own noisy input: denoised N above area N for N = 1 and 2 (at
+    // N = 4 this small image's footprints, shrunk by 1/√N, are under half a pixel, so it is
+    // area's image but for the order of the sums).
+    for (size_t i = 0; i < 2; ++i) EXPECT_GT(c.rows[8 + i].psnr, c.rows[3 + i].psnr) << c.rows[8 + i].label;
+    EXPECT_GE(c.rows[10].psnr, c.rows[5].psnr - 0.01) << c.rows[10].label;
     const EqualQuality& e = c.equal;
     EXPECT_TRUE(e.valid);
     EXPECT_DOUBLE_EQ(e.targetPsnr, c.rows[1].psnr);
@@ -321,6 +329,7 @@ TEST(RunBenchmark, DefaultAgainstCompetitors) {
     EXPECT_NE(md.find("| reference: area N=64 |"), std::string::npos) << md;
     EXPECT_NE(md.find("| soft (default) |"), std::string::npos) << md;
     EXPECT_NE(md.find("| area N=16 |"), std::string::npos) << md;
+    EXPECT_NE(md.find("| area N=1 + denoiser |"), std::string::npos) << md;
     EXPECT_NE(md.find("than area sampling at equal PSNR"), std::string::npos) << md;
     EXPECT_NE(md.find("every light of radius R = kI·h"), std::string::npos) << md;  // the old tables say theirs
     const std::string csv = BenchCsv(report.results);
@@ -337,7 +346,7 @@ TEST(RunBenchmark, DefaultAgainstCompetitors) {
     const BenchCompetitors& o = over.quality[0].competitors;
     EXPECT_TRUE(o.radiusOverride);
     EXPECT_EQ(o.lightRadii, (std::vector<float>{0.3f, 0.3f}));
-    EXPECT_EQ(o.rows.size(), 6u);
+    EXPECT_EQ(o.rows.size(), 9u);
     EXPECT_NE(BenchQualityMarkdown(over).find("every light of radius 0.3 (--light-radius)"), std::string::npos);
 }
 

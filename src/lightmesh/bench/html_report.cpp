@@ -271,6 +271,9 @@ std::string BenchHtml(const BenchReport& report, const std::string& title) {
                                                         radiiText(g->scene, g->width, g->height).c_str(), r.median)
                     : r.method == "area"  ? StringPrintf("area N = %d, %s, %s, %.3f s", r.samples, r.accel.c_str(),
                                                         radiiText(g->scene, g->width, g->height).c_str(), r.median)
+                    : r.method == "denoised"
+                        ? StringPrintf("area N = %d + shadow denoiser, %s, %s, %.3f s", r.samples, r.accel.c_str(),
+                                       radiiText(g->scene, g->width, g->height).c_str(), r.median)
                     : r.method == "penumbra"
                         ? StringPrintf("%s (%s) CC %d kI %g, light radius %.3g, %.3f s", r.paperName.c_str(),
                                        r.variant.c_str(), r.cc, r.ki, r.lightRadius, r.median)

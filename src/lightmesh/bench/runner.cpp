@@ -259,8 +259,9 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
     if (m.quality && (m.cc.empty() || m.ki.empty())) ThrowError("bench: --quality needs a CC and a kI");
     for (const std::string& v : m.variants) ParseLightMeshVariant(v);  // fail before any work
     if (!m.imageDir.empty()) CheckWritableFolder((std::filesystem::path(m.imageDir) / "x.png").string());
-    for (int n : m.competitorSamples)
-        if (n < 1 || n > 4096) ThrowError("bench: area samples per light must be 1 to 4096, got %d", n);
+    for (const std::vector<int>* list : {&m.competitorSamples, &m.denoisedSamples})
+        for (int n : *list)
+            if (n < 1 || n > 4096) ThrowError("bench: area samples per light must be 1 to 4096, got %d", n);
     if (m.lightRadius && !(*m.lightRadius >= 0 && std::isfinite(*m.lightRadius)))
         ThrowError("bench: --light-radius must be finite and >= 0");
     // The default-vs-competitors cells (--quality): on the renderer's default back-end; RT
@@ -275,7 +276,8 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
         std::find(m.cc.begin(), m.cc.end(), lmmDefaults.cc) != m.cc.end() &&
         std::find(m.ki.begin(), m.ki.end(), lmmDefaults.ki) != m.ki.end();
     const int competitorCells = m.quality ? (compRtInMatrix ? 0 : 1) + 1 + (compLmmInMatrix ? 0 : 1) +
-                                                static_cast<int>(m.competitorSamples.size()) + 1  // + the reference
+                                                static_cast<int>(m.competitorSamples.size() + m.denoisedSamples.size()) +
+                                                1  // + the reference
                                           : 0;
     const int perSize = (m.noShadows ? 1 : 0) + static_cast<int>(m.accels.size()) +
                         static_cast<int>(m.cc.size() * m.ki.size() *
@@ -361,6 +363,8 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                     double comp = 3.0 + (compRtInMatrix ? 0.0 : 1.0) +
                                   (compLmmInMatrix ? 0.0 : 0.5 * lmmDefaults.ki * lmmDefaults.ki);
                     for (int n : m.competitorSamples) comp += 0.5 + 0.5 * n;
+                    // denoised: area's rays (closest hits) and the filter, ≈ 2 RT measured on the gazebo.
+                    for (int n : m.denoisedSamples) comp += 1.5 + 0.6 * n;
                     seconds += unit * comp + once * (0.5 + 0.5 * m.refSamples);
                 }
             }
@@ -479,6 +483,17 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                     o.areaLight.samples = n;
                     add(r, compAcc, o);
                 }
+                for (int n : m.denoisedSamples) {
+                    BenchResult r;
+                    r.method = "denoised";
+                    r.paperName = StringPrintf("denoised N=%d", n);
+                    r.samples = n;
+                    r.role = "competitor";
+                    RenderOptions o = compBase;
+                    o.shadows = "denoised";
+                    o.areaLight.samples = n;
+                    add(r, compAcc, o);
+                }
             }
             for (int i = -1; i < m.repeat; ++i) {  // i = -1: the warm-up pass
                 for (size_t c = 0; c < cells.size(); ++c) {
@@ -503,7 +518,8 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                                             : r.method == "penumbra" ? StringPrintf("cc%d-ki%g-%s-R%g-thin-%s", r.cc, r.ki,
                                                                                     r.variant.c_str(), r.lightRadius,
                                                                                     r.thinCheck.c_str())
-                                            : r.method == "area" ? StringPrintf("area-N%d-%s", r.samples, r.accel.c_str())
+                                            : r.method == "area" || r.method == "denoised"
+                                                ? StringPrintf("%s-N%d-%s", r.method.c_str(), r.samples, r.accel.c_str())
                                                                  : r.method + "-" + r.accel) +
                                            // the competitors' LMM beside the matrix's on another back-end
                                            (r.method == "lmm" && !r.role.empty() ? "-" + r.accel : std::string()) +
@@ -631,6 +647,8 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
             });
             for (int n : m.competitorSamples)
                 findCell([&](const BenchResult& r) { return r.method == "area" && r.samples == n; });
+            for (int n : m.denoisedSamples)
+                findCell([&](const BenchResult& r) { return r.method == "denoised" && r.samples == n; });
             // No shadows on the same back-end: the shadow totals' zero.
             const Image* compNone = nullptr;
             for (size_t i = first; i < results.size(); ++i)
@@ -703,6 +721,7 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                             : r.method == "rt"   ? "RT"
                             : r.method == "soft" ? "soft (default)"
                             : r.method == "lmm"  ? StringPrintf("LMM %s CC %d kI %g", r.variant.c_str(), r.cc, r.ki)
+                            : r.method == "denoised" ? StringPrintf("area N=%d + denoiser", r.samples)
                                                  : StringPrintf("area N=%d", r.samples);
                 comp.rows.push_back(std::move(row));
             };

@@ -314,4 +314,52 @@ DistributedRender RenderDistributed(const MpiSession& session, const WhittedRend
     return out;
 }
 
+DistributedRender RenderDistributedBands(const MpiSession& session, const WhittedRenderer& renderer,
+                                         const ShadowDenoiser& denoiser, ProgressReporter* progress) {
+    const int rank = session.Rank(), size = session.Size();
+    const int tilesX = renderer.TilesX(), tileRows = renderer.TileCount() / tilesX;
+    constexpr int T = WhittedRenderer::kTileSize;
+    // Rank r: tile rows [rows·r/size, rows·(r+1)/size).
+    const int row0 = static_cast<int>(int64_t(tileRows) * rank / size);
+    const int row1 = static_cast<int>(int64_t(tileRows) * (rank + 1) / size);
+    Image image;
+    std::vector<int> mine;
+    RankReport report;
+    report.rank = rank;
+    std::string error;
+    const auto start = std::chrono::steady_clock::now();
+    try {
+        image = Image(renderer.Width(), renderer.Height());
+        if (row1 > row0) {
+            denoiser.RenderRows(row0 * T, std::min(row1 * T, renderer.Height()), &image, report.counters, progress);
+            report.batches = 1;
+        }
+        for (int t = row0 * tilesX; t < row1 * tilesX; ++t) mine.push_back(t);
+        if (RankIs("LIGHTMESH_MPI_TEST_KILL_RANK", rank)) std::raise(SIGKILL);
+        if (RankIs("LIGHTMESH_MPI_TEST_FAIL_RANK", rank)) throw std::bad_alloc();
+    } catch (...) {
+        error = CurrentExceptionLine();
+    }
+    report.seconds = SecondsSince(start);
+    report.tiles = static_cast<int>(mine.size());
+
+    DistributedRender out;
+    std::string message;
+    int failedRank = -1;
+    if (!session.AllSucceeded(error, &message, &failedRank)) {
+        out.error = message;
+        out.errorRank = failedRank;
+        return out;
+    }
+    try {
+        GatherOnRankZero(rank, size, tilesX, report, mine, &image, &out);
+    } catch (...) {
+        std::fprintf(stderr, "lightmesh: error: %s (rank %d of %d, gathering the image)\n",
+                     CurrentExceptionLine().c_str(), rank, size);
+        MPI_Abort(MPI_COMM_WORLD, 1);
+    }
+    out.result.seconds = SecondsSince(start);
+    return out;
+}
+
 }  // namespace lm

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "lightmesh/distributed/rank_report.h"
+#include "lightmesh/render/shadow_denoiser.h"
 #include "lightmesh/render/whitted.h"
 
 namespace lm {
@@ -63,5 +64,13 @@ struct DistributedRender {
 DistributedRender RenderDistributed(const MpiSession& session, const WhittedRenderer& renderer,
                                     const std::function<uint64_t()>& nodesEvaluated,
                                     ProgressReporter* progress);
+
+/// Collective: RenderDistributed for "--shadows denoised", whose pixels read their
+/// neighbours' noisy visibility: rank r renders an even share of the image's rows of tiles,
+/// one band, with the denoiser's apron of noisy rows above and below it
+/// (ShadowDenoiser::RenderRows; the aprons are rendered twice, by both neighbours), and
+/// rank 0 gathers the bands. The image is one process's, byte for byte.
+DistributedRender RenderDistributedBands(const MpiSession& session, const WhittedRenderer& renderer,
+                                         const ShadowDenoiser& denoiser, ProgressReporter* progress);
 
 }  // namespace lm

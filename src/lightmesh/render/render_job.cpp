@@ -45,6 +45,8 @@ RenderJob::RenderJob(const Scene& scene, const RenderOptions& options, const Acc
     shadows_ = NamingOrigins(options_, [&] { return CreateShadowMethod(options_.shadows, scene, *accel_, options_); });
     shadowSetupSeconds_ = SecondsSince(t1);
     renderer_ = std::make_unique<WhittedRenderer>(scene, *accel_, *shadows_, options_);
+    if (options_.shadows == "denoised")
+        denoiser_ = std::make_unique<ShadowDenoiser>(scene, *accel_, *renderer_, options_, LightRadii(scene, options_));
 }
 
 }  // namespace lm

@@ -124,6 +124,19 @@ Color WhittedRenderer::Shade(const Ray& ray, const Hit& hit, int depth, RenderCo
     return FinishShading(ray, lit, vis, depth, counters);
 }
 
+ShadingPoint WhittedRenderer::ShadeSplit(const Ray& ray, const Hit& hit, bool* needed, Color* omega, Color* rest,
+                                         RenderCounters& counters) const {
+    Lighting lit;
+    PrepareShading(ray, hit, &lit, counters);
+    static constexpr float kNone[kMaxLights] = {};
+    *rest = FinishShading(ray, lit, kNone, 0, counters);
+    for (size_t i = 0; i < scene_.lights.size(); ++i) {
+        needed[i] = lit.any && lit.needed[i];
+        omega[i] = needed[i] ? lit.omega[i] : Color();
+    }
+    return lit.sp;
+}
+
 Color WhittedRenderer::Pixel(int x, int y, RenderCounters& counters) const {
     const int aa = options_.aa;
     Color sum;

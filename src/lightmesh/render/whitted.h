@@ -68,6 +68,16 @@ class WhittedRenderer {
     double EstimateSeconds(int samples) const;
     static constexpr int kPacketSize = 8;
 
+    /// The camera ray of sub-pixel (sx, sy) of pixel (x, y), as Pixel() and RenderTile make it.
+    Ray CameraRay(int x, int y, int sx, int sy) const { return camera_.Generate(SubPixel(x, sx), SubPixel(y, sy)); }
+    /// A hit's shading split around its lights' visibility, for a caller that computes and
+    /// filters the visibility itself (the shadow denoiser): needed[i] and omega[i] (black
+    /// where not needed) for each light, and *rest gets the other terms (A·kd and the
+    /// mirror's, whose shadows come from the renderer's method). Shade() gives rest plus
+    /// Σ omega[i]·V_i. Returns the shading point.
+    ShadingPoint ShadeSplit(const Ray& ray, const Hit& hit, bool* needed, Color* omega, Color* rest,
+                            RenderCounters& counters) const;
+
     /// Builds the shading point for a hit of `ray` (also used by tests and the shadow
     /// methods' tests).
     static ShadingPoint MakeShadingPoint(const TriangleMesh& mesh, const Ray& ray, const Hit& hit);

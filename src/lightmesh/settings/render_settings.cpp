@@ -18,10 +18,11 @@ const std::vector<RenderSetting>& RenderSettings() {
         {"aa", "--aa", K::Int, 1, 16, {}, "Anti-aliasing: N x N camera rays per pixel (default 1)", nullptr, {}},
         {"max_depth", "--max-depth", K::Int, 1, 64, {}, "Mirror recursion limit (1: no reflections; default 5)",
          nullptr, {}},
-        {"shadows", "--shadows", K::Choice, 0, 0, {"soft", "none", "rt", "lmm", "area"},
+        {"shadows", "--shadows", K::Choice, 0, 0, {"soft", "none", "rt", "lmm", "area", "denoised"},
          "Shadows: soft (soft shadows of the lights' spheres from the light mesh's cells), none, rt "
-         "(hard: one shadow ray per light), lmm (the paper's light mesh method) or area (soft reference: "
-         "--samples shadow rays per light); default soft", nullptr, {}},
+         "(hard: one shadow ray per light), lmm (the paper's light mesh method), area (soft reference: "
+         "--samples shadow rays per light) or denoised (area's --samples rays, then a shadow denoiser); "
+         "default soft", nullptr, {}},
         {"accel", "--accel", K::Choice, 0, 0, {"brute", "grid", "embree"},
          std::string("Ray-query back-end: brute, grid (the paper's nested grid) or embree; default ") +
              kDefaultAccelerator,
@@ -55,13 +56,14 @@ const std::vector<RenderSetting>& RenderSettings() {
          "scene's centre) with this one (default: no override); 0: point lights. Soft and area shadows use "
          "spheres of it; lmm sizes "
          "its penumbrae by it (contact hardening), which only this option turns on, not the lights' own radii",
-         "shadows", {"soft", "area", "lmm"}},
+         "shadows", {"soft", "area", "denoised", "lmm"}},
         {"thin_check", "--thin-check", K::Choice, 0, 0, {"off", "lit", "all"},
          "Light mesh with --light-radius: P's own shadow ray checks where the nodes agree, so occluders (lit) "
          "and also gaps (all) thinner than the mesh step keep their effect; off: the nodes decide (default all)",
          "shadows", {"lmm"}},
         {"samples", "--samples", K::Int, 1, 4096, {},
-         "Area shadows: stratified shadow rays per light and shading point (default 16)", "shadows", {"area"}},
+         "Area and denoised shadows: stratified shadow rays per light and shading point (default 16)", "shadows",
+         {"area", "denoised"}},
         {"soft_samples", "--soft-samples", K::Int, 16, 256, {},
          "Soft shadows: directions per light where a triangle is in a point's cone to it, a multiple of 16 (a "
          "quarter first; the rest only in a penumbra; default 64)",

@@ -70,9 +70,9 @@ TEST(RenderSettings, UnusedFlagsAreNamedByTheTable) {
     EXPECT_EQ(UnusedSettingWarning("cc", "rt"), "--cc is not used by --shadows rt (only by lmm and soft); ignored");
     EXPECT_EQ(UnusedSettingWarning("cc", "lmm"), "");
     EXPECT_EQ(UnusedSettingWarning("light_radius", "none"),
-              "--light-radius is not used by --shadows none (only by soft, area and lmm); ignored");
+              "--light-radius is not used by --shadows none (only by soft, area, denoised and lmm); ignored");
     EXPECT_EQ(UnusedSettingWarning("light_radius", "area"), "");
-    EXPECT_EQ(UnusedSettingWarning("samples", "lmm"), "--samples is not used by --shadows lmm (only by area); ignored");
+    EXPECT_EQ(UnusedSettingWarning("samples", "lmm"), "--samples is not used by --shadows lmm (only by area and denoised); ignored");
     EXPECT_EQ(UnusedSettingWarning("grid", "embree"), "--grid is not used by --accel embree (only by grid); ignored");
     EXPECT_EQ(UnusedSettingWarning("grid", "grid"), "");
     EXPECT_EQ(UnusedSettingWarning("width", "anything"), "");

@@ -114,21 +114,37 @@ Vec3 SampleConeStratified(const Vec3& axis, float oneMinusCosMax, int index, int
 // Rays handed to Accelerator::OccludedMany at once: Embree's widest packet here (8, AVX2).
 constexpr int kRayBatch = 8;
 
+SphereLightRays::SphereLightRays(const Vec3& origin, const Vec3& center, float radius, int samples, uint64_t seed)
+    : origin_(origin), oc_(center - origin), r2_(radius * radius), samples_(samples) {
+    const float d2 = LengthSquared(oc_);
+    inside_ = d2 <= r2_;  // inside the light: all of it is visible
+    if (inside_) return;
+    const float d = std::sqrt(d2);
+    axis_ = oc_ / d;
+    // 1 − cos θmax without cancellation: sin²/(1 + cos), sin² θmax = R²/d².
+    const float sin2 = r2_ / d2;
+    oneMinusCosMax_ = sin2 / (1.0f + std::sqrt(std::max(0.0f, 1.0f - sin2)));
+    shift0_ = UnitFloat(seed >> 40);
+    shift1_ = UnitFloat(seed >> 8);
+    CoordinateSystem(axis_, &e1_, &e2_);
+}
+
+Ray SphereLightRays::Get(int index) const {
+    const Vec3 w = SampleCone(e1_, e2_, axis_, oneMinusCosMax_, index, samples_, shift0_, shift1_);
+    // The near intersection with the sphere, from the perpendicular distance of C to the ray
+    // (stabler than b² − c); rounding at the cone's rim is clamped to the tangent.
+    const float b = Dot(w, oc_);
+    const float h2 = r2_ - LengthSquared(oc_ - w * b);
+    const float t = b - std::sqrt(std::max(0.0f, h2));
+    // Like LightVisible, stop just short of the light itself.
+    return Ray{origin_, w * t, 0.0f, 1.0f - 1e-5f};
+}
+
 float SphereLightVisibility(const Accelerator& accel, const Vec3& origin, const Vec3& center,
                             float radius, int samples, uint64_t seed, int* rays) {
     if (rays) *rays = 0;
-    const Vec3 oc = center - origin;
-    const float d2 = LengthSquared(oc);
-    const float r2 = radius * radius;
-    if (d2 <= r2) return 1.0f;  // inside the light: all of it is visible
-    const float d = std::sqrt(d2);
-    const Vec3 axis = oc / d;
-    // 1 − cos θmax without cancellation: sin²/(1 + cos), sin² θmax = R²/d².
-    const float sin2 = r2 / d2;
-    const float oneMinusCosMax = sin2 / (1.0f + std::sqrt(std::max(0.0f, 1.0f - sin2)));
-    const float shift0 = UnitFloat(seed >> 40), shift1 = UnitFloat(seed >> 8);
-    Vec3 e1, e2;
-    CoordinateSystem(axis, &e1, &e2);
+    const SphereLightRays sampler(origin, center, radius, samples, seed);
+    if (sampler.Inside()) return 1.0f;
     int visible = 0;
     // kRayBatch rays at a time: from one point into a narrow cone, coherent enough for a
     // packet (Accelerator::OccludedMany).
@@ -136,17 +152,7 @@ float SphereLightVisibility(const Accelerator& accel, const Vec3& origin, const 
     bool blocked[kRayBatch];
     for (int first = 0; first < samples; first += kRayBatch) {
         const int n = std::min(kRayBatch, samples - first);
-        for (int k = 0; k < n; ++k) {
-            const Vec3 w = SampleCone(e1, e2, axis, oneMinusCosMax, first + k, samples, shift0, shift1);
-            // The near intersection with the sphere, from the perpendicular distance of C to
-            // the ray (stabler than b² − c); rounding at the cone's rim is clamped to the
-            // tangent.
-            const float b = Dot(w, oc);
-            const float h2 = r2 - LengthSquared(oc - w * b);
-            const float t = b - std::sqrt(std::max(0.0f, h2));
-            // Like LightVisible, stop just short of the light itself.
-            batch[k] = Ray{origin, w * t, 0.0f, 1.0f - 1e-5f};
-        }
+        for (int k = 0; k < n; ++k) batch[k] = sampler.Get(first + k);
         accel.OccludedMany(batch, static_cast<size_t>(n), blocked);
         for (int k = 0; k < n; ++k) visible += !blocked[k];
     }
@@ -234,9 +240,9 @@ namespace {
 class AreaLightShadows final : public ShadowMethod {
   public:
     AreaLightShadows(const Scene& scene, const Accelerator& accel, const AreaLightOptions& options,
-                     std::vector<float> radii)
-        : scene_(scene), accel_(accel), options_(options), radii_(std::move(radii)) {}
-    std::string_view Name() const override { return "area"; }
+                     std::vector<float> radii, std::string_view name)
+        : scene_(scene), accel_(accel), options_(options), radii_(std::move(radii)), name_(name) {}
+    std::string_view Name() const override { return name_; }
 
     void Visibility(const ShadingPoint& sp, const bool* needed, float* vis,
                     RenderCounters& counters) const override {
@@ -275,12 +281,14 @@ class AreaLightShadows final : public ShadowMethod {
     const Accelerator& accel_;
     const AreaLightOptions options_;
     const std::vector<float> radii_;  ///< per light, from LightRadii
+    const std::string_view name_;
 };
 
 }  // namespace
 
 std::unique_ptr<ShadowMethod> CreateAreaLightShadows(const Scene& scene, const Accelerator& accel,
-                                                     const AreaLightOptions& options, std::vector<float> radii) {
+                                                     const AreaLightOptions& options, std::vector<float> radii,
+                                                     std::string_view name) {
     ValidateAreaLightOptions(options);
     if (radii.size() != scene.lights.size())
         ThrowError("area lights: %zu radii for %zu lights", radii.size(), scene.lights.size());
@@ -288,7 +296,7 @@ std::unique_ptr<ShadowMethod> CreateAreaLightShadows(const Scene& scene, const A
         if (!(std::isfinite(radii[i]) && radii[i] >= 0))
             ThrowError("%s: light %zu: radius %g: must be a finite number >= 0", scene.name.c_str(), i,
                        static_cast<double>(radii[i]));
-    return std::make_unique<AreaLightShadows>(scene, accel, options, std::move(radii));
+    return std::make_unique<AreaLightShadows>(scene, accel, options, std::move(radii), name);
 }
 
 }  // namespace lm

@@ -29,6 +29,24 @@ uint64_t AreaLightSeed(const ShadingPoint& sp, uint32_t light);
 float SphereLightVisibility(const Accelerator& accel, const Vec3& origin, const Vec3& center,
                             float radius, int samples, uint64_t seed, int* rays = nullptr);
 
+/// The shadow rays SphereLightVisibility traces, one by one, for a caller that needs more
+/// than whether they are blocked (the shadow denoiser reads where they are blocked): ray
+/// `index` of `samples` goes from `origin` to the near side of the sphere; each ray's
+/// direction ends at t = 1 − 1e-5 (ray.d spans the segment).
+class SphereLightRays {
+  public:
+    SphereLightRays(const Vec3& origin, const Vec3& center, float radius, int samples, uint64_t seed);
+    /// The origin lies inside the light: V = 1 without rays.
+    bool Inside() const { return inside_; }
+    Ray Get(int index) const;
+
+  private:
+    Vec3 origin_, oc_, axis_, e1_, e2_;
+    float r2_ = 0, oneMinusCosMax_ = 0, shift0_ = 0, shift1_ = 0;
+    int samples_ = 1;
+    bool inside_ = false;
+};
+
 /// A cheaper estimate of the same fraction, for the light mesh's narrow penumbrae: the
 /// light as the disc of radius `radius` it shows `origin` (centred on `center`, facing it;
 /// for radius << distance the sphere's silhouette), sampled at the centres of 2·perRing
@@ -85,8 +103,10 @@ Vec3 SampleConeStratified(const Vec3& axis, float oneMinusCosMax, int index, int
 /// radii[i] (LightRadii: the lights' own radii or the override). For a light of radius 0 it
 /// traces exactly the shadow ray of "rt", so with every radius 0 the images are
 /// bit-identical. Throws Error for bad options (ValidateAreaLightOptions) or radii (not one
-/// per light, negative or not finite).
+/// per light, negative or not finite). `name` is its Name(): "denoised" when the camera
+/// hits' visibility is filtered afterwards (render/shadow_denoiser.h), a string literal.
 std::unique_ptr<ShadowMethod> CreateAreaLightShadows(const Scene& scene, const Accelerator& accel,
-                                                     const AreaLightOptions& options, std::vector<float> radii);
+                                                     const AreaLightOptions& options, std::vector<float> radii,
+                                                     std::string_view name = "area");
 
 }  // namespace lm

@@ -145,7 +145,7 @@ float CameraRayAngle(const Camera& camera, const RenderOptions& options) {
 
 }  // namespace
 
-std::vector<std::string> ShadowMethodNames() { return {"soft", "none", "rt", "lmm", "area"}; }
+std::vector<std::string> ShadowMethodNames() { return {"soft", "none", "rt", "lmm", "area", "denoised"}; }
 
 std::vector<float> LightRadii(const Scene& scene, const RenderOptions& options) {
     std::vector<float> radii;
@@ -171,8 +171,12 @@ std::unique_ptr<ShadowMethod> CreateShadowMethod(std::string_view name, const Sc
         lmm.rayAngle = CameraRayAngle(scene.camera, options);
         return CreateLightMeshShadows(scene, accel, lmm);
     }
+    // "denoised": area's rays per point; RenderJob filters the camera hits' visibility
+    // (render/shadow_denoiser.h), the mirrors keep these.
     if (name == "area") return CreateAreaLightShadows(scene, accel, options.areaLight, LightRadii(scene, options));
-    ThrowSettingError("shadows", "unknown shadow method \"%.*s\" (choose soft, none, rt, lmm or area)", static_cast<int>(name.size()),
+    if (name == "denoised")
+        return CreateAreaLightShadows(scene, accel, options.areaLight, LightRadii(scene, options), "denoised");
+    ThrowSettingError("shadows", "unknown shadow method \"%.*s\" (choose soft, none, rt, lmm, area or denoised)", static_cast<int>(name.size()),
                name.data());
 }
 
