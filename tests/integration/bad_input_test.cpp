@@ -470,14 +470,6 @@ std::vector<Case> Corpus() {
          .expected = "lightmesh: error: $D/scene.json /lights/0/intensity/2: must not be "
                      "negative, got -1\n",
          .files = {{"scene.json", WithLights(R"([{"position": [0, 6, 0], "intensity": [1, 1, -1]}])")}}},
-        {.name = "lights_too_many_for_lmm",
-         .args = kRender + " --shadows lmm",
-         .expected = "lightmesh: error: light mesh: 63 lights; at most 62 are supported\n",
-         .files = {{"scene.json", WithLights(ManyLights(63))}}},
-        {.name = "lights_too_many_for_the_renderer",
-         .args = kRender + " --shadows rt",
-         .expected = "lightmesh: error: $D/scene.json: 65 lights; at most 64 are supported\n",
-         .files = {{"scene.json", WithLights(ManyLights(65))}}},
         // --- Camera -------------------------------------------------------------------------
         {.name = "camera_look_at_is_position",
          .args = kRender,

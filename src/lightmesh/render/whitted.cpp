@@ -15,9 +15,6 @@ WhittedRenderer::WhittedRenderer(const Scene& scene, const Accelerator& accel,
                                  const ShadowMethod& shadows, const RenderOptions& options)
     : scene_(scene), accel_(accel), shadows_(shadows), options_(options),
       camera_(scene.camera, options.width, options.height) {
-    if (scene.lights.size() > static_cast<size_t>(kMaxLights))
-        ThrowErrorAt({scene.name}, "%zu lights; at most %d are supported",
-                   scene.lights.size(), kMaxLights);
     if (options.aa < 1 || options.aa > 16) ThrowError("--aa %d: must be 1 to 16", options.aa);
     if (options.maxDepth < 1 || options.maxDepth > 64)
         ThrowError("max depth %d: must be 1 to 64", options.maxDepth);
@@ -114,9 +111,23 @@ Color WhittedRenderer::FinishShading(const Ray& ray, const Lighting& lit, const 
 }
 
 Color WhittedRenderer::Shade(const Ray& ray, const Hit& hit, int depth, RenderCounters& counters) const {
+    // The lights' terms on the stack up to kLocal lights, on the heap beyond.
+    constexpr size_t kLocal = 64;
+    const size_t nLights = scene_.lights.size();
+    bool neededLocal[kLocal];
+    Color omegaLocal[kLocal];
+    float visLocal[kLocal] = {};
+    std::unique_ptr<bool[]> neededHeap;
+    std::unique_ptr<Color[]> omegaHeap;
+    std::unique_ptr<float[]> visHeap;
     Lighting lit;
+    lit.needed = neededLocal, lit.omega = omegaLocal;
+    float* vis = visLocal;
+    if (nLights > kLocal) {
+        neededHeap.reset(new bool[nLights]), omegaHeap.reset(new Color[nLights]), visHeap.reset(new float[nLights]());
+        lit.needed = neededHeap.get(), lit.omega = omegaHeap.get(), vis = visHeap.get();
+    }
     PrepareShading(ray, hit, &lit, counters);
-    float vis[kMaxLights] = {};
     if (lit.any) shadows_.Visibility(lit.sp, lit.needed, vis, counters);
     return FinishShading(ray, lit, vis, depth, counters);
 }
@@ -141,9 +152,9 @@ void WhittedRenderer::RenderTile(int tile, Image* image, RenderCounters& counter
     // sub-pixel as Pixel() makes them, go to the back-end together (a packet on the grid
     // and on Embree); each gets the hit Intersect gives it alone, so the pixels are
     // Pixel()'s bit for bit.
-    // The buffers live as long as the thread: a Lighting holds kMaxLights terms, so a
-    // fresh batch per tile zero-filled 57 KiB each time (3 % of an RT render on the
-    // gazebo). Every entry read is written first (PrepareShading fills what Finish reads).
+    // The buffers live as long as the thread: a batch holds kShadingBatch × lights terms, so
+    // a fresh batch per tile zero-filled 57 KiB each time at 64 lights (3 % of an RT render
+    // on the gazebo). Every entry read is written first (PrepareShading fills what Finish reads).
     // A tile started on this thread while another waits in it (a nested TBB loop
     // stealing work) takes buffers of its own.
     thread_local TileBuffers threadBuffers;

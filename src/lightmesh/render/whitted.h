@@ -17,9 +17,6 @@
 
 namespace lm {
 
-/// Most lights a scene may have (visibility is gathered in fixed-size arrays).
-inline constexpr int kMaxLights = 64;
-
 struct RenderResult {
     Image image;
     RenderCounters counters;
@@ -31,7 +28,7 @@ struct RenderResult {
 /// ShadowMethod: one shadow ray (formula (1), "rt"), or the light mesh (formula (2)).
 class WhittedRenderer {
   public:
-    /// Throws Error for a degenerate camera, a bad image size or too many lights.
+    /// Throws Error for a degenerate camera or a bad image size. Any number of lights.
     WhittedRenderer(const Scene& scene, const Accelerator& accel, const ShadowMethod& shadows,
                     const RenderOptions& options);
 
@@ -79,8 +76,8 @@ class WhittedRenderer {
         Vec3 ns;  ///< shading normal
         const Material* mat = nullptr;
         bool any = false;  ///< some light's term is not black (visibility is needed)
-        bool needed[kMaxLights];
-        Color omega[kMaxLights];  ///< light i's unshadowed term, where needed[i]
+        bool* needed = nullptr;   ///< per light (storage of the caller: TileBuffers, Shade)
+        Color* omega = nullptr;   ///< light i's unshadowed term, where needed[i]
     };
     /// Hits shaded together in RenderTile: the points whose visibility one
     /// ShadowMethod::VisibilityMany call computes.
@@ -94,12 +91,21 @@ class WhittedRenderer {
         std::vector<ShadingPoint> points;
         std::unique_ptr<bool[]> needed;  // kShadingBatch × lights
         size_t neededLights = 0;
+        // The batch's Lighting terms: kShadingBatch × lights each (Lighting points into them).
+        std::unique_ptr<bool[]> litNeeded;
+        std::unique_ptr<Color[]> litOmega;
         bool inUse = false;  // a RenderTile on this thread holds them
         void Reserve(size_t lights) {
             if (batch.size() < kShadingBatch) batch.resize(kShadingBatch), points.resize(kShadingBatch);
             if (!needed || neededLights < lights) {
                 neededLights = std::max<size_t>(lights, 1);
                 needed.reset(new bool[kShadingBatch * neededLights]);
+                litNeeded.reset(new bool[kShadingBatch * neededLights]);
+                litOmega.reset(new Color[kShadingBatch * neededLights]);
+            }
+            for (size_t i = 0; i < kShadingBatch; ++i) {
+                batch[i].needed = litNeeded.get() + i * neededLights;
+                batch[i].omega = litOmega.get() + i * neededLights;
             }
         }
     };

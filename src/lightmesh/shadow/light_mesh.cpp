@@ -25,6 +25,7 @@
 #include "lightmesh/shadow/area_light.h"
 #include "lightmesh/shadow/light_mesh_cells.h"
 #include "lightmesh/shadow/light_mesh_impl.h"
+#include "lightmesh/shadow/light_mesh_groups.h"
 #include "lightmesh/shadow/light_mesh_kernels.h"
 #include "lightmesh/shadow/light_mesh_patches.h"
 #include "lightmesh/shadow/light_mesh_penumbra.h"
@@ -70,6 +71,12 @@ LightMeshLattice LightMeshLattice::Make(const Bounds3& bounds, int cc, float ki)
 }
 
 int LightMeshBytesPerNode(size_t lights) {
+    if (lights > kMaxLightsPerWord) {  // groups (LightGroups' sizes), a word each
+        const size_t groups = (lights + kMaxLightsPerWord - 1) / kMaxLightsPerWord;
+        int bytes = 0;
+        for (size_t g = 0; g < groups; ++g) bytes += LightMeshBytesPerNode(lights / groups + (g < lights % groups ? 1 : 0));
+        return bytes;
+    }
     const size_t bits = lights + 2;  // visibility bits + initialised + inside
     return bits <= 8 ? 1 : bits <= 16 ? 2 : bits <= 32 ? 4 : 8;
 }
@@ -170,8 +177,10 @@ namespace {
 
 template <typename Word>
 LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const LightMeshLattice& lattice,
-                           const LightMeshVariant& variant, TemplateLoad templates, const LightMeshOptions& options)
+                           const LightMeshVariant& variant, TemplateLoad templates, const LightMeshOptions& options,
+                           std::vector<PointLight> lights)
     : scene_(scene),
+      lights_(std::move(lights)),
       accel_(accel),
       lattice_(lattice),
       variant_(variant),
@@ -192,7 +201,7 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
                      : options.thinCheck == "lit" ? ThinCheck::kLit
                                                   : ThinCheck::kOff;
     const std::string& cellSummaries = options.cellSummaries;
-    if (lightRadius_ > 0) blockerT_ = ZeroedArray<uint16_t>(lattice.NodeCount() * scene.lights.size());
+    if (lightRadius_ > 0) blockerT_ = ZeroedArray<uint16_t>(lattice.NodeCount() * lights_.size());
     if (variant_.enumeration == SphereEnumeration::Templates) ConvertTemplates();
     sceneBox_ = scene.mesh.Bounds();
     // Tolerances at the lattice's scale. delta: how far from a plane a vertex may lie and
@@ -270,13 +279,13 @@ inline void LightMesh<Word>::CheckThin(const ShadingPoint& sp, const bool* neede
     // P's own rays to the lights the nodes decided alone, traced together.
     const uint64_t checked = ThinChecked(needed, ownRays, vis);
     if (!checked) return;
-    ApplyThinCheck(sp, checked, LightsVisible(accel_, sp.origin, scene_.lights, checked), vis, counters);
+    ApplyThinCheck(sp, checked, LightsVisible(accel_, sp.origin, lights_, checked), vis, counters);
 }
 
 template <typename Word>
 inline uint64_t LightMesh<Word>::ThinChecked(const bool* needed, uint64_t ownRays, const float* vis) const {
     uint64_t checked = 0;
-    for (size_t l = 0; l < scene_.lights.size(); ++l) {
+    for (size_t l = 0; l < lights_.size(); ++l) {
         if (!needed[l] || ((ownRays >> l) & 1)) continue;
         if (vis[l] == 1.0f || (thinCheck_ == ThinCheck::kAll && vis[l] == 0.0f)) checked |= uint64_t(1) << l;
     }
@@ -286,10 +295,10 @@ inline uint64_t LightMesh<Word>::ThinChecked(const bool* needed, uint64_t ownRay
 template <typename Word>
 inline void LightMesh<Word>::ApplyThinCheck(const ShadingPoint& sp, uint64_t checked, uint64_t visible, float* vis,
                                             RenderCounters& counters) const {
-    for (size_t l = 0; l < scene_.lights.size(); ++l) {
+    for (size_t l = 0; l < lights_.size(); ++l) {
         if (!((checked >> l) & 1)) continue;
         const bool lit = vis[l] == 1.0f;
-        const Vec3& light = scene_.lights[l].position;
+        const Vec3& light = lights_[l].position;
         ++Count(counters, LightMeshCount::kThinChecks);
         ++counters.shadowRays;
         if ((((visible >> l) & 1) != 0) == lit) continue;
@@ -334,7 +343,7 @@ inline void LightMesh<Word>::VisibilityMany(const ShadingPoint* sps, size_t coun
         TraceDiscs(queue, lights, vis + first * lights, counters);
         if (thinCheck_ == ThinCheck::kOff) continue;
         // (ApplyThinCheck counts the rays, one per checked light, as CheckThin does.)
-        LightsVisibleMany(accel_, sps + first, n, scene_.lights, checked, visible);
+        LightsVisibleMany(accel_, sps + first, n, lights_, checked, visible);
         for (size_t i = 0; i < n; ++i)
             if (checked[i]) ApplyThinCheck(sps[first + i], checked[i], visible[i], vis + (first + i) * lights, counters);
     }
@@ -397,7 +406,7 @@ inline void LightMesh<Word>::TraceDiscs(const DiscQueue& queue, size_t lights, f
 template <typename Word>
 inline uint64_t LightMesh<Word>::Interpolate(const ShadingPoint& sp, const bool* needed, float* vis,
                                              RenderCounters& counters) const {
-    const size_t nLights = scene_.lights.size();
+    const size_t nLights = lights_.size();
     Accumulator acc(nLights);
     Word neededMask = 0;
     for (size_t l = 0; l < nLights; ++l)
@@ -431,7 +440,7 @@ inline uint64_t LightMesh<Word>::Interpolate(const ShadingPoint& sp, const bool*
         for (size_t l = 0; l < nLights; ++l) {
             if (!needed[l]) continue;
             ++counters.shadowRays;
-            vis[l] = LightVisible(accel_, sp.origin, scene_.lights[l].position) ? 1.0f : 0.0f;
+            vis[l] = LightVisible(accel_, sp.origin, lights_[l].position) ? 1.0f : 0.0f;
         }
         return ~uint64_t(0);  // every light from P's own ray
     }
@@ -565,14 +574,14 @@ inline void LightMesh<Word>::ConvertTemplates() {
 template <typename Word>
 inline Word LightMesh<Word>::EvaluateVisibility(const Vec3& x, uint64_t index) const {
     Word value = kInit;
-    const size_t nLights = scene_.lights.size();
+    const size_t nLights = lights_.size();
     if (lightRadius_ > 0) {
         // Penumbra mode: the same segment, but the nearest blocker's distance too, as
         // its parameter t along x → light in 16 bits (0: no blocker). The stores are
         // relaxed: they happen before the word's publication (release), and racing
         // threads store the same values.
         for (size_t l = 0; l < nLights; ++l) {
-            const Vec3& light = scene_.lights[l].position;
+            const Vec3& light = lights_[l].position;
             Hit hit;
             if (!accel_.Intersect(LightSegment(x, light), &hit)) {
                 value |= Word(1) << l;
@@ -587,9 +596,9 @@ inline Word LightMesh<Word>::EvaluateVisibility(const Vec3& x, uint64_t index) c
     // Embree's packets, each ray the answer it gets alone): castle with 20 and 40 lights,
     // the default 3 % and 7 % faster; with 4 to 12 lights no gain was measurable.
     if (nLights >= kPacketLights)
-        return value | static_cast<Word>(LightsVisible(accel_, x, scene_.lights, (uint64_t(1) << nLights) - 1));
+        return value | static_cast<Word>(LightsVisible(accel_, x, lights_, (uint64_t(1) << nLights) - 1));
     for (size_t l = 0; l < nLights; ++l)
-        if (LightVisible(accel_, x, scene_.lights[l].position)) value |= Word(1) << l;
+        if (LightVisible(accel_, x, lights_[l].position)) value |= Word(1) << l;
     return value;
 }
 
@@ -607,9 +616,9 @@ template <typename Word>
 inline Word LightMesh<Word>::EvaluateWithInside(const Vec3& x) const {
     Word value = kInit;
     int odd = 0, votes = 0;
-    const size_t nLights = scene_.lights.size();
+    const size_t nLights = lights_.size();
     for (size_t l = 0; l < nLights; ++l) {
-        const Vec3& light = scene_.lights[l].position;
+        const Vec3& light = lights_[l].position;
         if (votes < 3) {
             const int crossings = accel_.CountCrossings(LightSegment(x, light));
             if (crossings == 0) value |= Word(1) << l;
@@ -645,17 +654,19 @@ std::unique_ptr<LightMeshShadows> CreateLightMeshShadows(const Scene& scene, con
     const LightMeshVariant variant = ParseLightMeshVariant(options.variant);
     const LightMeshLattice lattice = LightMeshLattice::Make(scene.mesh.Bounds(), options.cc, options.ki);
     const size_t nLights = scene.lights.size();
-    if (nLights > 62) ThrowError("light mesh: %zu lights; at most 62 are supported", nLights);
     const int ns = options.ns == 0 ? kDefaultTemplateSubsteps : options.ns;
     if (ns < 1 || ns > 64) ThrowSettingError("ns", "light mesh: ns must be between 1 and 64, got %d", ns);
-    const int bytes = LightMeshBytesPerNode(nLights);
     if (!(options.lightRadius >= 0) || !std::isfinite(options.lightRadius))
         ThrowSettingError("light_radius", "light mesh: the light radius must be finite and >= 0, got %g", options.lightRadius);
     if (options.lightRadius > 0 && variant.local != LocalVisibility::Consensus)
         ThrowSettingError("light_radius", "light mesh: a light radius (contact-hardening penumbrae) needs the consensus variant (the "
                    "default), not %s",
                    variant.name.c_str());
-    const int bytesPerNode = LightMeshStorageBytesPerNode(nLights, options.lightRadius);
+    // More lights than a word holds: groups of them, each a light mesh of its own
+    // (LightMeshGroups); the storage per node is the groups' together.
+    const std::vector<std::vector<uint32_t>> groups = LightGroups(scene.lights, kMaxLightsPerWord);
+    uint64_t bytesPerNode = 0;
+    for (const auto& g : groups) bytesPerNode += static_cast<uint64_t>(LightMeshStorageBytesPerNode(g.size(), options.lightRadius));
     // Node words. (Cell summaries add a pointer per 4³ cells, zero pages until used, and
     // their records, about 32 bytes per cell used, lazily like the nodes.)
     const uint64_t need = lattice.NodeCount() * static_cast<uint64_t>(bytesPerNode);
@@ -666,8 +677,11 @@ std::unique_ptr<LightMeshShadows> CreateLightMeshShadows(const Scene& scene, con
         ThrowSettingError("cc", "light mesh %dx%dx%d (CC %d, kI %g) needs %s of node storage%s, more than half of "
                    "this machine's %s: lower CC",
                    lattice.nx, lattice.ny, lattice.nz, options.cc, options.ki, FormatBytes(need).c_str(),
-                   options.lightRadius > 0
-                       ? StringPrintf(" (%d bytes per node with the blocker distances of the light radius)", bytesPerNode).c_str()
+                   options.lightRadius > 0 || groups.size() > 1
+                       ? StringPrintf(" (%llu bytes per node%s%s)", static_cast<unsigned long long>(bytesPerNode),
+                                      groups.size() > 1 ? StringPrintf(" for %zu lights in %zu groups", nLights, groups.size()).c_str() : "",
+                                      options.lightRadius > 0 ? " with the blocker distances of the light radius" : "")
+                             .c_str()
                        : "",
                    FormatBytes(physical).c_str());
     if (variant.local == LocalVisibility::Inside) {
@@ -692,11 +706,26 @@ std::unique_ptr<LightMeshShadows> CreateLightMeshShadows(const Scene& scene, con
         ThrowSettingError("cell_summaries", "cell summaries \"%s\": choose auto, on or off", summaries.c_str());
     if (options.simdWidth != 0 && options.simdWidth != 1 && options.simdWidth != 4 && options.simdWidth != 8)
         ThrowError("light mesh: SIMD width %d: choose 0, 1, 4 or 8", options.simdWidth);
-    switch (bytes) {
-        case 1: return std::make_unique<LightMesh<uint8_t>>(scene, accel, lattice, variant, std::move(templates), options);
-        case 2: return std::make_unique<LightMesh<uint16_t>>(scene, accel, lattice, variant, std::move(templates), options);
-        case 4: return std::make_unique<LightMesh<uint32_t>>(scene, accel, lattice, variant, std::move(templates), options);
-        default: return std::make_unique<LightMesh<uint64_t>>(scene, accel, lattice, variant, std::move(templates), options);
+    if (groups.size() == 1)
+        return CreateLightMeshForLights(scene, accel, lattice, variant, std::move(templates), options, scene.lights);
+    std::vector<std::unique_ptr<LightMeshShadows>> meshes;
+    for (const auto& g : groups) {
+        std::vector<PointLight> lights;
+        for (uint32_t id : g) lights.push_back(scene.lights[id]);
+        meshes.push_back(CreateLightMeshForLights(scene, accel, lattice, variant, templates, options, std::move(lights)));
+    }
+    return CreateLightMeshGroups(scene, groups, std::move(meshes));
+}
+
+std::unique_ptr<LightMeshShadows> CreateLightMeshForLights(const Scene& scene, const Accelerator& accel,
+                                                           const LightMeshLattice& lattice, const LightMeshVariant& variant,
+                                                           TemplateLoad templates, const LightMeshOptions& options,
+                                                           std::vector<PointLight> lights) {
+    switch (LightMeshBytesPerNode(lights.size())) {
+        case 1: return std::make_unique<LightMesh<uint8_t>>(scene, accel, lattice, variant, std::move(templates), options, std::move(lights));
+        case 2: return std::make_unique<LightMesh<uint16_t>>(scene, accel, lattice, variant, std::move(templates), options, std::move(lights));
+        case 4: return std::make_unique<LightMesh<uint32_t>>(scene, accel, lattice, variant, std::move(templates), options, std::move(lights));
+        default: return std::make_unique<LightMesh<uint64_t>>(scene, accel, lattice, variant, std::move(templates), options, std::move(lights));
     }
 }
 

@@ -108,8 +108,11 @@ class LightMesh final : public LightMeshShadows {
     static constexpr Word kVisMask = kInside - 1;
 
   public:
+    // `lights`: the lights this mesh's words hold (the scene's, or one group of them:
+    // LightMeshGroups); light l of the mesh is lights[l].
     LightMesh(const Scene& scene, const Accelerator& accel, const LightMeshLattice& lattice,
-              const LightMeshVariant& variant, TemplateLoad templates, const LightMeshOptions& options);
+              const LightMeshVariant& variant, TemplateLoad templates, const LightMeshOptions& options,
+              std::vector<PointLight> lights);
 
     // The most (triangle, brick) pairs the binning may store: far more than any scene of
     // ordinary triangles needs (the garden: about 8 per triangle), far less than a file of
@@ -122,7 +125,7 @@ class LightMesh final : public LightMeshShadows {
     const LightMeshLattice& Lattice() const override { return lattice_; }
     const LightMeshVariant& Variant() const override { return variant_; }
     const TemplateLoad& Templates() const override { return templates_; }
-    int BytesPerNode() const override { return LightMeshStorageBytesPerNode(scene_.lights.size(), lightRadius_); }
+    int BytesPerNode() const override { return LightMeshStorageBytesPerNode(lights_.size(), lightRadius_); }
     uint64_t NodesEvaluated() const override { return evaluated_.load(); }
     bool IsEvaluated(uint64_t index) const override {
         return (nodes_[index].load(std::memory_order_acquire) & kInit) != 0;
@@ -130,14 +133,14 @@ class LightMesh final : public LightMeshShadows {
     uint64_t NodeVisibility(uint64_t index) const override { return NodeWord(index) & kVisMask; }
     bool NodeInside(uint64_t index) const override { return (NodeWord(index) & kInside) != 0; }
     float NodeBlockerParameter(uint64_t index, size_t light) const override {
-        if (light >= scene_.lights.size()) return 0.0f;
+        if (light >= lights_.size()) return 0.0f;
         const Word w = NodeWord(index);
         if (lightRadius_ == 0 || ((w >> light) & 1)) return 0.0f;
         return BlockerParameter(index, light);
     }
     // The stored blocker parameter of an evaluated node whose light is blocked.
     float BlockerParameter(uint64_t index, size_t light) const {
-        return static_cast<float>(blockerT_[index * scene_.lights.size() + light].load(std::memory_order_relaxed)) *
+        return static_cast<float>(blockerT_[index * lights_.size() + light].load(std::memory_order_relaxed)) *
                (1.0f / 65535.0f);
     }
 
@@ -395,7 +398,7 @@ class LightMesh final : public LightMeshShadows {
     // Segments traced when a node is evaluated: one per light, plus, for СТ, the extra
     // segments that complete its vote of three (see EvaluateNode).
     size_t SegmentsPerNode() const {
-        const size_t n = scene_.lights.size();
+        const size_t n = lights_.size();
         return variant_.local == LocalVisibility::Inside && n < 3 ? 3 : n;
     }
 
@@ -480,7 +483,7 @@ class LightMesh final : public LightMeshShadows {
     void UseAll(const FrontRun& run, int64_t base, Accumulator& acc) const {
         auto word = [&](int32_t linear) { return Evaluate(static_cast<uint64_t>(base + linear)); };
         if (sumFront_ && sumFront_(run.blocks, run.masks, run.count, static_cast<const void*>(nodes_.get() + base),
-                                   static_cast<int>(scene_.lights.size()), acc.visible, &acc.m))
+                                   static_cast<int>(lights_.size()), acc.visible, &acc.m))
             return;
         if constexpr (sizeof(Word) == 1) {
             uint64_t lanes = 0;
@@ -646,6 +649,7 @@ class LightMesh final : public LightMeshShadows {
     static constexpr float kPlaneEps = 1e-5f;
 
     const Scene& scene_;
+    const std::vector<PointLight> lights_;  // the lights of the node words (the constructor's)
     const Accelerator& accel_;
     const LightMeshLattice lattice_;
     const LightMeshVariant variant_;
