@@ -8,6 +8,7 @@
 
 #include "lightmesh/accel/accelerator.h"
 #include "lightmesh/io/image.h"
+#include "lightmesh/render/light_lists.h"
 #include "lightmesh/util/counters.h"
 #include "lightmesh/settings/options.h"
 #include "lightmesh/scene/camera.h"
@@ -51,6 +52,8 @@ class WhittedRenderer {
     int Height() const { return options_.height; }
     int TilesX() const { return (options_.width + kTileSize - 1) / kTileSize; }
     int TileCount() const { return TilesX() * ((options_.height + kTileSize - 1) / kTileSize); }
+    /// The per-cell lists of the lights with a range (inactive when no light has one).
+    const LightLists& Lists() const { return lightLists_; }
     /// The pixels of one tile into *image (of the render's size): Pixel()'s values, with the
     /// camera rays of kPacketSize × kPacketSize pixels traced together (IntersectMany).
     /// With an origin, pixel (x, y) goes to image->At(x - originX, y - originY) instead
@@ -78,6 +81,8 @@ class WhittedRenderer {
         bool any = false;  ///< some light's term is not black (visibility is needed)
         bool* needed = nullptr;   ///< per light (storage of the caller: TileBuffers, Shade)
         Color* omega = nullptr;   ///< light i's unshadowed term, where needed[i]
+        uint32_t* lit = nullptr;  ///< the lights with needed[i], ascending (as many as lights)
+        uint32_t litCount = 0;
     };
     /// Hits shaded together in RenderTile: the points whose visibility one
     /// ShadowMethod::VisibilityMany call computes.
@@ -94,6 +99,7 @@ class WhittedRenderer {
         // The batch's Lighting terms: kShadingBatch × lights each (Lighting points into them).
         std::unique_ptr<bool[]> litNeeded;
         std::unique_ptr<Color[]> litOmega;
+        std::unique_ptr<uint32_t[]> litIds;
         bool inUse = false;  // a RenderTile on this thread holds them
         void Reserve(size_t lights) {
             if (batch.size() < kShadingBatch) batch.resize(kShadingBatch), points.resize(kShadingBatch);
@@ -102,10 +108,12 @@ class WhittedRenderer {
                 needed.reset(new bool[kShadingBatch * neededLights]);
                 litNeeded.reset(new bool[kShadingBatch * neededLights]);
                 litOmega.reset(new Color[kShadingBatch * neededLights]);
+                litIds.reset(new uint32_t[kShadingBatch * neededLights]);
             }
             for (size_t i = 0; i < kShadingBatch; ++i) {
                 batch[i].needed = litNeeded.get() + i * neededLights;
                 batch[i].omega = litOmega.get() + i * neededLights;
+                batch[i].lit = litIds.get() + i * neededLights;
             }
         }
     };
@@ -126,6 +134,7 @@ class WhittedRenderer {
     const ShadowMethod& shadows_;
     const RenderOptions options_;
     CameraRays camera_;
+    LightLists lightLists_;  // the lights near each cell, where lights have a range
 };
 
 }  // namespace lm

@@ -748,6 +748,7 @@ class LightMesh final : public LightMeshShadows {
     // along the node's shadow segment, t·65535 (EvaluateVisibility); light l of node i at
     // i·lights + l.
     const float lightRadius_;
+    bool ranged_ = false;  // some light has a finite range (EvaluateVisibility skips beyond it)
     ThinCheck thinCheck_ = ThinCheck::kOff;
     ZeroedPtr<std::atomic<uint16_t>> blockerT_;
     static constexpr size_t kReachChunk = 1 << 18;
