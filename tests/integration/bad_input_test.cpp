@@ -78,14 +78,6 @@ std::string WithExtra(const std::string& extra) {
     return SceneJson(p);
 }
 
-/// n lights in a ring above the box.
-std::string ManyLights(int n) {
-    std::string s = "[";
-    for (int i = 0; i < n; ++i)
-        s += (i ? ", " : "") + std::string("{\"position\": [") + std::to_string(i % 10 - 5) +
-             ", 6, " + std::to_string(i / 10) + "]}";
-    return s + "]";
-}
 
 
 // --- Inputs of issue 16 (robustness, round two) --------------------------------------------
@@ -470,6 +462,14 @@ std::vector<Case> Corpus() {
          .expected = "lightmesh: error: $D/scene.json /lights/0/intensity/2: must not be "
                      "negative, got -1\n",
          .files = {{"scene.json", WithLights(R"([{"position": [0, 6, 0], "intensity": [1, 1, -1]}])")}}},
+        {.name = "light_range_zero",
+         .args = kRender,
+         .expected = "lightmesh: error: $D/scene.json /lights/0/range: must be greater than 0, got 0\n",
+         .files = {{"scene.json", WithLights(R"([{"position": [0, 6, 0], "range": 0}])")}}},
+        {.name = "light_range_negative",
+         .args = kRender + " --shadows lmm",
+         .expected = "lightmesh: error: $D/scene.json /lights/1/range: must be greater than 0, got -2.5\n",
+         .files = {{"scene.json", WithLights(R"([{"position": [0, 6, 0]}, {"position": [1, 6, 0], "range": -2.5}])")}}},
         // --- Camera -------------------------------------------------------------------------
         {.name = "camera_look_at_is_position",
          .args = kRender,
