@@ -178,7 +178,7 @@ namespace {
 template <typename Word>
 LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const LightMeshLattice& lattice,
                            const LightMeshVariant& variant, TemplateLoad templates, const LightMeshOptions& options,
-                           std::vector<PointLight> lights)
+                           std::vector<PointLight> lights, const std::shared_ptr<void>& sharedTables)
     : scene_(scene),
       lights_(std::move(lights)),
       accel_(accel),
@@ -195,7 +195,8 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
       sumFront_(ChooseSumFrontFunction(options.simdWidth, static_cast<int>(sizeof(Word)))),
       minority_(ChooseMinorityFunction(options.simdWidth, static_cast<int>(sizeof(Word)))),
       nodes_(ZeroedArray<Word>(lattice.NodeCount() + kNodePadding)),
-      lightRadius_(options.lightRadius) {
+      lightRadius_(options.lightRadius),
+      tables_(TakeTables(sharedTables)) {
     if (lightRadius_ > 0)
         thinCheck_ = options.thinCheck == "all" ? ThinCheck::kAll
                      : options.thinCheck == "lit" ? ThinCheck::kLit
@@ -235,7 +236,11 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
         bricksY_ = static_cast<uint64_t>(lattice.ny + kBrick - 1) / kBrick;
         const uint64_t bricksZ = static_cast<uint64_t>(lattice.nz + kBrick - 1) / kBrick;
         bricks_ = ZeroedArray<SummaryBrick*>(bricksX_ * bricksY_ * bricksZ);
-        {
+        if (tables_->built) {
+            // Another group's tables (the same geometry, lattice and options).
+            binPairs_ = tables_->binPairs;
+            if (!tables_->binned) summaries_ = false, summariesOff_ = true;
+        } else {
             const TriangleMesh& mesh = scene.mesh;
             planes_.resize(mesh.triangles.size());
             magnitudes_.resize(mesh.triangles.size());
@@ -252,7 +257,7 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
                 magnitudes_[t] = std::max({MaxComponent(Abs(a)), MaxComponent(Abs(b)), MaxComponent(Abs(c))});
             });
         }
-        if (!BinTrianglesByBrick(bricksZ)) {
+        if (!tables_->built && !BinTrianglesByBrick(bricksZ)) {
             // Images are the same without summaries; only the time differs.
             summaries_ = false;
             summariesOff_ = true;
@@ -263,6 +268,11 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
                                     scene.name.c_str(), static_cast<unsigned long long>(binPairs_),
                                     static_cast<unsigned long long>(BinBudget())));
         }
+    }
+    if (summaries_ || summariesOff_) {
+        tables_->built = true;
+        tables_->binned = summaries_;
+        tables_->binPairs = binPairs_;
     }
     patches_ = summaries_ && patchesFit_ && variant_.local == LocalVisibility::Consensus;
 }
@@ -721,10 +731,11 @@ std::unique_ptr<LightMeshShadows> CreateLightMeshShadows(const Scene& scene, con
     if (groups.size() == 1)
         return CreateLightMeshForLights(scene, accel, lattice, variant, std::move(templates), options, scene.lights);
     std::vector<std::unique_ptr<LightMeshShadows>> meshes;
+    std::shared_ptr<void> tables;  // the geometry's tables, built by the first group, shared
     for (const auto& g : groups) {
         std::vector<PointLight> lights;
         for (uint32_t id : g) lights.push_back(scene.lights[id]);
-        meshes.push_back(CreateLightMeshForLights(scene, accel, lattice, variant, templates, options, std::move(lights)));
+        meshes.push_back(CreateLightMeshForLights(scene, accel, lattice, variant, templates, options, std::move(lights), &tables));
     }
     return CreateLightMeshGroups(scene, groups, std::move(meshes));
 }
@@ -732,12 +743,20 @@ std::unique_ptr<LightMeshShadows> CreateLightMeshShadows(const Scene& scene, con
 std::unique_ptr<LightMeshShadows> CreateLightMeshForLights(const Scene& scene, const Accelerator& accel,
                                                            const LightMeshLattice& lattice, const LightMeshVariant& variant,
                                                            TemplateLoad templates, const LightMeshOptions& options,
-                                                           std::vector<PointLight> lights) {
+                                                           std::vector<PointLight> lights, std::shared_ptr<void>* tables) {
+    // Tables are shared between meshes of one word type only (every group's words are 8
+    // bytes: 31 lights or more each).
+    auto make = [&]<typename Word>(Word) -> std::unique_ptr<LightMeshShadows> {
+        auto mesh = std::make_unique<LightMesh<Word>>(scene, accel, lattice, variant, std::move(templates), options,
+                                                      std::move(lights), tables ? *tables : nullptr);
+        if (tables) *tables = mesh->SharedTables();
+        return mesh;
+    };
     switch (LightMeshBytesPerNode(lights.size())) {
-        case 1: return std::make_unique<LightMesh<uint8_t>>(scene, accel, lattice, variant, std::move(templates), options, std::move(lights));
-        case 2: return std::make_unique<LightMesh<uint16_t>>(scene, accel, lattice, variant, std::move(templates), options, std::move(lights));
-        case 4: return std::make_unique<LightMesh<uint32_t>>(scene, accel, lattice, variant, std::move(templates), options, std::move(lights));
-        default: return std::make_unique<LightMesh<uint64_t>>(scene, accel, lattice, variant, std::move(templates), options, std::move(lights));
+        case 1: return make(uint8_t{});
+        case 2: return make(uint16_t{});
+        case 4: return make(uint32_t{});
+        default: return make(uint64_t{});
     }
 }
 

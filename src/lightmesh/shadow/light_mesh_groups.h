@@ -24,10 +24,13 @@ inline constexpr size_t kMaxLightsPerWord = 62;
 std::vector<std::vector<uint32_t>> LightGroups(const std::vector<PointLight>& lights, size_t perGroup);
 
 /// One light mesh for `lights` (a group, or all the scene's lights), its words sized to them.
+/// With `tables`, the geometry's tables (triangle planes, the bricks' lists) are taken from
+/// *tables when set (a previous group of the same scene, lattice and options) and left there.
 std::unique_ptr<LightMeshShadows> CreateLightMeshForLights(const Scene& scene, const Accelerator& accel,
                                                            const LightMeshLattice& lattice, const LightMeshVariant& variant,
                                                            TemplateLoad templates, const LightMeshOptions& options,
-                                                           std::vector<PointLight> lights);
+                                                           std::vector<PointLight> lights,
+                                                           std::shared_ptr<void>* tables = nullptr);
 
 /// The light mesh of many lights: meshes[g] holds the lights groups[g] (scene indices).
 std::unique_ptr<LightMeshShadows> CreateLightMeshGroups(const Scene& scene, std::vector<std::vector<uint32_t>> groups,

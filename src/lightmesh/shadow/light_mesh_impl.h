@@ -110,9 +110,10 @@ class LightMesh final : public LightMeshShadows {
   public:
     // `lights`: the lights this mesh's words hold (the scene's, or one group of them:
     // LightMeshGroups); light l of the mesh is lights[l].
+    // `sharedTables`: another group's SharedTables() (same scene, lattice and options), or null.
     LightMesh(const Scene& scene, const Accelerator& accel, const LightMeshLattice& lattice,
               const LightMeshVariant& variant, TemplateLoad templates, const LightMeshOptions& options,
-              std::vector<PointLight> lights);
+              std::vector<PointLight> lights, const std::shared_ptr<void>& sharedTables = nullptr);
 
     // The most (triangle, brick) pairs the binning may store: far more than any scene of
     // ordinary triangles needs (the garden: about 8 per triangle), far less than a file of
@@ -763,13 +764,35 @@ class LightMesh final : public LightMeshShadows {
         Vec3 lo, hi;
     };
     // (These on huge pages: on the garden 18 and 15 MiB, filled at once.)
-    std::vector<TrianglePlane, HugePageAllocator<TrianglePlane>> planes_;
+    // The triangles' planes and magnitudes and the bricks' lists depend on the geometry and
+    // the lattice only: the groups of one LightMeshGroups share them (SharedTables, built
+    // by the first group; on the garden 45 MiB a group), each group keeps its node words.
+    struct Tables {
+        std::vector<TrianglePlane, HugePageAllocator<TrianglePlane>> planes;
+        std::vector<float, HugePageAllocator<float>> magnitudes;
+        std::vector<uint64_t, HugePageAllocator<uint64_t>> brickStart;
+        std::vector<uint32_t, HugePageAllocator<uint32_t>> brickTris;
+        bool built = false;  // by the first mesh that had them
+        bool binned = false;
+        uint64_t binPairs = 0;
+    };
+    static std::shared_ptr<Tables> TakeTables(const std::shared_ptr<void>& shared) {
+        return shared ? std::static_pointer_cast<Tables>(shared) : std::make_shared<Tables>();
+    }
+    std::shared_ptr<Tables> tables_;
+
+  public:
+    // The tables, for the next group to share (CreateLightMeshForLights).
+    std::shared_ptr<void> SharedTables() const { return tables_; }
+
+  private:
+    std::vector<TrianglePlane, HugePageAllocator<TrianglePlane>>& planes_ = tables_->planes;
     // Per triangle, the largest |coordinate| of its vertices (a cell's tolerance), apart
     // from the planes: a summary takes the maximum over its reach, and as a field of the
     // 44-byte planes that gather was 8 % of the castle's L1 read misses (callgrind's model).
-    std::vector<float, HugePageAllocator<float>> magnitudes_;
-    std::vector<uint64_t, HugePageAllocator<uint64_t>> brickStart_;  // CSR of the bricks' candidate triangles
-    std::vector<uint32_t, HugePageAllocator<uint32_t>> brickTris_;
+    std::vector<float, HugePageAllocator<float>>& magnitudes_ = tables_->magnitudes;
+    std::vector<uint64_t, HugePageAllocator<uint64_t>>& brickStart_ = tables_->brickStart;  // CSR of the bricks' candidate triangles
+    std::vector<uint32_t, HugePageAllocator<uint32_t>>& brickTris_ = tables_->brickTris;
     uint64_t bricksX_ = 0, bricksY_ = 0;
     ZeroedPtr<std::atomic<SummaryBrick*>> bricks_;  // per brick of cells, allocated on first use
     mutable std::mutex brickMutex_;
