@@ -6,7 +6,7 @@ interleaved runs (Embree for every method, the render phase of `lightmesh render
 
   scripts/many-lights-sweep.py --lightmesh build/apps/lightmesh --scene scenes/real/parque.json \\
       --box -6 -6 6 6 --height 4.5 --total 120 --range 5 --lights 16,64,256,1024 \\
-      --size 320x240 --repeat 3 [--methods none,rt,soft,lmm] [--markdown out.md]
+      --size 320x240 --repeat 3 [--methods none,rt,soft,lmm,lmm:reduced] [--markdown out.md]
 
 Lamps: an n x n grid (N = n^2) over the box [X0, X1] x [Z0, Z1] at height Y, each of
 intensity TOTAL / N. Prints a Markdown table per culling setting: the render phase of each
@@ -37,7 +37,10 @@ def number(text):
 def run(binary, scene, method, size, extra):
     w, h = size.split("x")
     out = os.path.join(tempfile.gettempdir(), "lm-sweep-%d.exr" % os.getpid())
-    cmd = [binary, "render", scene, "--shadows", method, "--width", w, "--height", h, "--stats", "-q", "-o", out] + extra
+    shadows, _, variant = method.partition(":")  # "lmm:reduced": a light-mesh variant
+    cmd = [binary, "render", scene, "--shadows", shadows, "--width", w, "--height", h, "--stats", "-q", "-o", out] + extra
+    if variant:
+        cmd += ["--variant", variant]
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
         sys.exit("failed: %s\n%s" % (" ".join(cmd), r.stderr))
@@ -126,7 +129,7 @@ def main():
             for m in others:
                 f = last[m]
                 cells.append("%.1f" % ((f["shadow"] + f["local"] + f["nodeSegments"]) / pixels))
-            lm = last.get("lmm")
+            lm = next((last[m] for m in methods if m.startswith("lmm")), None)
             cells.append("%s (%s B/node; %s)" % (lm["storage"], lm["bytesPerNode"], lm["touched"] or "-") if lm else "-")
             cells.append(" / ".join(last[m]["peak"] for m in methods))
             lines.append("| " + " | ".join(cells) + " |")

@@ -123,7 +123,8 @@ class LightMeshGroups final : public LightMeshShadows {
         return meshes_[group_[light]]->NodeBlockerParameter(index, local_[light]);
     }
 
-    // The first group's figures, with the storage and the nodes for all groups.
+    // The first group's figures, with the storage and the nodes for all groups (its cell
+    // summaries are the first group's: each group keeps its own).
     ShadowFigures Figures() const override {
         ShadowFigures f = meshes_.front()->Figures();
         const uint64_t total = Lattice().NodeCount();
@@ -146,7 +147,9 @@ class LightMeshGroups final : public LightMeshShadows {
                                      100.0 * static_cast<double>(evaluated) / static_cast<double>(total * meshes_.size()),
                                      static_cast<unsigned long long>(total), meshes_.size());
             else if (name == "node segments")
-                value = StringPrintf("%llu", static_cast<unsigned long long>(segments));
+                value = StringPrintf("%llu at most (lights beyond their range get none)", static_cast<unsigned long long>(segments));
+            else if (name == "cell summaries")
+                value = "first group: " + value;
         }
         return f;
     }
