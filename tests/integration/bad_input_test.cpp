@@ -67,6 +67,14 @@ std::string WithLights(const std::string& lights) {
     p.lights = lights;
     return SceneJson(p);
 }
+/// n lights in rows of ten above the box.
+std::string ManyLights(int n) {
+    std::string s = "[";
+    for (int i = 0; i < n; ++i)
+        s += (i ? ", " : "") + std::string("{\"position\": [") + std::to_string(i % 10 - 5) + ", 6, " +
+             std::to_string(i / 10) + "]}";
+    return s + "]";
+}
 std::string WithMeshes(const std::string& meshes) {
     SceneParts p;
     p.meshes = meshes;
@@ -594,6 +602,14 @@ std::vector<Case> Corpus() {
                      "MiB of node storage (3 bytes per node with the blocker distances of the light "
                      "radius), more than half of this machine's 64.0 MiB: lower CC\n",
          .files = {{"scene.json", good}},
+         .env = "LIGHTMESH_MEMORY_LIMIT=64M"},
+        {.name = "light_mesh_of_many_lights_too_big_for_the_limit",
+         // 200 lights: 4 groups of 50, a word of 8 bytes each per node.
+         .args = "render $D/scene.json --shadows lmm --cc 300 -o $OUT",
+         .expected = "lightmesh: error: --cc: light mesh 306x109x306 (CC 300, kI 2) needs 311.5 MiB of node "
+                     "storage (32 bytes per node for 200 lights in 4 groups), more than half of this "
+                     "machine's 64.0 MiB: lower CC\n",
+         .files = {{"scene.json", WithLights(ManyLights(200))}},
          .env = "LIGHTMESH_MEMORY_LIMIT=64M"},
         {.name = "image_too_big_for_the_limit",
          .args = "render $D/scene.json --width 4096 --height 4096 -o $OUT",
