@@ -1,6 +1,8 @@
 // cmd_info.cpp -- `lightmesh info`.
 #include "commands.h"
 
+#include <cmath>
+
 #include "lightmesh/accel/accelerator.h"
 #include "lightmesh/geometry/cutouts.h"
 #include "lightmesh/util/log.h"
@@ -33,10 +35,11 @@ int RunInfo(const CommonOptions& common, const std::string& accelName, int grid)
                                : "");
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         const lm::PointLight& l = scene.lights[i];
-        std::printf("  light %zu  at [%g %g %g], intensity [%g %g %g], falloff %s, radius %g%s\n", i, l.position.x,
+        std::printf("  light %zu  at [%g %g %g], intensity [%g %g %g], falloff %s, radius %g%s%s\n", i, l.position.x,
                     l.position.y, l.position.z, l.intensity.r, l.intensity.g, l.intensity.b,
                     l.falloff == lm::Falloff::None ? "none" : "inverse_square", l.radius,
-                    l.radius == 0 ? " (a point)" : "");
+                    l.radius == 0 ? " (a point)" : "",
+                    std::isfinite(l.range) ? lm::StringPrintf(", range %g", static_cast<double>(l.range)).c_str() : "");
     }
     std::vector<size_t> uses(scene.materials.size());
     for (uint32_t m : scene.mesh.materialIds) ++uses[m];

@@ -67,6 +67,14 @@ std::string WithLights(const std::string& lights) {
     p.lights = lights;
     return SceneJson(p);
 }
+/// n lights in rows of ten above the box.
+std::string ManyLights(int n) {
+    std::string s = "[";
+    for (int i = 0; i < n; ++i)
+        s += (i ? ", " : "") + std::string("{\"position\": [") + std::to_string(i % 10 - 5) + ", 6, " +
+             std::to_string(i / 10) + "]}";
+    return s + "]";
+}
 std::string WithMeshes(const std::string& meshes) {
     SceneParts p;
     p.meshes = meshes;
@@ -78,14 +86,6 @@ std::string WithExtra(const std::string& extra) {
     return SceneJson(p);
 }
 
-/// n lights in a ring above the box.
-std::string ManyLights(int n) {
-    std::string s = "[";
-    for (int i = 0; i < n; ++i)
-        s += (i ? ", " : "") + std::string("{\"position\": [") + std::to_string(i % 10 - 5) +
-             ", 6, " + std::to_string(i / 10) + "]}";
-    return s + "]";
-}
 
 
 // --- Inputs of issue 16 (robustness, round two) --------------------------------------------
@@ -470,14 +470,14 @@ std::vector<Case> Corpus() {
          .expected = "lightmesh: error: $D/scene.json /lights/0/intensity/2: must not be "
                      "negative, got -1\n",
          .files = {{"scene.json", WithLights(R"([{"position": [0, 6, 0], "intensity": [1, 1, -1]}])")}}},
-        {.name = "lights_too_many_for_lmm",
+        {.name = "light_range_zero",
+         .args = kRender,
+         .expected = "lightmesh: error: $D/scene.json /lights/0/range: must be greater than 0, got 0\n",
+         .files = {{"scene.json", WithLights(R"([{"position": [0, 6, 0], "range": 0}])")}}},
+        {.name = "light_range_negative",
          .args = kRender + " --shadows lmm",
-         .expected = "lightmesh: error: light mesh: 63 lights; at most 62 are supported\n",
-         .files = {{"scene.json", WithLights(ManyLights(63))}}},
-        {.name = "lights_too_many_for_the_renderer",
-         .args = kRender + " --shadows rt",
-         .expected = "lightmesh: error: $D/scene.json: 65 lights; at most 64 are supported\n",
-         .files = {{"scene.json", WithLights(ManyLights(65))}}},
+         .expected = "lightmesh: error: $D/scene.json /lights/1/range: must be greater than 0, got -2.5\n",
+         .files = {{"scene.json", WithLights(R"([{"position": [0, 6, 0]}, {"position": [1, 6, 0], "range": -2.5}])")}}},
         // --- Camera -------------------------------------------------------------------------
         {.name = "camera_look_at_is_position",
          .args = kRender,
@@ -609,6 +609,14 @@ std::vector<Case> Corpus() {
          .expected = "--shadows denoised: its buffers for 1024x1024 pixels and 1 light would need 76.0 MiB, "
                      "more than half the memory budget (64.0 MiB); render a smaller image or fewer lights\n",
          .files = {{"scene.json", good}},
+         .env = "LIGHTMESH_MEMORY_LIMIT=64M"},
+        {.name = "light_mesh_of_many_lights_too_big_for_the_limit",
+         // 200 lights: 4 groups of 50, a word of 8 bytes each per node.
+         .args = "render $D/scene.json --shadows lmm --cc 300 -o $OUT",
+         .expected = "lightmesh: error: --cc: light mesh 306x109x306 (CC 300, kI 2) needs 311.5 MiB of node "
+                     "storage (32 bytes per node for 200 lights in 4 groups), more than half of this "
+                     "machine's 64.0 MiB: lower CC\n",
+         .files = {{"scene.json", WithLights(ManyLights(200))}},
          .env = "LIGHTMESH_MEMORY_LIMIT=64M"},
         {.name = "image_too_big_for_the_limit",
          .args = "render $D/scene.json --width 4096 --height 4096 -o $OUT",

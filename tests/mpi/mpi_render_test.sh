@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # mpi_render_test.sh -- `mpirun -np N lightmesh render` against one process (issue 14).
 #   mpi_render_test.sh CASE LIGHTMESH MPIEXEC SOURCE_DIR
-# CASE: identical | failure | killed | bad-scene | schedule | templates | other-commands
+# CASE: identical | failure | killed | bad-scene | schedule | templates | other-commands | many-lights
 # Run by ctest (tests/CMakeLists.txt), which sets OMPI_ALLOW_RUN_AS_ROOT{,_CONFIRM}=1: CI
 # runs as root. --oversubscribe: more ranks than this machine's 2 cores.
 set -u
@@ -86,6 +86,22 @@ bad-scene)
     [ "$(grep -c 'lightmesh: error:' "$work/stderr")" -eq 1 ] || fail "expected one error line, from rank 0"
     grep -q 'missing.json' "$work/stderr" || fail "the message does not name the file"
     [ ! -e "$work/out.png" ] || fail "an image was written"
+    ;;
+many-lights)
+    # 130 lamps with ranges (scripts/many-lights.py; the light mesh in three groups of
+    # lights): 3 ranks give the bytes of one process in every method.
+    python3 "$source_dir/scripts/many-lights.py" "$source_dir/scenes/table_vase.json" "$work/lamps.json" \
+        --grid 13 10 --box -2 -2 2 2 --height 2.5 --intensity 0.2 --range 2.5 --radius 0.05 >/dev/null ||
+        fail "many-lights.py"
+    for m in soft rt lmm "area --samples 4"; do
+        # shellcheck disable=SC2086
+        "$lightmesh" render "$work/lamps.json" "${size[@]}" --shadows $m -q -o "$work/ref.png" >/dev/null ||
+            fail "single-process render ($m)"
+        # shellcheck disable=SC2086
+        mpi 3 "$lightmesh" render "$work/lamps.json" "${size[@]}" --shadows $m -q -o "$work/mpi.png" >/dev/null ||
+            fail "mpirun ($m)"
+        cmp -s "$work/ref.png" "$work/mpi.png" || fail "3 ranks differ from one process ($m, 130 lights)"
+    done
     ;;
 schedule)
     # All the geometry in one corner of the image: the ranks that get those tiles take

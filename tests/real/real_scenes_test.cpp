@@ -1,4 +1,4 @@
-// The real scenes' checks (issue 6): the four scene files of scenes/real/ with the models
+// The real scenes' checks (issue 6): the scene files of scenes/real/ with the models
 // scripts/fetch-scenes.sh takes from Debian packages. Not part of the unit tests, which need
 // no downloads: this binary carries the ctest label "real" and runs by
 // scripts/test-real-scenes.sh (which fetches the models first). A model that was never
@@ -375,6 +375,38 @@ TEST(RealCutouts, FoliageCardsLetLightThroughTheirHoles) {
         }
     EXPECT_LE(differ, 96u * 72u / 200);
     EXPECT_GT(throughHoles, 200u) << "camera rays that pass a card's hole";
+}
+
+// The many-light scenes (docs/many-lights.md): their lamps, each with a range, and the same
+// image for 1 and 2 threads in rt, soft and lmm (the light mesh in groups of lights).
+TEST(RealManyLights, ScenesLoadAndRenderTheSameForAnyThreadCount) {
+    const std::pair<std::string, size_t> scenes[] = {{"castle-lamps.json", 271}, {"hall-lights.json", 256}};
+    for (const auto& [file, lights] : scenes) {
+        const Scene& s = Loaded(file);
+        if (s.mesh.TriangleCount() == 0) {
+            if (auto it = g_notFetched.find(file); it != g_notFetched.end())
+                GTEST_SKIP() << "the model is not fetched: run scripts/fetch-scenes.sh (" << it->second << ")";
+            FAIL() << file << " not loaded";
+        }
+        EXPECT_EQ(s.lights.size(), lights) << file;
+        for (const PointLight& l : s.lights) EXPECT_TRUE(std::isfinite(l.range)) << file;
+        const testing::ScratchFolder scratch("lm_real_many");
+        for (const char* method : {"rt", "soft", "lmm"}) {
+            std::string first;
+            for (const char* threads : {"1", "2"}) {
+                const std::string out = scratch.path + "/" + method + threads + ".png";
+                const testing::CliResult r = testing::RunLightmesh("render " + ScenePath(file) + " --width 96 --height 72 -q --shadows " +
+                                                                   method + " --threads " + threads + " --template-dir " +
+                                                                   g_templateDir + " -o " + out);
+                ASSERT_EQ(r.exitCode, 0) << r.output;
+                const std::string bytes = testing::FileBytes(out);
+                if (first.empty())
+                    first = bytes;
+                else
+                    EXPECT_TRUE(bytes == first) << file << " " << method << ": 2 threads differ from 1";
+            }
+        }
+    }
 }
 
 }  // namespace

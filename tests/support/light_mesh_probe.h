@@ -21,9 +21,9 @@ struct LightMeshProbe {
     }
     /// V of `light` at sp, every light needed; the work is added to *counters if given.
     float Vis(const ShadingPoint& sp, int light = 0, RenderCounters* counters = nullptr) const {
-        bool needed[kMaxLights];
-        float vis[kMaxLights] = {};
-        std::fill(needed, needed + kMaxLights, true);
+        bool needed[64];
+        float vis[64] = {};
+        std::fill(needed, needed + 64, true);
         RenderCounters c;
         lmm->Visibility(sp, needed, vis, counters ? *counters : c);
         return vis[light];

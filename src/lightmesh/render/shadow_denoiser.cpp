@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <utility>
+#include <vector>
 
 #include "lightmesh/shadow/area_light.h"
 #include "lightmesh/util/error.h"
@@ -250,8 +252,12 @@ void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& co
         std::vector<Hit> hits;
         std::vector<Ray> shadow(static_cast<size_t>(samples));
         std::vector<Hit> blockers(static_cast<size_t>(samples));
-        bool neededBuf[kMaxLights];
-        Color omegaBuf[kMaxLights];
+        // Per light, as long as the task: the hit's terms and its pixel's sums.
+        std::unique_ptr<bool[]> neededBuf(new bool[lights]);
+        std::vector<Color> omegaBuf(lights), omegaSum(lights);
+        std::vector<uint32_t> litIds(lights);
+        std::vector<float> num(lights), den(lights), penSum(lights);
+        std::vector<int> penCount(lights);
         for (int t = range.begin(); t != range.end(); ++t) {
             RenderCounters& c = tileCounters[static_cast<size_t>(t)];
             const int tx0 = (t % tilesX) * T, ty0 = ry0 + (t / tilesX) * T;
@@ -277,21 +283,18 @@ void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& co
                             // Per light: Σ V·w, Σ w, Σ penumbra and its count over the pixel's hits
                             // (only the scene's lights' entries cleared: 1.8 KiB for all 64 was
                             // a tenth of the noisy pass).
-                            float num[kMaxLights], den[kMaxLights], penSum[kMaxLights];
-                            int penCount[kMaxLights];
-                            Color omegaSum[kMaxLights];
-                            std::fill_n(num, lights, 0.0f);
-                            std::fill_n(den, lights, 0.0f);
-                            std::fill_n(penSum, lights, 0.0f);
-                            std::fill_n(penCount, lights, 0);
-                            std::fill_n(omegaSum, lights, Color());
+                            std::fill(num.begin(), num.end(), 0.0f);
+                            std::fill(den.begin(), den.end(), 0.0f);
+                            std::fill(penSum.begin(), penSum.end(), 0.0f);
+                            std::fill(penCount.begin(), penCount.end(), 0);
+                            std::fill(omegaSum.begin(), omegaSum.end(), Color());
                             for (size_t s = first; s < first + static_cast<size_t>(aa * aa); ++s) {
                                 if (hits[s].prim == UINT32_MAX) {
                                     restSum += scene_.background;
                                     continue;
                                 }
                                 Color r;
-                                const ShadingPoint sp = renderer_.ShadeSplit(rays[s], hits[s], neededBuf, omegaBuf, &r, c);
+                                const ShadingPoint sp = renderer_.ShadeSplit(rays[s], hits[s], neededBuf.get(), omegaBuf.data(), litIds.data(), &r, c);
                                 restSum += r;
                                 const float footprint = hits[s].t * pixelAngle_;
                                 if (s == first) {

@@ -15,10 +15,7 @@ namespace lm {
 WhittedRenderer::WhittedRenderer(const Scene& scene, const Accelerator& accel,
                                  const ShadowMethod& shadows, const RenderOptions& options)
     : scene_(scene), accel_(accel), shadows_(shadows), options_(options),
-      camera_(scene.camera, options.width, options.height) {
-    if (scene.lights.size() > static_cast<size_t>(kMaxLights))
-        ThrowErrorAt({scene.name}, "%zu lights; at most %d are supported",
-                   scene.lights.size(), kMaxLights);
+      camera_(scene.camera, options.width, options.height), lightLists_(scene.lights, scene.mesh.Bounds()) {
     if (options.aa < 1 || options.aa > 16) ThrowError("--aa %d: must be 1 to 16", options.aa);
     if (options.maxDepth < 1 || options.maxDepth > 64)
         ThrowError("max depth %d: must be 1 to 64", options.maxDepth);
@@ -75,16 +72,18 @@ void WhittedRenderer::PrepareShading(const Ray& ray, const Hit& hit, Lighting* l
     lit->kd = mat.texture < 0 ? mat.kd : TexturedDiffuse(scene_, mat, ray, hit, spread_);
     lit->any = false;
     const size_t nLights = scene_.lights.size();
-    for (size_t i = 0; i < nLights; ++i) {
+    lit->litCount = 0;
+    auto term = [&](uint32_t i) {
         const PointLight& light = scene_.lights[i];
         const Vec3 toLight = light.position - sp.p;
         const float dist2 = LengthSquared(toLight);
+        bool& needed = lit->needed[i];
+        needed = false;
+        if (dist2 > light.range * light.range) return;  // beyond its range (infinite: never)
         const Vec3 l = toLight / std::sqrt(dist2);
         // A light behind the geometric surface cannot light it, whatever the shading normal.
         const float cosN = Dot(ns, l);
-        bool& needed = lit->needed[i];
-        needed = Dot(sp.n, l) > 0 && cosN > 0;
-        if (!needed) continue;
+        if (!(Dot(sp.n, l) > 0 && cosN > 0)) return;
         Color local = lit->kd * cosN;
         if (!mat.ks.IsBlack()) {
             const float cosR = Dot(Reflect(-l, ns), toEye);
@@ -92,9 +91,21 @@ void WhittedRenderer::PrepareShading(const Ray& ray, const Hit& hit, Lighting* l
         }
         const float falloff = light.falloff == Falloff::InverseSquare ? 1.0f / dist2 : 1.0f;
         lit->omega[i] = light.intensity * local * falloff;
-        lit->any = lit->any || !lit->omega[i].IsBlack();
         needed = !lit->omega[i].IsBlack();
+        lit->any = lit->any || needed;
+        if (needed) lit->lit[lit->litCount++] = i;
+    };
+    if (!lightLists_.Active()) {
+        for (size_t i = 0; i < nLights; ++i) term(static_cast<uint32_t>(i));
+        return;
     }
+    // Lights with a range: only those of the point's cell, merged in ascending order with
+    // the lights without one (the terms add in light order, as above).
+    std::fill(lit->needed, lit->needed + nLights, false);
+    const std::span<const uint32_t> a = lightLists_.Everywhere(), b = lightLists_.Near(sp.p);
+    size_t ia = 0, ib = 0;
+    while (ia < a.size() || ib < b.size())
+        term(ib == b.size() || (ia < a.size() && a[ia] < b[ib]) ? a[ia++] : b[ib++]);
 }
 
 Color WhittedRenderer::FinishShading(const Ray& ray, const Lighting& lit, const float* vis, int depth,
@@ -102,8 +113,7 @@ Color WhittedRenderer::FinishShading(const Ray& ray, const Lighting& lit, const 
     const Material& mat = *lit.mat;
     Color result = scene_.ambient * lit.kd;
     if (lit.any)
-        for (size_t i = 0; i < scene_.lights.size(); ++i)
-            if (lit.needed[i]) result += lit.omega[i] * vis[i];
+        for (uint32_t k = 0; k < lit.litCount; ++k) result += lit.omega[lit.lit[k]] * vis[lit.lit[k]];
 
     if (!mat.mirror.IsBlack() && depth + 1 < options_.maxDepth) {
         Vec3 r = Reflect(ray.d, lit.ns);
@@ -117,22 +127,41 @@ Color WhittedRenderer::FinishShading(const Ray& ray, const Lighting& lit, const 
 }
 
 Color WhittedRenderer::Shade(const Ray& ray, const Hit& hit, int depth, RenderCounters& counters) const {
+    // The lights' terms on the stack up to kLocal lights, on the heap beyond.
+    constexpr size_t kLocal = 64;
+    const size_t nLights = scene_.lights.size();
+    bool neededLocal[kLocal];
+    Color omegaLocal[kLocal];
+    uint32_t idsLocal[kLocal];
+    float visLocal[kLocal] = {};
+    std::unique_ptr<bool[]> neededHeap;
+    std::unique_ptr<Color[]> omegaHeap;
+    std::unique_ptr<uint32_t[]> idsHeap;
+    std::unique_ptr<float[]> visHeap;
     Lighting lit;
+    lit.needed = neededLocal, lit.omega = omegaLocal, lit.lit = idsLocal;
+    float* vis = visLocal;
+    if (nLights > kLocal) {
+        neededHeap.reset(new bool[nLights]), omegaHeap.reset(new Color[nLights]), idsHeap.reset(new uint32_t[nLights]);
+        visHeap.reset(new float[nLights]());
+        lit.needed = neededHeap.get(), lit.omega = omegaHeap.get(), lit.lit = idsHeap.get(), vis = visHeap.get();
+    }
     PrepareShading(ray, hit, &lit, counters);
-    float vis[kMaxLights] = {};
     if (lit.any) shadows_.Visibility(lit.sp, lit.needed, vis, counters);
     return FinishShading(ray, lit, vis, depth, counters);
 }
 
-ShadingPoint WhittedRenderer::ShadeSplit(const Ray& ray, const Hit& hit, bool* needed, Color* omega, Color* rest,
-                                         RenderCounters& counters) const {
+ShadingPoint WhittedRenderer::ShadeSplit(const Ray& ray, const Hit& hit, bool* needed, Color* omega, uint32_t* litIds,
+                                         Color* rest, RenderCounters& counters) const {
     Lighting lit;
+    lit.needed = needed, lit.omega = omega, lit.lit = litIds;
     PrepareShading(ray, hit, &lit, counters);
-    static constexpr float kNone[kMaxLights] = {};
-    *rest = FinishShading(ray, lit, kNone, 0, counters);
+    Lighting unlit = lit;  // the same point without the lights' terms
+    unlit.any = false;
+    *rest = FinishShading(ray, unlit, nullptr, 0, counters);
     for (size_t i = 0; i < scene_.lights.size(); ++i) {
-        needed[i] = lit.any && lit.needed[i];
-        omega[i] = needed[i] ? lit.omega[i] : Color();
+        needed[i] = lit.any && needed[i];
+        if (!needed[i]) omega[i] = Color();
     }
     return lit.sp;
 }
@@ -157,9 +186,9 @@ void WhittedRenderer::RenderTile(int tile, Image* image, RenderCounters& counter
     // sub-pixel as Pixel() makes them, go to the back-end together (a packet on the grid
     // and on Embree); each gets the hit Intersect gives it alone, so the pixels are
     // Pixel()'s bit for bit.
-    // The buffers live as long as the thread: a Lighting holds kMaxLights terms, so a
-    // fresh batch per tile zero-filled 57 KiB each time (3 % of an RT render on the
-    // gazebo). Every entry read is written first (PrepareShading fills what Finish reads).
+    // The buffers live as long as the thread: a batch holds kShadingBatch × lights terms, so
+    // a fresh batch per tile zero-filled 57 KiB each time at 64 lights (3 % of an RT render
+    // on the gazebo). Every entry read is written first (PrepareShading fills what Finish reads).
     // A tile started on this thread while another waits in it (a nested TBB loop
     // stealing work) takes buffers of its own.
     thread_local TileBuffers threadBuffers;

@@ -8,6 +8,7 @@
 
 #include "lightmesh/accel/accelerator.h"
 #include "lightmesh/io/image.h"
+#include "lightmesh/render/light_lists.h"
 #include "lightmesh/util/counters.h"
 #include "lightmesh/settings/options.h"
 #include "lightmesh/scene/camera.h"
@@ -16,9 +17,6 @@
 #include "lightmesh/util/progress.h"
 
 namespace lm {
-
-/// Most lights a scene may have (visibility is gathered in fixed-size arrays).
-inline constexpr int kMaxLights = 64;
 
 struct RenderResult {
     Image image;
@@ -31,7 +29,7 @@ struct RenderResult {
 /// ShadowMethod: one shadow ray (formula (1), "rt"), or the light mesh (formula (2)).
 class WhittedRenderer {
   public:
-    /// Throws Error for a degenerate camera, a bad image size or too many lights.
+    /// Throws Error for a degenerate camera or a bad image size. Any number of lights.
     WhittedRenderer(const Scene& scene, const Accelerator& accel, const ShadowMethod& shadows,
                     const RenderOptions& options);
 
@@ -54,6 +52,8 @@ class WhittedRenderer {
     int Height() const { return options_.height; }
     int TilesX() const { return (options_.width + kTileSize - 1) / kTileSize; }
     int TileCount() const { return TilesX() * ((options_.height + kTileSize - 1) / kTileSize); }
+    /// The per-cell lists of the lights with a range (inactive when no light has one).
+    const LightLists& Lists() const { return lightLists_; }
     /// The pixels of one tile into *image (of the render's size): Pixel()'s values, with the
     /// camera rays of kPacketSize × kPacketSize pixels traced together (IntersectMany).
     /// With an origin, pixel (x, y) goes to image->At(x - originX, y - originY) instead
@@ -74,9 +74,10 @@ class WhittedRenderer {
     /// filters the visibility itself (the shadow denoiser): needed[i] and omega[i] (black
     /// where not needed) for each light, and *rest gets the other terms (A·kd and the
     /// mirror's, whose shadows come from the renderer's method). Shade() gives rest plus
-    /// Σ omega[i]·V_i. Returns the shading point.
-    ShadingPoint ShadeSplit(const Ray& ray, const Hit& hit, bool* needed, Color* omega, Color* rest,
-                            RenderCounters& counters) const;
+    /// Σ omega[i]·V_i. needed, omega and litIds (scratch) hold one entry per light.
+    /// Returns the shading point.
+    ShadingPoint ShadeSplit(const Ray& ray, const Hit& hit, bool* needed, Color* omega, uint32_t* litIds,
+                            Color* rest, RenderCounters& counters) const;
 
     /// Builds the shading point for a hit of `ray` (also used by tests and the shadow
     /// methods' tests).
@@ -90,8 +91,10 @@ class WhittedRenderer {
         const Material* mat = nullptr;
         Color kd;  ///< the diffuse reflectance here (the material's, or its texture's)
         bool any = false;  ///< some light's term is not black (visibility is needed)
-        bool needed[kMaxLights];
-        Color omega[kMaxLights];  ///< light i's unshadowed term, where needed[i]
+        bool* needed = nullptr;   ///< per light (storage of the caller: TileBuffers, Shade)
+        Color* omega = nullptr;   ///< light i's unshadowed term, where needed[i]
+        uint32_t* lit = nullptr;  ///< the lights with needed[i], ascending (as many as lights)
+        uint32_t litCount = 0;
     };
     /// Hits shaded together in RenderTile: the points whose visibility one
     /// ShadowMethod::VisibilityMany call computes.
@@ -105,12 +108,24 @@ class WhittedRenderer {
         std::vector<ShadingPoint> points;
         std::unique_ptr<bool[]> needed;  // kShadingBatch × lights
         size_t neededLights = 0;
+        // The batch's Lighting terms: kShadingBatch × lights each (Lighting points into them).
+        std::unique_ptr<bool[]> litNeeded;
+        std::unique_ptr<Color[]> litOmega;
+        std::unique_ptr<uint32_t[]> litIds;
         bool inUse = false;  // a RenderTile on this thread holds them
         void Reserve(size_t lights) {
             if (batch.size() < kShadingBatch) batch.resize(kShadingBatch), points.resize(kShadingBatch);
             if (!needed || neededLights < lights) {
                 neededLights = std::max<size_t>(lights, 1);
                 needed.reset(new bool[kShadingBatch * neededLights]);
+                litNeeded.reset(new bool[kShadingBatch * neededLights]);
+                litOmega.reset(new Color[kShadingBatch * neededLights]);
+                litIds.reset(new uint32_t[kShadingBatch * neededLights]);
+            }
+            for (size_t i = 0; i < kShadingBatch; ++i) {
+                batch[i].needed = litNeeded.get() + i * neededLights;
+                batch[i].omega = litOmega.get() + i * neededLights;
+                batch[i].lit = litIds.get() + i * neededLights;
             }
         }
     };
@@ -132,6 +147,7 @@ class WhittedRenderer {
     const RenderOptions options_;
     CameraRays camera_;
     float spread_ = 0;  ///< radians between neighbouring camera rays (textures' footprints)
+    LightLists lightLists_;  // the lights near each cell, where lights have a range
 };
 
 }  // namespace lm

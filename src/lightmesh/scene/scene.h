@@ -59,6 +59,11 @@ struct PointLight {
     /// (shadow/shadow.h), which applies the render's --light-radius override. Scene files
     /// without "radius" and framed bare meshes get DefaultLightRadius (scene_file.h).
     float radius = 0.0f;
+    /// How far the light reaches, in scene units (> 0; infinite by default): a point
+    /// farther than this from the centre gets nothing from it. Every method honours it
+    /// alike: shading skips the light there, so no shadow method is asked for it (RT traces
+    /// no ray, the light mesh evaluates no bit a point in range could need).
+    float range = Infinity;
 };
 
 /// A pinhole camera.

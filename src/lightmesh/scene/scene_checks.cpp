@@ -182,6 +182,9 @@ void Validate(const Scene& scene) {
         if (!(std::isfinite(l.radius) && l.radius >= 0))
             ThrowError("%s: light %zu has a negative or non-finite radius (%g)", name.c_str(), i,
                        static_cast<double>(l.radius));
+        if (!(l.range > 0))
+            ThrowError("%s: light %zu has a range of %g: must be greater than 0", name.c_str(), i,
+                       static_cast<double>(l.range));
     }
     std::string key;
     if (std::string problem = CameraProblem(scene.camera, &key); !problem.empty())

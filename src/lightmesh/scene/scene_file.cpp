@@ -16,7 +16,8 @@
 //                "falloff": "inverse_square" (default) | "none", "radius": number ≥ 0 (the
 //                sphere the light stands for, scene units; 0 is a point; default 2 % of the
 //                light's distance to the centre of the scene's bounding box, ground
-//                included: DefaultLightRadius, recorded in a note)}, ...].
+//                included: DefaultLightRadius, recorded in a note), "range": number > 0
+//                (beyond it the light gives nothing; default: no limit)}, ...].
 //   "meshes"     required, ≥ 1: [{"file": path relative to the scene file's folder
 //                (required), "transform": {"scale": number | [3] (non-zero), "rotate":
 //                [[ax, ay, az, degrees], ...] (a single [ax, ay, az, degrees] is accepted too),
@@ -165,6 +166,10 @@ PointLight ReadLight(const Reader& r, const Json& j, const std::string& path, bo
     if (const Json* v = o.Find("radius")) {
         light.radius = NonNegative(r, *v, o.Child("radius"));
         *hasRadius = true;
+    }
+    if (const Json* v = o.Find("range")) {
+        light.range = Float(r, *v, o.Child("range"));
+        if (!(light.range > 0)) r.Fail(o.Child("range"), "must be greater than 0, got " + NumberText(*v));
     }
     if (const Json* v = o.Find("name")) String(r, *v, o.Child("name"));
     o.Finish();

@@ -19,9 +19,9 @@ using testing::FloorScene;
 
 
 float Vis(const ShadowMethod& method, const ShadingPoint& sp, int light = 0) {
-    bool needed[kMaxLights];
-    float vis[kMaxLights] = {};
-    std::fill(needed, needed + kMaxLights, true);
+    bool needed[64];
+    float vis[64] = {};
+    std::fill(needed, needed + 64, true);
     RenderCounters c;
     method.Visibility(sp, needed, vis, c);
     return vis[light];

@@ -25,6 +25,7 @@
 #include "lightmesh/shadow/area_light.h"
 #include "lightmesh/shadow/light_mesh_cells.h"
 #include "lightmesh/shadow/light_mesh_impl.h"
+#include "lightmesh/shadow/light_mesh_groups.h"
 #include "lightmesh/shadow/light_mesh_kernels.h"
 #include "lightmesh/shadow/light_mesh_patches.h"
 #include "lightmesh/shadow/light_mesh_penumbra.h"
@@ -70,6 +71,12 @@ LightMeshLattice LightMeshLattice::Make(const Bounds3& bounds, int cc, float ki)
 }
 
 int LightMeshBytesPerNode(size_t lights) {
+    if (lights > kMaxLightsPerWord) {  // groups (LightGroups' sizes), a word each
+        const size_t groups = (lights + kMaxLightsPerWord - 1) / kMaxLightsPerWord;
+        int bytes = 0;
+        for (size_t g = 0; g < groups; ++g) bytes += LightMeshBytesPerNode(lights / groups + (g < lights % groups ? 1 : 0));
+        return bytes;
+    }
     const size_t bits = lights + 2;  // visibility bits + initialised + inside
     return bits <= 8 ? 1 : bits <= 16 ? 2 : bits <= 32 ? 4 : 8;
 }
@@ -170,8 +177,10 @@ namespace {
 
 template <typename Word>
 LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const LightMeshLattice& lattice,
-                           const LightMeshVariant& variant, TemplateLoad templates, const LightMeshOptions& options)
+                           const LightMeshVariant& variant, TemplateLoad templates, const LightMeshOptions& options,
+                           std::vector<PointLight> lights, const std::shared_ptr<void>& sharedTables)
     : scene_(scene),
+      lights_(std::move(lights)),
       accel_(accel),
       lattice_(lattice),
       variant_(variant),
@@ -186,13 +195,15 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
       sumFront_(ChooseSumFrontFunction(options.simdWidth, static_cast<int>(sizeof(Word)))),
       minority_(ChooseMinorityFunction(options.simdWidth, static_cast<int>(sizeof(Word)))),
       nodes_(ZeroedArray<Word>(lattice.NodeCount() + kNodePadding)),
-      lightRadius_(options.lightRadius) {
+      lightRadius_(options.lightRadius),
+      tables_(TakeTables(sharedTables)) {
     if (lightRadius_ > 0)
         thinCheck_ = options.thinCheck == "all" ? ThinCheck::kAll
                      : options.thinCheck == "lit" ? ThinCheck::kLit
                                                   : ThinCheck::kOff;
     const std::string& cellSummaries = options.cellSummaries;
-    if (lightRadius_ > 0) blockerT_ = ZeroedArray<uint16_t>(lattice.NodeCount() * scene.lights.size());
+    if (lightRadius_ > 0) blockerT_ = ZeroedArray<uint16_t>(lattice.NodeCount() * lights_.size());
+    for (const PointLight& l : lights_) ranged_ = ranged_ || std::isfinite(l.range);
     if (variant_.enumeration == SphereEnumeration::Templates) ConvertTemplates();
     sceneBox_ = scene.mesh.Bounds();
     // Tolerances at the lattice's scale. delta: how far from a plane a vertex may lie and
@@ -228,7 +239,11 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
         bricksY_ = static_cast<uint64_t>(lattice.ny + kBrick - 1) / kBrick;
         const uint64_t bricksZ = static_cast<uint64_t>(lattice.nz + kBrick - 1) / kBrick;
         bricks_ = ZeroedArray<SummaryBrick*>(bricksX_ * bricksY_ * bricksZ);
-        {
+        if (tables_->built) {
+            // Another group's tables (the same geometry, lattice and options).
+            binPairs_ = tables_->binPairs;
+            if (!tables_->binned) summaries_ = false, summariesOff_ = true;
+        } else {
             const TriangleMesh& mesh = scene.mesh;
             planes_.resize(mesh.triangles.size());
             magnitudes_.resize(mesh.triangles.size());
@@ -245,7 +260,7 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
                 magnitudes_[t] = std::max({MaxComponent(Abs(a)), MaxComponent(Abs(b)), MaxComponent(Abs(c))});
             });
         }
-        if (!BinTrianglesByBrick(bricksZ)) {
+        if (!tables_->built && !BinTrianglesByBrick(bricksZ)) {
             // Images are the same without summaries; only the time differs.
             summaries_ = false;
             summariesOff_ = true;
@@ -256,6 +271,11 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
                                     scene.name.c_str(), static_cast<unsigned long long>(binPairs_),
                                     static_cast<unsigned long long>(BinBudget())));
         }
+    }
+    if (summaries_ || summariesOff_) {
+        tables_->built = true;
+        tables_->binned = summaries_;
+        tables_->binPairs = binPairs_;
     }
     patches_ = summaries_ && patchesFit_ && variant_.local == LocalVisibility::Consensus;
 }
@@ -273,13 +293,13 @@ inline void LightMesh<Word>::CheckThin(const ShadingPoint& sp, const bool* neede
     // P's own rays to the lights the nodes decided alone, traced together.
     const uint64_t checked = ThinChecked(needed, ownRays, vis);
     if (!checked) return;
-    ApplyThinCheck(sp, checked, LightsVisible(accel_, sp.origin, scene_.lights, checked), vis, counters);
+    ApplyThinCheck(sp, checked, LightsVisible(accel_, sp.origin, lights_, checked), vis, counters);
 }
 
 template <typename Word>
 inline uint64_t LightMesh<Word>::ThinChecked(const bool* needed, uint64_t ownRays, const float* vis) const {
     uint64_t checked = 0;
-    for (size_t l = 0; l < scene_.lights.size(); ++l) {
+    for (size_t l = 0; l < lights_.size(); ++l) {
         if (!needed[l] || ((ownRays >> l) & 1)) continue;
         if (vis[l] == 1.0f || (thinCheck_ == ThinCheck::kAll && vis[l] == 0.0f)) checked |= uint64_t(1) << l;
     }
@@ -289,10 +309,10 @@ inline uint64_t LightMesh<Word>::ThinChecked(const bool* needed, uint64_t ownRay
 template <typename Word>
 inline void LightMesh<Word>::ApplyThinCheck(const ShadingPoint& sp, uint64_t checked, uint64_t visible, float* vis,
                                             RenderCounters& counters) const {
-    for (size_t l = 0; l < scene_.lights.size(); ++l) {
+    for (size_t l = 0; l < lights_.size(); ++l) {
         if (!((checked >> l) & 1)) continue;
         const bool lit = vis[l] == 1.0f;
-        const Vec3& light = scene_.lights[l].position;
+        const Vec3& light = lights_[l].position;
         ++Count(counters, LightMeshCount::kThinChecks);
         ++counters.shadowRays;
         if ((((visible >> l) & 1) != 0) == lit) continue;
@@ -337,7 +357,7 @@ inline void LightMesh<Word>::VisibilityMany(const ShadingPoint* sps, size_t coun
         TraceDiscs(queue, lights, vis + first * lights, counters);
         if (thinCheck_ == ThinCheck::kOff) continue;
         // (ApplyThinCheck counts the rays, one per checked light, as CheckThin does.)
-        LightsVisibleMany(accel_, sps + first, n, scene_.lights, checked, visible);
+        LightsVisibleMany(accel_, sps + first, n, lights_, checked, visible);
         for (size_t i = 0; i < n; ++i)
             if (checked[i]) ApplyThinCheck(sps[first + i], checked[i], visible[i], vis + (first + i) * lights, counters);
     }
@@ -400,7 +420,7 @@ inline void LightMesh<Word>::TraceDiscs(const DiscQueue& queue, size_t lights, f
 template <typename Word>
 inline uint64_t LightMesh<Word>::Interpolate(const ShadingPoint& sp, const bool* needed, float* vis,
                                              RenderCounters& counters) const {
-    const size_t nLights = scene_.lights.size();
+    const size_t nLights = lights_.size();
     Accumulator acc(nLights);
     Word neededMask = 0;
     for (size_t l = 0; l < nLights; ++l)
@@ -434,7 +454,7 @@ inline uint64_t LightMesh<Word>::Interpolate(const ShadingPoint& sp, const bool*
         for (size_t l = 0; l < nLights; ++l) {
             if (!needed[l]) continue;
             ++counters.shadowRays;
-            vis[l] = LightVisible(accel_, sp.origin, scene_.lights[l].position) ? 1.0f : 0.0f;
+            vis[l] = LightVisible(accel_, sp.origin, lights_[l].position) ? 1.0f : 0.0f;
         }
         return ~uint64_t(0);  // every light from P's own ray
     }
@@ -568,14 +588,25 @@ inline void LightMesh<Word>::ConvertTemplates() {
 template <typename Word>
 inline Word LightMesh<Word>::EvaluateVisibility(const Vec3& x, uint64_t index) const {
     Word value = kInit;
-    const size_t nLights = scene_.lights.size();
+    const size_t nLights = lights_.size();
+    // Lights with a range: no ray (bit 0) to those that end short of every point that may use
+    // the node (points within pointReach_ of it; a step more for the cube loop's). Those
+    // points do not need the light, and formula (2) reads only the lights a point needs.
+    const uint64_t all = nLights >= 64 ? ~uint64_t(0) : (uint64_t(1) << nLights) - 1;
+    uint64_t inRange = all;
+    if (ranged_)
+        for (size_t l = 0; l < nLights; ++l) {
+            const float reach = lights_[l].range + pointReach_ + lattice_.h;
+            if (LengthSquared(lights_[l].position - x) > reach * reach) inRange &= ~(uint64_t(1) << l);
+        }
     if (lightRadius_ > 0) {
         // Penumbra mode: the same segment, but the nearest blocker's distance too, as
         // its parameter t along x → light in 16 bits (0: no blocker). The stores are
         // relaxed: they happen before the word's publication (release), and racing
         // threads store the same values.
         for (size_t l = 0; l < nLights; ++l) {
-            const Vec3& light = scene_.lights[l].position;
+            if (!((inRange >> l) & 1)) continue;
+            const Vec3& light = lights_[l].position;
             Hit hit;
             if (!accel_.Intersect(LightSegment(x, light), &hit)) {
                 value |= Word(1) << l;
@@ -590,9 +621,9 @@ inline Word LightMesh<Word>::EvaluateVisibility(const Vec3& x, uint64_t index) c
     // Embree's packets, each ray the answer it gets alone): castle with 20 and 40 lights,
     // the default 3 % and 7 % faster; with 4 to 12 lights no gain was measurable.
     if (nLights >= kPacketLights)
-        return value | static_cast<Word>(LightsVisible(accel_, x, scene_.lights, (uint64_t(1) << nLights) - 1));
+        return value | static_cast<Word>(LightsVisible(accel_, x, lights_, inRange));
     for (size_t l = 0; l < nLights; ++l)
-        if (LightVisible(accel_, x, scene_.lights[l].position)) value |= Word(1) << l;
+        if (((inRange >> l) & 1) && LightVisible(accel_, x, lights_[l].position)) value |= Word(1) << l;
     return value;
 }
 
@@ -610,9 +641,9 @@ template <typename Word>
 inline Word LightMesh<Word>::EvaluateWithInside(const Vec3& x) const {
     Word value = kInit;
     int odd = 0, votes = 0;
-    const size_t nLights = scene_.lights.size();
+    const size_t nLights = lights_.size();
     for (size_t l = 0; l < nLights; ++l) {
-        const Vec3& light = scene_.lights[l].position;
+        const Vec3& light = lights_[l].position;
         if (votes < 3) {
             const int crossings = accel_.CountCrossings(LightSegment(x, light));
             if (crossings == 0) value |= Word(1) << l;
@@ -648,17 +679,19 @@ std::unique_ptr<LightMeshShadows> CreateLightMeshShadows(const Scene& scene, con
     const LightMeshVariant variant = ParseLightMeshVariant(options.variant);
     const LightMeshLattice lattice = LightMeshLattice::Make(scene.mesh.Bounds(), options.cc, options.ki);
     const size_t nLights = scene.lights.size();
-    if (nLights > 62) ThrowError("light mesh: %zu lights; at most 62 are supported", nLights);
     const int ns = options.ns == 0 ? kDefaultTemplateSubsteps : options.ns;
     if (ns < 1 || ns > 64) ThrowSettingError("ns", "light mesh: ns must be between 1 and 64, got %d", ns);
-    const int bytes = LightMeshBytesPerNode(nLights);
     if (!(options.lightRadius >= 0) || !std::isfinite(options.lightRadius))
         ThrowSettingError("light_radius", "light mesh: the light radius must be finite and >= 0, got %g", options.lightRadius);
     if (options.lightRadius > 0 && variant.local != LocalVisibility::Consensus)
         ThrowSettingError("light_radius", "light mesh: a light radius (contact-hardening penumbrae) needs the consensus variant (the "
                    "default), not %s",
                    variant.name.c_str());
-    const int bytesPerNode = LightMeshStorageBytesPerNode(nLights, options.lightRadius);
+    // More lights than a word holds: groups of them, each a light mesh of its own
+    // (LightMeshGroups); the storage per node is the groups' together.
+    const std::vector<std::vector<uint32_t>> groups = LightGroups(scene.lights, kMaxLightsPerWord);
+    uint64_t bytesPerNode = 0;
+    for (const auto& g : groups) bytesPerNode += static_cast<uint64_t>(LightMeshStorageBytesPerNode(g.size(), options.lightRadius));
     // Node words. (Cell summaries add a pointer per 4³ cells, zero pages until used, and
     // their records, about 32 bytes per cell used, lazily like the nodes.)
     const uint64_t need = lattice.NodeCount() * static_cast<uint64_t>(bytesPerNode);
@@ -669,8 +702,11 @@ std::unique_ptr<LightMeshShadows> CreateLightMeshShadows(const Scene& scene, con
         ThrowSettingError("cc", "light mesh %dx%dx%d (CC %d, kI %g) needs %s of node storage%s, more than half of "
                    "this machine's %s: lower CC",
                    lattice.nx, lattice.ny, lattice.nz, options.cc, options.ki, FormatBytes(need).c_str(),
-                   options.lightRadius > 0
-                       ? StringPrintf(" (%d bytes per node with the blocker distances of the light radius)", bytesPerNode).c_str()
+                   options.lightRadius > 0 || groups.size() > 1
+                       ? StringPrintf(" (%llu bytes per node%s%s)", static_cast<unsigned long long>(bytesPerNode),
+                                      groups.size() > 1 ? StringPrintf(" for %zu lights in %zu groups", nLights, groups.size()).c_str() : "",
+                                      options.lightRadius > 0 ? " with the blocker distances of the light radius" : "")
+                             .c_str()
                        : "",
                    FormatBytes(physical).c_str());
     if (variant.local == LocalVisibility::Inside) {
@@ -695,11 +731,35 @@ std::unique_ptr<LightMeshShadows> CreateLightMeshShadows(const Scene& scene, con
         ThrowSettingError("cell_summaries", "cell summaries \"%s\": choose auto, on or off", summaries.c_str());
     if (options.simdWidth != 0 && options.simdWidth != 1 && options.simdWidth != 4 && options.simdWidth != 8)
         ThrowError("light mesh: SIMD width %d: choose 0, 1, 4 or 8", options.simdWidth);
-    switch (bytes) {
-        case 1: return std::make_unique<LightMesh<uint8_t>>(scene, accel, lattice, variant, std::move(templates), options);
-        case 2: return std::make_unique<LightMesh<uint16_t>>(scene, accel, lattice, variant, std::move(templates), options);
-        case 4: return std::make_unique<LightMesh<uint32_t>>(scene, accel, lattice, variant, std::move(templates), options);
-        default: return std::make_unique<LightMesh<uint64_t>>(scene, accel, lattice, variant, std::move(templates), options);
+    if (groups.size() == 1)
+        return CreateLightMeshForLights(scene, accel, lattice, variant, std::move(templates), options, scene.lights);
+    std::vector<std::unique_ptr<LightMeshShadows>> meshes;
+    std::shared_ptr<void> tables;  // the geometry's tables, built by the first group, shared
+    for (const auto& g : groups) {
+        std::vector<PointLight> lights;
+        for (uint32_t id : g) lights.push_back(scene.lights[id]);
+        meshes.push_back(CreateLightMeshForLights(scene, accel, lattice, variant, templates, options, std::move(lights), &tables));
+    }
+    return CreateLightMeshGroups(scene, groups, std::move(meshes));
+}
+
+std::unique_ptr<LightMeshShadows> CreateLightMeshForLights(const Scene& scene, const Accelerator& accel,
+                                                           const LightMeshLattice& lattice, const LightMeshVariant& variant,
+                                                           TemplateLoad templates, const LightMeshOptions& options,
+                                                           std::vector<PointLight> lights, std::shared_ptr<void>* tables) {
+    // Tables are shared between meshes of one word type only (every group's words are 8
+    // bytes: 31 lights or more each).
+    auto make = [&]<typename Word>(Word) -> std::unique_ptr<LightMeshShadows> {
+        auto mesh = std::make_unique<LightMesh<Word>>(scene, accel, lattice, variant, std::move(templates), options,
+                                                      std::move(lights), tables ? *tables : nullptr);
+        if (tables) *tables = mesh->SharedTables();
+        return mesh;
+    };
+    switch (LightMeshBytesPerNode(lights.size())) {
+        case 1: return make(uint8_t{});
+        case 2: return make(uint16_t{});
+        case 4: return make(uint32_t{});
+        default: return make(uint64_t{});
     }
 }
 

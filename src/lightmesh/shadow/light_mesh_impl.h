@@ -108,8 +108,12 @@ class LightMesh final : public LightMeshShadows {
     static constexpr Word kVisMask = kInside - 1;
 
   public:
+    // `lights`: the lights this mesh's words hold (the scene's, or one group of them:
+    // LightMeshGroups); light l of the mesh is lights[l].
+    // `sharedTables`: another group's SharedTables() (same scene, lattice and options), or null.
     LightMesh(const Scene& scene, const Accelerator& accel, const LightMeshLattice& lattice,
-              const LightMeshVariant& variant, TemplateLoad templates, const LightMeshOptions& options);
+              const LightMeshVariant& variant, TemplateLoad templates, const LightMeshOptions& options,
+              std::vector<PointLight> lights, const std::shared_ptr<void>& sharedTables = nullptr);
 
     // The most (triangle, brick) pairs the binning may store: far more than any scene of
     // ordinary triangles needs (the garden: about 8 per triangle), far less than a file of
@@ -122,7 +126,7 @@ class LightMesh final : public LightMeshShadows {
     const LightMeshLattice& Lattice() const override { return lattice_; }
     const LightMeshVariant& Variant() const override { return variant_; }
     const TemplateLoad& Templates() const override { return templates_; }
-    int BytesPerNode() const override { return LightMeshStorageBytesPerNode(scene_.lights.size(), lightRadius_); }
+    int BytesPerNode() const override { return LightMeshStorageBytesPerNode(lights_.size(), lightRadius_); }
     uint64_t NodesEvaluated() const override { return evaluated_.load(); }
     bool IsEvaluated(uint64_t index) const override {
         return (nodes_[index].load(std::memory_order_acquire) & kInit) != 0;
@@ -130,14 +134,14 @@ class LightMesh final : public LightMeshShadows {
     uint64_t NodeVisibility(uint64_t index) const override { return NodeWord(index) & kVisMask; }
     bool NodeInside(uint64_t index) const override { return (NodeWord(index) & kInside) != 0; }
     float NodeBlockerParameter(uint64_t index, size_t light) const override {
-        if (light >= scene_.lights.size()) return 0.0f;
+        if (light >= lights_.size()) return 0.0f;
         const Word w = NodeWord(index);
         if (lightRadius_ == 0 || ((w >> light) & 1)) return 0.0f;
         return BlockerParameter(index, light);
     }
     // The stored blocker parameter of an evaluated node whose light is blocked.
     float BlockerParameter(uint64_t index, size_t light) const {
-        return static_cast<float>(blockerT_[index * scene_.lights.size() + light].load(std::memory_order_relaxed)) *
+        return static_cast<float>(blockerT_[index * lights_.size() + light].load(std::memory_order_relaxed)) *
                (1.0f / 65535.0f);
     }
 
@@ -395,7 +399,7 @@ class LightMesh final : public LightMeshShadows {
     // Segments traced when a node is evaluated: one per light, plus, for СТ, the extra
     // segments that complete its vote of three (see EvaluateNode).
     size_t SegmentsPerNode() const {
-        const size_t n = scene_.lights.size();
+        const size_t n = lights_.size();
         return variant_.local == LocalVisibility::Inside && n < 3 ? 3 : n;
     }
 
@@ -480,7 +484,7 @@ class LightMesh final : public LightMeshShadows {
     void UseAll(const FrontRun& run, int64_t base, Accumulator& acc) const {
         auto word = [&](int32_t linear) { return Evaluate(static_cast<uint64_t>(base + linear)); };
         if (sumFront_ && sumFront_(run.blocks, run.masks, run.count, static_cast<const void*>(nodes_.get() + base),
-                                   static_cast<int>(scene_.lights.size()), acc.visible, &acc.m))
+                                   static_cast<int>(lights_.size()), acc.visible, &acc.m))
             return;
         if constexpr (sizeof(Word) == 1) {
             uint64_t lanes = 0;
@@ -646,6 +650,7 @@ class LightMesh final : public LightMeshShadows {
     static constexpr float kPlaneEps = 1e-5f;
 
     const Scene& scene_;
+    const std::vector<PointLight> lights_;  // the lights of the node words (the constructor's)
     const Accelerator& accel_;
     const LightMeshLattice lattice_;
     const LightMeshVariant variant_;
@@ -744,6 +749,7 @@ class LightMesh final : public LightMeshShadows {
     // along the node's shadow segment, t·65535 (EvaluateVisibility); light l of node i at
     // i·lights + l.
     const float lightRadius_;
+    bool ranged_ = false;  // some light has a finite range (EvaluateVisibility skips beyond it)
     ThinCheck thinCheck_ = ThinCheck::kOff;
     ZeroedPtr<std::atomic<uint16_t>> blockerT_;
     static constexpr size_t kReachChunk = 1 << 18;
@@ -758,13 +764,35 @@ class LightMesh final : public LightMeshShadows {
         Vec3 lo, hi;
     };
     // (These on huge pages: on the garden 18 and 15 MiB, filled at once.)
-    std::vector<TrianglePlane, HugePageAllocator<TrianglePlane>> planes_;
+    // The triangles' planes and magnitudes and the bricks' lists depend on the geometry and
+    // the lattice only: the groups of one LightMeshGroups share them (SharedTables, built
+    // by the first group; on the garden 45 MiB a group), each group keeps its node words.
+    struct Tables {
+        std::vector<TrianglePlane, HugePageAllocator<TrianglePlane>> planes;
+        std::vector<float, HugePageAllocator<float>> magnitudes;
+        std::vector<uint64_t, HugePageAllocator<uint64_t>> brickStart;
+        std::vector<uint32_t, HugePageAllocator<uint32_t>> brickTris;
+        bool built = false;  // by the first mesh that had them
+        bool binned = false;
+        uint64_t binPairs = 0;
+    };
+    static std::shared_ptr<Tables> TakeTables(const std::shared_ptr<void>& shared) {
+        return shared ? std::static_pointer_cast<Tables>(shared) : std::make_shared<Tables>();
+    }
+    std::shared_ptr<Tables> tables_;
+
+  public:
+    // The tables, for the next group to share (CreateLightMeshForLights).
+    std::shared_ptr<void> SharedTables() const { return tables_; }
+
+  private:
+    std::vector<TrianglePlane, HugePageAllocator<TrianglePlane>>& planes_ = tables_->planes;
     // Per triangle, the largest |coordinate| of its vertices (a cell's tolerance), apart
     // from the planes: a summary takes the maximum over its reach, and as a field of the
     // 44-byte planes that gather was 8 % of the castle's L1 read misses (callgrind's model).
-    std::vector<float, HugePageAllocator<float>> magnitudes_;
-    std::vector<uint64_t, HugePageAllocator<uint64_t>> brickStart_;  // CSR of the bricks' candidate triangles
-    std::vector<uint32_t, HugePageAllocator<uint32_t>> brickTris_;
+    std::vector<float, HugePageAllocator<float>>& magnitudes_ = tables_->magnitudes;
+    std::vector<uint64_t, HugePageAllocator<uint64_t>>& brickStart_ = tables_->brickStart;  // CSR of the bricks' candidate triangles
+    std::vector<uint32_t, HugePageAllocator<uint32_t>>& brickTris_ = tables_->brickTris;
     uint64_t bricksX_ = 0, bricksY_ = 0;
     ZeroedPtr<std::atomic<SummaryBrick*>> bricks_;  // per brick of cells, allocated on first use
     mutable std::mutex brickMutex_;

@@ -15,7 +15,7 @@ namespace {
 template <typename Word>
 inline float LightMesh<Word>::NarrowPenumbra(const ShadingPoint& sp, size_t l, float rho,
                                              const std::vector<PenumbraNode>& nodes, RenderCounters& counters) const {
-    const Vec3& light = scene_.lights[l].position;
+    const Vec3& light = lights_[l].position;
     const float reach = rho + kDetect * lattice_.h, reach2 = reach * reach;
     const Word bit = Word(1) << l;
     // Whether some node within reach sees the light, and whether some does not (without
@@ -53,7 +53,7 @@ inline void LightMesh<Word>::PenumbraInterpolate(const ShadingPoint& sp, Word ne
                                                  const std::vector<PenumbraNode>& nodes, int64_t base, bool planar,
                                                  const CellSummary* summary, Blockers& blockers, Accumulator& acc,
                                                  RenderCounters& counters) const {
-    const size_t nLights = scene_.lights.size();
+    const size_t nLights = lights_.size();
     thread_local std::vector<uint8_t> kept;
     const size_t n = nodes.size();
     // Per light: uniform over the candidates, or a penumbra with support radius ρ_l.
@@ -69,7 +69,7 @@ inline void LightMesh<Word>::PenumbraInterpolate(const ShadingPoint& sp, Word ne
     const Word disagree = (someSee & ~allSee) & neededMask;
     for (size_t l = 0; l < nLights; ++l) {
         if (!((disagree >> l) & 1)) continue;
-        const Vec3& light = scene_.lights[l].position;
+        const Vec3& light = lights_[l].position;
         uint32_t blocked = 0;
         double sum = 0;
         for (const PenumbraNode& c : nodes) {
@@ -116,7 +116,7 @@ inline void LightMesh<Word>::PenumbraInterpolate(const ShadingPoint& sp, Word ne
     }
     for (size_t l = 0; l < nLights; ++l) {
         if (!((neededMask >> l) & 1)) continue;
-        const Vec3& light = scene_.lights[l].position;
+        const Vec3& light = lights_[l].position;
         if (!((mixed >> l) & 1)) {
             // Every candidate has the same bit: any node that sees P gives it.
             if (firstKept >= 0) {

@@ -90,9 +90,9 @@ TEST(LightMesh, EveryWordSizeGivesEachLightItsOwnAverage) {
                 for (float x = -2.2f; x <= 2.6f; x += 0.0731f)
                     for (float z = -2.1f; z <= 2.2f; z += 0.0917f) {
                         const ShadingPoint sp = testing::RenderedFloorPoint(x, z);
-                        bool needed[kMaxLights];
-                        float vis[kMaxLights] = {};
-                        std::fill(needed, needed + kMaxLights, true);
+                        bool needed[64];
+                        float vis[64] = {};
+                        std::fill(needed, needed + 64, true);
                         RenderCounters c;
                         many.lmm->Visibility(sp, needed, vis, c);
                         for (int l = 0; l < lights; ++l) {
@@ -692,9 +692,9 @@ TEST(LightMesh, CellSummaryAnswersOpenFloorWithoutSegments) {
     LightMeshOptions o;
     o.variant = "consensus";
     auto lmm = CreateLightMeshShadows(s, *accel, o);
-    bool needed[kMaxLights] = {true};
+    bool needed[64] = {true};
     for (const auto& [x, expected] : {std::pair{6.0f, 1.0f}, std::pair{8.5f, 1.0f}}) {
-        float vis[kMaxLights] = {};
+        float vis[64] = {};
         RenderCounters c;
         lmm->Visibility(FloorPoint(x, 0.3f), needed, vis, c);
         EXPECT_EQ(vis[0], expected) << x;
@@ -703,7 +703,7 @@ TEST(LightMesh, CellSummaryAnswersOpenFloorWithoutSegments) {
         EXPECT_EQ(Count(c, Lmc::kLocalSegments), 0u) << x;
     }
     // On the box's top face, next to its edge: planar only if the reach stays on the face.
-    float vis[kMaxLights] = {};
+    float vis[64] = {};
     RenderCounters c;
     ShadingPoint top;
     top.p = Vec3(0.1f, 0.5f, 0.1f);
@@ -735,8 +735,8 @@ TEST(LightMesh, CellSummariesLookOnlyAsFarAsTheirPlanesPointsReach) {
     ASSERT_GT(L.Node(0, cj + 3, 0).y, reach);  // the cube's top layer is beyond every floor sphere
     ASSERT_LT(0.46f, L.Node(0, cj + 3, 0).y);  // and the plate within the cube's reach
 
-    bool needed[kMaxLights] = {true};
-    float vis[kMaxLights] = {};
+    bool needed[64] = {true};
+    float vis[64] = {};
     RenderCounters c;
     lmm->Visibility(FloorPoint(6.0f, 0.3f), needed, vis, c);
     EXPECT_EQ(Count(c, Lmc::kPlanarCellPoints), 1u);
@@ -754,7 +754,7 @@ TEST(LightMesh, CellSummariesLookOnlyAsFarAsTheirPlanesPointsReach) {
     LightMeshOptions ot = o;
     ot.variant = "object";
     auto object = CreateLightMeshShadows(s, *accel, ot);
-    float visObject[kMaxLights] = {};
+    float visObject[64] = {};
     RenderCounters co;
     object->Visibility(FloorPoint(6.0f, 0.3f), needed, visObject, co);
     EXPECT_EQ(vis[0], visObject[0]);

@@ -278,13 +278,13 @@ inline void LightMesh<Word>::ConsensusWalk(const ShadingPoint& sp, Word neededMa
     // Pass 1: evaluate the candidates and count, per light, those that see it (Нет's
     // sums): they agree on the needed lights when every count is 0 or all of them.
     // (Only the lights the renderer needs matter: the others light P from behind.)
-    Accumulator counts(scene_.lights.size());
+    Accumulator counts(lights_.size());
     UseAll(all, base, counts);
     counts.Flush();
     const uint32_t n = counts.m;
     Word majority = 0;  // per light, the bit most candidates carry (MinorityFirst)
     bool agree = true;
-    for (size_t l = 0; l < scene_.lights.size(); ++l) {
+    for (size_t l = 0; l < lights_.size(); ++l) {
         if (!((neededMask >> l) & 1)) continue;
         agree &= counts.visible[l] == 0 || counts.visible[l] == n;
         if (2 * counts.visible[l] > n) majority |= Word(1) << l;

@@ -155,12 +155,12 @@ TEST(Penumbra, ContactShadowsStayHardWhereTodaysMethodBlurs) {
     o.cc = 100;
     o.ki = 2.0f;
     auto fixed = CreateLightMeshShadows(s, *p.accel, o);
-    bool needed[kMaxLights] = {true};
+    bool needed[64] = {true};
     int hardFixed = 0, hardPenumbra = 0, points = 0;
     for (float x = -0.5f; x <= 0.5f; x += 0.01f, ++points) {
         const ShadingPoint sp = FloorPoint(x, 0.3f);
         RenderCounters c;
-        float vis[kMaxLights] = {};
+        float vis[64] = {};
         fixed->Visibility(sp, needed, vis, c);
         hardFixed += vis[0] == 0.0f || vis[0] == 1.0f;
         const float v = p.Vis(sp);

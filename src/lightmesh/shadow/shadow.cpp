@@ -15,7 +15,7 @@ bool LightVisible(const Accelerator& accel, const Vec3& origin, const Vec3& ligh
     return !accel.Occluded(LightSegment(origin, light));
 }
 
-uint64_t LightsVisible(const Accelerator& accel, const Vec3& origin, const std::vector<PointLight>& lights,
+uint64_t LightsVisible(const Accelerator& accel, const Vec3& origin, std::span<const PointLight> lights,
                        uint64_t mask) {
     // 16 rays at a time, Embree's widest packet: a Ray is initialised where it is
     // declared, and this runs once per shading point (and per light-mesh node with 16
@@ -44,7 +44,7 @@ uint64_t LightsVisible(const Accelerator& accel, const Vec3& origin, const std::
 }
 
 uint64_t LightsVisibleMany(const Accelerator& accel, const ShadingPoint* sps, size_t count,
-                           const std::vector<PointLight>& lights, const uint64_t* masks, uint64_t* visible) {
+                           std::span<const PointLight> lights, const uint64_t* masks, uint64_t* visible) {
     constexpr size_t kChunk = 64;
     Ray rays[kChunk];
     size_t which[kChunk];
@@ -91,43 +91,58 @@ class NoShadows final : public ShadowMethod {
     size_t lights_;
 };
 
-/// "rt": Whitted's hard shadows, one shadow ray per light (formula (1)).
+/// "rt": Whitted's hard shadows, one shadow ray per light (formula (1)). Any number of
+/// lights: their rays go out 64 lights at a time (a mask each), in light order.
 class HardShadows final : public ShadowMethod {
   public:
     HardShadows(const Scene& scene, const Accelerator& accel) : scene_(scene), accel_(accel) {}
     std::string_view Name() const override { return "rt"; }
     void Visibility(const ShadingPoint& sp, const bool* needed, float* vis,
                     RenderCounters& counters) const override {
-        uint64_t mask = 0;
-        for (size_t i = 0; i < scene_.lights.size(); ++i)
-            if (needed[i]) mask |= uint64_t(1) << i;
-        counters.shadowRays += static_cast<uint64_t>(__builtin_popcountll(mask));
-        const uint64_t visible = LightsVisible(accel_, sp.origin, scene_.lights, mask);
-        for (size_t i = 0; i < scene_.lights.size(); ++i)
-            if (needed[i]) vis[i] = (visible >> i) & 1 ? 1.0f : 0.0f;
+        const size_t lights = scene_.lights.size();
+        const std::span<const PointLight> all(scene_.lights);
+        for (size_t first = 0; first < lights; first += 64) {
+            const size_t n = std::min<size_t>(64, lights - first);
+            uint64_t mask = 0;
+            for (size_t i = 0; i < n; ++i)
+                if (needed[first + i]) mask |= uint64_t(1) << i;
+            if (!mask) continue;
+            counters.shadowRays += static_cast<uint64_t>(__builtin_popcountll(mask));
+            const uint64_t visible = LightsVisible(accel_, sp.origin, all.subspan(first, n), mask);
+            for (size_t i = 0; i < n; ++i)
+                if (needed[first + i]) vis[first + i] = (visible >> i) & 1 ? 1.0f : 0.0f;
+        }
     }
     // Light by light, the points' shadow rays to it together (LightsVisibleMany): rays
     // from neighbouring points to one light are coherent, which a back-end traces as a
-    // packet (Embree's rtcOccluded8, the grid's coherent traversal).
+    // packet (Embree's rtcOccluded8, the grid's coherent traversal). 64 lights at a time.
     void VisibilityMany(const ShadingPoint* sps, size_t count, size_t lights, const bool* needed, float* vis,
                         RenderCounters& counters) const override {
-        if (lights > 64) {  // beyond a mask (the renderer refuses more than kMaxLights = 64)
-            ShadowMethod::VisibilityMany(sps, count, lights, needed, vis, counters);
-            return;
-        }
         constexpr size_t kChunk = 64;  // points at a time, for the masks on the stack
+        const std::span<const PointLight> all(scene_.lights);
         uint64_t masks[kChunk], visible[kChunk];
         for (size_t first = 0; first < count; first += kChunk) {
             const size_t n = std::min(kChunk, count - first);
-            for (size_t i = 0; i < n; ++i) {
-                masks[i] = 0;
-                for (size_t l = 0; l < lights; ++l)
-                    if (needed[(first + i) * lights + l]) masks[i] |= uint64_t(1) << l;
+            for (size_t l0 = 0; l0 < lights; l0 += 64) {
+                const size_t nl = std::min<size_t>(64, lights - l0);
+                uint64_t any = 0;
+                for (size_t i = 0; i < n; ++i) {
+                    masks[i] = 0;
+                    const bool* need = needed + (first + i) * lights + l0;
+                    for (size_t l = 0; l < nl; ++l)
+                        if (need[l]) masks[i] |= uint64_t(1) << l;
+                    any |= masks[i];
+                }
+                if (!any) continue;
+                counters.shadowRays += LightsVisibleMany(accel_, sps + first, n, all.subspan(l0, nl), masks, visible);
+                for (size_t i = 0; i < n; ++i) {
+                    float* v = vis + (first + i) * lights + l0;
+                    for (uint64_t m = masks[i]; m; m &= m - 1) {
+                        const int l = __builtin_ctzll(m);
+                        v[l] = (visible[i] >> l) & 1 ? 1.0f : 0.0f;
+                    }
+                }
             }
-            counters.shadowRays += LightsVisibleMany(accel_, sps + first, n, scene_.lights, masks, visible);
-            for (size_t i = 0; i < n; ++i)
-                for (size_t l = 0; l < lights; ++l)
-                    if (needed[(first + i) * lights + l]) vis[(first + i) * lights + l] = (visible[i] >> l) & 1 ? 1.0f : 0.0f;
         }
     }
 

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <memory>
+#include <span>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -81,11 +82,12 @@ inline Ray LightSegment(const Vec3& origin, const Vec3& light) { return Ray{orig
 /// One shadow ray from sp.origin to the light: the hard-shadow visibility of formula (1).
 bool LightVisible(const Accelerator& accel, const Vec3& origin, const Vec3& light);
 
-/// LightVisible for the lights in `mask` (bit l: lights[l]; the first 64 lights) from one
-/// origin, traced together (Accelerator::OccludedMany: a packet on Embree, 2–11 % faster
-/// RT on the 6-light garden; each ray's answer is LightVisible's). Bit l of the result is
-/// set where light l of the mask is visible.
-uint64_t LightsVisible(const Accelerator& accel, const Vec3& origin, const std::vector<PointLight>& lights,
+/// LightVisible for the lights in `mask` (bit l: lights[l]; the first 64 lights of the
+/// span: callers with more lights pass them 64 at a time) from one origin, traced together
+/// (Accelerator::OccludedMany: a packet on Embree, 2–11 % faster RT on the 6-light garden;
+/// each ray's answer is LightVisible's). Bit l of the result is set where light l of the
+/// mask is visible.
+uint64_t LightsVisible(const Accelerator& accel, const Vec3& origin, std::span<const PointLight> lights,
                        uint64_t mask);
 
 /// LightsVisible for many points at once, light by light: for each light, the shadow rays
@@ -93,7 +95,8 @@ uint64_t LightsVisible(const Accelerator& accel, const Vec3& origin, const std::
 /// neighbouring points to one light are coherent: a packet on Embree, the grid's coherent
 /// traversal). visible[i] gets bit l where light l is seen from sps[i].origin; each ray's
 /// answer is LightVisible's. Returns the number of rays traced.
+/// Like LightsVisible, the lights of the span are its first 64.
 uint64_t LightsVisibleMany(const Accelerator& accel, const ShadingPoint* sps, size_t count,
-                           const std::vector<PointLight>& lights, const uint64_t* masks, uint64_t* visible);
+                           std::span<const PointLight> lights, const uint64_t* masks, uint64_t* visible);
 
 }  // namespace lm
