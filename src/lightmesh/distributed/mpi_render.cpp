@@ -220,6 +220,33 @@ static void GatherOnRankZero(int rank, int size, int tilesX, const RankReport& r
     out->result.image = std::move(*image);
 }
 
+/// The end of a distributed render, on every rank: whether all ranks succeeded (the lowest
+/// failing rank's message goes to rank 0, and nobody sends tiles), then the gathers. A
+/// failure in a gather (out of memory on rank 0, an MPI error) would leave the other ranks
+/// waiting in a collective, so it ends the whole job at once.
+static DistributedRender Conclude(const MpiSession& session, int tilesX, const RankReport& report,
+                                  const std::vector<int>& mine, const std::string& error,
+                                  std::chrono::steady_clock::time_point start, Image* image) {
+    const int rank = session.Rank(), size = session.Size();
+    DistributedRender out;
+    std::string message;
+    int failedRank = -1;
+    if (!session.AllSucceeded(error, &message, &failedRank)) {
+        out.error = message;
+        out.errorRank = failedRank;
+        return out;
+    }
+    try {
+        GatherOnRankZero(rank, size, tilesX, report, mine, image, &out);
+    } catch (...) {
+        std::fprintf(stderr, "lightmesh: error: %s (rank %d of %d, gathering the image)\n",
+                     CurrentExceptionLine().c_str(), rank, size);
+        MPI_Abort(MPI_COMM_WORLD, 1);
+    }
+    out.result.seconds = SecondsSince(start);
+    return out;
+}
+
 DistributedRender RenderDistributed(const MpiSession& session, const WhittedRenderer& renderer,
                                     const std::function<uint64_t()>& nodesEvaluated,
                                     ProgressReporter* progress) {
@@ -291,27 +318,7 @@ DistributedRender RenderDistributed(const MpiSession& session, const WhittedRend
     MPI_Win_unlock_all(window);
     MPI_Win_free(&window);
 
-    DistributedRender out;
-    // Who failed: the lowest failing rank's message goes to rank 0, and nobody sends tiles.
-    std::string message;
-    int failedRank = -1;
-    if (!session.AllSucceeded(error, &message, &failedRank)) {
-        out.error = message;
-        out.errorRank = failedRank;
-        return out;
-    }
-
-    // The gathers. A failure here (out of memory on rank 0, an MPI error) would leave the
-    // other ranks waiting in a collective, so it ends the whole job at once.
-    try {
-        GatherOnRankZero(rank, size, tilesX, report, mine, &image, &out);
-    } catch (...) {
-        std::fprintf(stderr, "lightmesh: error: %s (rank %d of %d, gathering the image)\n",
-                     CurrentExceptionLine().c_str(), rank, size);
-        MPI_Abort(MPI_COMM_WORLD, 1);
-    }
-    out.result.seconds = SecondsSince(start);
-    return out;
+    return Conclude(session, tilesX, report, mine, error, start, &image);
 }
 
 DistributedRender RenderDistributedBands(const MpiSession& session, const WhittedRenderer& renderer,
@@ -343,23 +350,7 @@ DistributedRender RenderDistributedBands(const MpiSession& session, const Whitte
     report.seconds = SecondsSince(start);
     report.tiles = static_cast<int>(mine.size());
 
-    DistributedRender out;
-    std::string message;
-    int failedRank = -1;
-    if (!session.AllSucceeded(error, &message, &failedRank)) {
-        out.error = message;
-        out.errorRank = failedRank;
-        return out;
-    }
-    try {
-        GatherOnRankZero(rank, size, tilesX, report, mine, &image, &out);
-    } catch (...) {
-        std::fprintf(stderr, "lightmesh: error: %s (rank %d of %d, gathering the image)\n",
-                     CurrentExceptionLine().c_str(), rank, size);
-        MPI_Abort(MPI_COMM_WORLD, 1);
-    }
-    out.result.seconds = SecondsSince(start);
-    return out;
+    return Conclude(session, tilesX, report, mine, error, start, &image);
 }
 
 }  // namespace lm

@@ -14,25 +14,14 @@
 #include "lightmesh/geometry/mesh.h"
 #include "lightmesh/io/image.h"
 #include "lightmesh/scene/scene_file.h"
+#include "support/cutout_scenes.h"
 
 namespace lm {
 namespace {
 
 namespace fs = std::filesystem;
-const std::string DataDir = std::string(LIGHTMESH_TEST_DATA) + "/textures";
-
-/// checker_mask.gltf (a 4 × 4 quad at y = 1 whose alpha is an 8 × 8 checker, MASK at 0.5)
-/// above a ground slab.
-Scene CheckerScene(bool textures = true) {
-    SceneLoadOptions o;
-    o.textures = textures;
-    o.text = R"({"camera": {"position": [0, 10, 10], "look_at": [0, 0, 0]},
-                 "lights": [{"position": [0, 50, 0], "intensity": 2500, "radius": 0.3}],
-                 "meshes": [{"file": "checker_mask.gltf"}],
-                 "ground": {"height": 0, "size": 3}})";
-    std::vector<std::string> warnings;
-    return LoadScene(DataDir + "/checker_scene.json", o, &warnings);
-}
+const std::string DataDir = testing::TextureDataDir();
+using testing::CheckerScene;
 
 TEST(Cutouts, TheCheckerQuadIsACutOutAndItsHolesAreHoles) {
     const Scene s = CheckerScene();

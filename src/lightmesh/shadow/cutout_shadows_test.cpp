@@ -7,23 +7,13 @@
 #include "lightmesh/geometry/cutouts.h"
 #include "lightmesh/render/whitted.h"
 #include "lightmesh/scene/scene_file.h"
+#include "support/cutout_scenes.h"
 #include "lightmesh/shadow/shadow.h"
 
 namespace lm {
 namespace {
 
-const std::string DataDir = std::string(LIGHTMESH_TEST_DATA) + "/textures";
-
-Scene CheckerScene(bool textures) {
-    SceneLoadOptions o;
-    o.textures = textures;
-    o.text = R"({"camera": {"position": [0, 10, 10], "look_at": [0, 0, 0]},
-                 "lights": [{"position": [0, 50, 0], "intensity": 2500, "radius": 0.3}],
-                 "meshes": [{"file": "checker_mask.gltf"}],
-                 "ground": {"height": 0, "size": 3}})";
-    std::vector<std::string> warnings;
-    return LoadScene(DataDir + "/checker_scene.json", o, &warnings);
-}
+using testing::CheckerScene;
 
 /// The mean visibility of the light over a 40 × 40 grid of ground points under the quad's
 /// middle (its shadow spans ±2.04 on the ground).
