@@ -618,6 +618,15 @@ std::vector<Case> Corpus() {
                      "machine's 64.0 MiB: lower CC\n",
          .files = {{"scene.json", WithLights(ManyLights(200))}},
          .env = "LIGHTMESH_MEMORY_LIMIT=64M"},
+        {.name = "soft_shadow_lists_of_many_lights_past_the_limit",
+         // 200 lights over a box: the cells' lists (one per cell and light, built as points
+         // need them) pass half of 64 MiB during the render, which stops and writes nothing.
+         .args = "render $D/scene.json -o $OUT",
+         .expected = "lightmesh: error: soft shadows: the cells' occluder lists for 200 lights have grown past "
+                     "32.0 MiB, half of the 64.0 MiB this process may use; give the lights a \"range\", lower "
+                     "--cc, or use --shadows lmm or rt\n",
+         .files = {{"scene.json", WithLights(ManyLights(200))}},
+         .env = "LIGHTMESH_MEMORY_LIMIT=64M"},
         {.name = "image_too_big_for_the_limit",
          .args = "render $D/scene.json --width 4096 --height 4096 -o $OUT",
          .expected = "lightmesh: error: image 4096x4096 would need 192.0 MiB, more than half "

@@ -223,6 +223,8 @@ SoftShadows::SoftShadows(const Scene& scene, const Accelerator& accel, SoftShado
                           options_.cc, indexBytes / 1e9, nx_, ny_, nz_, static_cast<double>(budget) / 1e9);
     blocks_.reset(new std::atomic<Slot*>[blockCount_]);
     for (size_t b = 0; b < blockCount_; ++b) blocks_[b].store(nullptr, std::memory_order_relaxed);
+    byteLimit_ = budget / 2;
+    bytesBuilt_.store(static_cast<uint64_t>(indexBytes), std::memory_order_relaxed);
 
     // The stratified disc pattern: point k of the golden-ratio lattice ((k + ½)/N,
     // frac(k·(φ − 1))), mapped to the unit disc (area_light.cpp's pattern, unshifted; each
@@ -471,10 +473,12 @@ const SoftShadows::CellList* SoftShadows::List(const Vec3& o, size_t light, std:
     if (!slots) {
         Slot* fresh = new Slot[kBlockCells * lights];
         for (size_t s = 0; s < kBlockCells * lights; ++s) fresh[s].store(nullptr, std::memory_order_relaxed);
-        if (blocks_[block].compare_exchange_strong(slots, fresh, std::memory_order_acq_rel, std::memory_order_acquire))
+        if (blocks_[block].compare_exchange_strong(slots, fresh, std::memory_order_acq_rel, std::memory_order_acquire)) {
             slots = fresh;
-        else
+            Account(kBlockCells * lights * sizeof(Slot));
+        } else {
             delete[] fresh;
+        }
     }
     const size_t cell = (static_cast<size_t>(k % kBlockSide) * kBlockSide + static_cast<size_t>(j % kBlockSide)) *
                             kBlockSide + static_cast<size_t>(i % kBlockSide);
@@ -494,6 +498,18 @@ std::unique_ptr<SoftShadows::CellList> SoftShadows::BuildCell(const Bounds3& box
     return BuildList(BallHull{box.Center(), ra, scene_.lights[light].position, options_.radii[light]}, box, light);
 }
 
+void SoftShadows::Account(size_t bytes) const {
+    const uint64_t total = bytesBuilt_.fetch_add(bytes, std::memory_order_relaxed) + bytes;
+    if (byteLimit_ && total > byteLimit_ && total - bytes <= byteLimit_) {
+        const size_t lights = scene_.lights.size();
+        throw Error(StringPrintf("soft shadows: the cells' occluder lists for %s light%s have grown past %s, half of "
+                                 "the %s this process may use; give the lights a \"range\", lower --cc, or use "
+                                 "--shadows lmm or rt",
+                                 FormatCount(lights).c_str(), lights == 1 ? "" : "s", FormatBytes(byteLimit_).c_str(),
+                                 FormatBytes(2 * byteLimit_).c_str()));
+    }
+}
+
 const SoftShadows::CellList* SoftShadows::Publish(std::atomic<const CellList*>* slot, std::unique_ptr<CellList> built) const {
     const CellList* fresh = built->count == 0 && !built->dense ? &kEmptyList : built.get();
     const CellList* expected = nullptr;
@@ -501,7 +517,12 @@ const SoftShadows::CellList* SoftShadows::Publish(std::atomic<const CellList*>* 
         cellsBuilt_.fetch_add(1, std::memory_order_relaxed);
         entriesBuilt_.fetch_add(built->count, std::memory_order_relaxed);
         if (built->dense) denseBuilt_.fetch_add(1, std::memory_order_relaxed);
-        if (fresh != &kEmptyList) built.release();
+        if (fresh != &kEmptyList) {
+            const CellList* list = built.release();
+            Account(sizeof(CellList) + 4 * (list->planes.capacity() + list->prims.capacity() + list->codes.capacity() +
+                                            list->receivers.capacity()) +
+                    sizeof(std::atomic<const Receiver*>) * list->receivers.size());
+        }
         return fresh;
     }
     return expected;  // another thread published the same list first
@@ -803,9 +824,10 @@ float SoftShadows::LightVisibility(const ShadingPoint& sp, size_t light, RenderC
             std::unique_ptr<Receiver> built = BuildReceiver(*list, sp.prim, scene_.lights[light].position, R);
             const Receiver* expected = nullptr;
             if (list->recv[r].compare_exchange_strong(expected, built.get(), std::memory_order_acq_rel,
-                                                      std::memory_order_acquire))
+                                                      std::memory_order_acquire)) {
                 rec = built.release();
-            else
+                Account(sizeof(Receiver) + 4 * (rec->entries.capacity() + rec->soa.capacity()));
+            } else
                 rec = expected;  // another thread published the same receiver first
         }
         const Triangle& t = tris_[sp.prim];
@@ -849,8 +871,14 @@ void SoftShadows::Visibility(const ShadingPoint& sp, const bool* needed, float* 
 
 ShadowFigures SoftShadows::Figures() const {
     std::string radii;
-    for (size_t i = 0; i < options_.radii.size(); ++i)
-        radii += StringPrintf("%s%g", i ? ", " : "", static_cast<double>(options_.radii[i]));
+    const std::vector<float>& r = options_.radii;
+    if (r.size() <= 8) {
+        for (size_t i = 0; i < r.size(); ++i) radii += StringPrintf("%s%g", i ? ", " : "", static_cast<double>(r[i]));
+    } else {  // many lights: their range
+        const auto [lo, hi] = std::minmax_element(r.begin(), r.end());
+        radii = StringPrintf("%g to %g (%s lights)", static_cast<double>(*lo), static_cast<double>(*hi),
+                             FormatCount(r.size()).c_str());
+    }
     const uint64_t cells = cellsBuilt_.load(), entries = entriesBuilt_.load();
     return {{"light radii", radii.empty() ? "-" : radii},
             {"cells", StringPrintf("CC %d, h %g, %d x %d x %d", options_.cc, static_cast<double>(h_), nx_, ny_, nz_)},
@@ -858,10 +886,12 @@ ShadowFigures SoftShadows::Figures() const {
                                      options_.samples, options_.denseSamples, options_.denseEntries)},
             {"occluder hierarchy", StringPrintf("%zu nodes, %.1f MB, %.1f ms", bvh_.NodeCount(), bvh_.Bytes() / 1e6,
                                                 bvh_.BuildSeconds() * 1e3)},
-            {"cell lists", StringPrintf("%llu built (cell x light), %.1f triangles each, %llu dense",
+            {"cell lists", StringPrintf("%llu built (cell x light), %.1f triangles each, %llu dense, %s with the "
+                                        "index and receivers",
                                         static_cast<unsigned long long>(cells),
                                         cells ? static_cast<double>(entries) / static_cast<double>(cells) : 0.0,
-                                        static_cast<unsigned long long>(denseBuilt_.load()))}};
+                                        static_cast<unsigned long long>(denseBuilt_.load()),
+                                        FormatBytes(bytesBuilt_.load()).c_str())}};
 }
 
 StatsLines SoftShadows::CounterLines(const RenderCounters& counters) const {

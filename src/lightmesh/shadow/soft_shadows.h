@@ -125,6 +125,15 @@ class SoftShadows final : public ShadowMethod {
     static constexpr int kTurns = 1024;           ///< the pattern's turns, from a point's hash
     float turnCos_[kTurns], turnSin_[kTurns];
     mutable std::atomic<uint64_t> cellsBuilt_{0}, entriesBuilt_{0}, denseBuilt_{0};
+    /// The bytes of the blocks, lists and receivers published so far, and the most they may
+    /// take: half the memory budget (PhysicalMemoryBytes; 0: no limit). Lists are built
+    /// where points need them, so their size is only known as the render goes: past the
+    /// limit the render stops with an Error instead of running the machine out of memory.
+    /// Only published copies count, and the lists a render needs do not depend on the
+    /// threads, so whether a render stops does not either.
+    mutable std::atomic<uint64_t> bytesBuilt_{0};
+    uint64_t byteLimit_ = 0;
+    void Account(size_t bytes) const;
 };
 
 /// Builds "soft" (see above); throws Error for bad options.
