@@ -1,6 +1,7 @@
 // cmd_info.cpp -- `lightmesh info`.
 #include "commands.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "lightmesh/accel/accelerator.h"
@@ -33,13 +34,32 @@ int RunInfo(const CommonOptions& common, const std::string& accelName, int grid)
                 radiusOverride ? lm::StringPrintf(" (rendered with every radius %g: the scene's \"light_radius\")",
                                                   static_cast<double>(*radiusOverride)).c_str()
                                : "");
-    for (size_t i = 0; i < scene.lights.size(); ++i) {
+    // Many lights: the first kListed and a summary of the rest (-v lists them all).
+    constexpr size_t kListed = 16;
+    const size_t listed = common.verbose ? scene.lights.size() : std::min(scene.lights.size(), kListed);
+    for (size_t i = 0; i < listed; ++i) {
         const lm::PointLight& l = scene.lights[i];
         std::printf("  light %zu  at [%g %g %g], intensity [%g %g %g], falloff %s, radius %g%s%s\n", i, l.position.x,
                     l.position.y, l.position.z, l.intensity.r, l.intensity.g, l.intensity.b,
                     l.falloff == lm::Falloff::None ? "none" : "inverse_square", l.radius,
                     l.radius == 0 ? " (a point)" : "",
                     std::isfinite(l.range) ? lm::StringPrintf(", range %g", static_cast<double>(l.range)).c_str() : "");
+    }
+    if (listed < scene.lights.size()) {
+        float rlo = INFINITY, rhi = 0, glo = INFINITY, ghi = 0;
+        size_t ranged = 0;
+        for (size_t i = listed; i < scene.lights.size(); ++i) {
+            const lm::PointLight& l = scene.lights[i];
+            rlo = std::min(rlo, l.radius), rhi = std::max(rhi, l.radius);
+            if (std::isfinite(l.range)) ++ranged, glo = std::min(glo, l.range), ghi = std::max(ghi, l.range);
+        }
+        auto span = [](float lo, float hi) {
+            return lo == hi ? lm::StringPrintf("%g", static_cast<double>(lo))
+                            : lm::StringPrintf("%g to %g", static_cast<double>(lo), static_cast<double>(hi));
+        };
+        std::printf("  and %s more: radius %s, %s with a range%s (-v lists every light)\n",
+                    Count(scene.lights.size() - listed).c_str(), span(rlo, rhi).c_str(), Count(ranged).c_str(),
+                    ranged ? (" (" + span(glo, ghi) + ")").c_str() : "");
     }
     std::vector<size_t> uses(scene.materials.size());
     for (uint32_t m : scene.mesh.materialIds) ++uses[m];
