@@ -142,6 +142,28 @@ TEST(Cli, InfoDescribesTheScene) {
     EXPECT_NE(r.output.find("accel      grid"), std::string::npos) << r.output;
 }
 
+// Many lights: info lists the first 16 and sums up the rest; -v lists them all.
+TEST(Cli, InfoSumsUpManyLights) {
+    std::ofstream(Temp("many.obj")) << "v -1 0 -1\nv 1 0 -1\nv 0 0 1\nf 1 2 3\n";
+    std::string lights;
+    for (int i = 0; i < 20; ++i)
+        lights += (i ? ", " : "") + std::string("{\"position\": [") + std::to_string(i) + ", 5, 0], \"radius\": " +
+                  (i < 19 ? "0.5" : "0.25") + (i % 2 ? ", \"range\": 30}" : "}");
+    std::ofstream(Temp("many.json")) << R"({"camera": {"position": [0, 2, 8], "look_at": [0, 0, 0]}, "lights": [)"
+                                     << lights << R"(], "meshes": [{"file": "many.obj"}]})";
+    const CliRun r = Lightmesh("info " + Temp("many.json"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("  light 15  at [15 5 0]"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("  light 16 "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("  and 4 more: radius 0.25 to 0.5, 2 with a range (30) (-v lists every light)\n"),
+              std::string::npos)
+        << r.output;
+    const CliRun all = Lightmesh("info -v " + Temp("many.json"));
+    ASSERT_EQ(all.exitCode, 0) << all.output;
+    EXPECT_NE(all.output.find("  light 19  at [19 5 0]"), std::string::npos) << all.output;
+    EXPECT_EQ(all.output.find("more: radius"), std::string::npos) << all.output;
+}
+
 // Lights have sizes: info lists them; --shadows area samples them without a warning;
 // --light-radius 0 overrides them all to points, which is RT's image byte for byte, and
 // says so.
