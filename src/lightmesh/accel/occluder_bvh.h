@@ -38,10 +38,11 @@ class HullPieces {
     }
 
   private:
-    struct Piece {
-        float o[3], inv[3], r;
-    };
-    Piece pieces_[kPieces];
+    // The pieces side by side, one per SSE lane: MeetsBox tests all four at once, with the
+    // same operations per piece as one at a time (so the same answer, bit for bit).
+    alignas(16) float o_[3][kPieces];
+    alignas(16) float inv_[3][kPieces];
+    alignas(16) float r_[kPieces];
 };
 
 /// A binary BVH (median splits on the longest axis of the centroids, up to 4 triangles a
