@@ -24,6 +24,13 @@ OccluderBvh::OccluderBvh(const TriangleMesh& mesh) : mesh_(mesh) {
     prims_.resize(n);
     nodes_.reserve(n ? 2 * ((n + kLeafSize - 1) / kLeafSize) : 1);
     if (n) Build(items.data(), n, 0, 0);
+    boxes_.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+        const uint32_t prim = prims_[i];
+        const Vec3 &p0 = mesh.Vertex(prim, 0), &p1 = mesh.Vertex(prim, 1), &p2 = mesh.Vertex(prim, 2);
+        const Vec3 lo = Min(Min(p0, p1), p2), hi = Max(Max(p0, p1), p2);
+        boxes_[i] = {{lo.x, lo.y, lo.z}, {hi.x, hi.y, hi.z}};
+    }
     buildSeconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
@@ -106,11 +113,8 @@ bool OccluderBvh::Query(const BallHull& hull, std::vector<uint32_t>* out, size_t
         if (!meets(node.lo, node.hi)) continue;
         if (node.count) {
             for (uint32_t i = 0; i < node.count; ++i) {
-                const uint32_t prim = prims_[node.index + i];
-                const Vec3 &p0 = mesh_.Vertex(prim, 0), &p1 = mesh_.Vertex(prim, 1), &p2 = mesh_.Vertex(prim, 2);
-                const Vec3 lo = Min(Min(p0, p1), p2), hi = Max(Max(p0, p1), p2);
-                const float l[3] = {lo.x, lo.y, lo.z}, h[3] = {hi.x, hi.y, hi.z};
-                if (node.count == 1 || meets(l, h)) out->push_back(prim);
+                const PrimBox& b = boxes_[node.index + i];
+                if (node.count == 1 || meets(b.lo, b.hi)) out->push_back(prims_[node.index + i]);
             }
             if (out->size() - start > limit) return false;
             continue;
