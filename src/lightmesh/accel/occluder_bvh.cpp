@@ -1,5 +1,7 @@
 #include "lightmesh/accel/occluder_bvh.h"
 
+#include <immintrin.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -22,6 +24,13 @@ OccluderBvh::OccluderBvh(const TriangleMesh& mesh) : mesh_(mesh) {
     prims_.resize(n);
     nodes_.reserve(n ? 2 * ((n + kLeafSize - 1) / kLeafSize) : 1);
     if (n) Build(items.data(), n, 0, 0);
+    boxes_.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+        const uint32_t prim = prims_[i];
+        const Vec3 &p0 = mesh.Vertex(prim, 0), &p1 = mesh.Vertex(prim, 1), &p2 = mesh.Vertex(prim, 2);
+        const Vec3 lo = Min(Min(p0, p1), p2), hi = Max(Max(p0, p1), p2);
+        boxes_[i] = {{lo.x, lo.y, lo.z}, {hi.x, hi.y, hi.z}};
+    }
     buildSeconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
@@ -56,40 +65,39 @@ uint32_t OccluderBvh::Build(BuildItem* items, size_t count, size_t first, int de
 }
 
 HullPieces::HullPieces(const BallHull& hull) {
+    static_assert(kPieces == 4, "MeetsBox tests the pieces in the four lanes of an SSE register");
     const Vec3 d = hull.b - hull.a;
     for (int j = 0; j < kPieces; ++j) {
         const float s0 = static_cast<float>(j) / kPieces, s1 = static_cast<float>(j + 1) / kPieces;
         const Vec3 o = hull.a + d * s0;
         const Vec3 seg = d * (s1 - s0);
-        Piece& p = pieces_[j];
         for (int k = 0; k < 3; ++k) {
-            p.o[k] = o[k];
+            o_[k][j] = o[k];
             // A zero component gets a huge finite inverse: (bound − o)·inv is then ±huge or
             // 0, never NaN, and the slab test stays exact.
-            p.inv[k] = std::abs(seg[k]) > 1e-30f ? 1.0f / seg[k] : (seg[k] < 0 ? -1e30f : 1e30f);
+            inv_[k][j] = std::abs(seg[k]) > 1e-30f ? 1.0f / seg[k] : (seg[k] < 0 ? -1e30f : 1e30f);
         }
         // The radius grows or shrinks linearly: its largest value on the stretch is at an
         // end; a relative margin covers the rounding of the grown boxes.
         const float r = std::max(hull.ra + (hull.rb - hull.ra) * s0, hull.ra + (hull.rb - hull.ra) * s1);
-        p.r = r * (1.0f + 1e-5f) + 1e-6f * (MaxComponent(Abs(o)) + Length(seg));
+        r_[j] = r * (1.0f + 1e-5f) + 1e-6f * (MaxComponent(Abs(o)) + Length(seg));
     }
 }
 
 bool HullPieces::MeetsBox(const float lo[3], const float hi[3]) const {
-    for (const Piece& p : pieces_) {
-        // The slab test of the piece's axis against the box grown by its radius (a box
-        // grown by r contains every point within r of the box).
-        float t0 = 0.0f, t1 = 1.0f;
-        for (int k = 0; k < 3; ++k) {
-            float a = (lo[k] - p.r - p.o[k]) * p.inv[k];
-            float b = (hi[k] + p.r - p.o[k]) * p.inv[k];
-            if (a > b) std::swap(a, b);
-            t0 = std::max(t0, a);
-            t1 = std::min(t1, b);
-        }
-        if (t0 <= t1) return true;
+    // Per piece (lane), the slab test of its axis against the box grown by its radius (a
+    // box grown by r contains every point within r of the box). No value is NaN, so min and
+    // max order each slab's ends as a swap would, and the comparisons decide as they would.
+    const __m128 r = _mm_load_ps(r_);
+    __m128 t0 = _mm_setzero_ps(), t1 = _mm_set1_ps(1.0f);
+    for (int k = 0; k < 3; ++k) {
+        const __m128 o = _mm_load_ps(o_[k]), inv = _mm_load_ps(inv_[k]);
+        const __m128 a = _mm_mul_ps(_mm_sub_ps(_mm_sub_ps(_mm_set1_ps(lo[k]), r), o), inv);
+        const __m128 b = _mm_mul_ps(_mm_sub_ps(_mm_add_ps(_mm_set1_ps(hi[k]), r), o), inv);
+        t0 = _mm_max_ps(t0, _mm_min_ps(a, b));
+        t1 = _mm_min_ps(t1, _mm_max_ps(a, b));
     }
-    return false;
+    return _mm_movemask_ps(_mm_cmple_ps(t0, t1)) != 0;
 }
 
 bool OccluderBvh::Query(const BallHull& hull, std::vector<uint32_t>* out, size_t limit) const {
@@ -105,11 +113,8 @@ bool OccluderBvh::Query(const BallHull& hull, std::vector<uint32_t>* out, size_t
         if (!meets(node.lo, node.hi)) continue;
         if (node.count) {
             for (uint32_t i = 0; i < node.count; ++i) {
-                const uint32_t prim = prims_[node.index + i];
-                const Vec3 &p0 = mesh_.Vertex(prim, 0), &p1 = mesh_.Vertex(prim, 1), &p2 = mesh_.Vertex(prim, 2);
-                const Vec3 lo = Min(Min(p0, p1), p2), hi = Max(Max(p0, p1), p2);
-                const float l[3] = {lo.x, lo.y, lo.z}, h[3] = {hi.x, hi.y, hi.z};
-                if (node.count == 1 || meets(l, h)) out->push_back(prim);
+                const PrimBox& b = boxes_[node.index + i];
+                if (node.count == 1 || meets(b.lo, b.hi)) out->push_back(prims_[node.index + i]);
             }
             if (out->size() - start > limit) return false;
             continue;

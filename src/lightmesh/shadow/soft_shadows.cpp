@@ -185,6 +185,10 @@ SoftShadows::SoftShadows(const Scene& scene, const Accelerator& accel, SoftShado
 
     // What the per-point tests read of each triangle, in one cache line.
     const auto& mesh = scene.mesh;
+    // A receiver's entry and a list's sort key keep a triangle id in 30 bits.
+    if (mesh.TriangleCount() > size_t{kPrimMask} + 1)
+        throw Error(StringPrintf("soft shadows: %s triangles: at most %s; use --shadows rt",
+                                 FormatCount(mesh.TriangleCount()).c_str(), FormatCount(size_t{kPrimMask} + 1).c_str()));
     tris_.resize(mesh.TriangleCount());
     area_.resize(mesh.TriangleCount());
     for (uint32_t i = 0; i < tris_.size(); ++i) {
@@ -380,13 +384,13 @@ std::unique_ptr<SoftShadows::CellList> SoftShadows::BuildList(const BallHull& hu
     const Vec3 L = hull.b;
     const float R = options_.radii[light];
     const Vec3 boxCenter = box.Center(), half = box.Diagonal() * 0.5f;
-    struct Plane {
-        float x, y, z, w;
-    };
-    thread_local std::vector<Plane> planes;
-    thread_local std::vector<uint32_t> codes;  // the kept entries' side codes
-    planes.clear();
-    codes.clear();
+    // The kept entries, one 64-bit key each: the bits of the triangle's |n|² inverted (they
+    // order as the values do, |n|² being > 0), then its id, then its side code (2 bits;
+    // ids are below 2^30). Sorted ascending, the keys come largest triangle first, ties by
+    // id: in an umbra the first of them usually covers the point's whole first pass, and it
+    // never looks at the rest (SampleLight).
+    thread_local std::vector<uint64_t> keys;
+    keys.clear();
     for (uint32_t id : ids) {
         const Triangle& t = tris_[id];
         const Vec3 n = V3(t.n), v0 = V3(t.v0);
@@ -403,53 +407,54 @@ std::unique_ptr<SoftShadows::CellList> SoftShadows::BuildList(const BallHull& hu
             const float extent = std::abs(n.x) * half.x + std::abs(n.y) * half.y + std::abs(n.z) * half.z;
             if (sC > extent * 1.0001f + 1e-5f * len * Length(boxCenter - v0)) continue;
         }
-        const Vec3 m = n * side;
-        planes.push_back(side != 0 ? Plane{m.x, m.y, m.z, -Dot(m, v0)} : Plane{0, 0, 0, -1});
-        list->prims.push_back(id);
-        codes.push_back(side > 0 ? kInFront : side < 0 ? kBehind : 0);
+        const uint32_t code = side > 0 ? kInFront : side < 0 ? kBehind : 0;
+        keys.push_back(static_cast<uint64_t>(~std::bit_cast<uint32_t>(area_[id])) << 32 | uint64_t{id} << 2 | code);
     }
-    list->count = static_cast<uint32_t>(list->prims.size());
-    list->box = box;
+    list->count = static_cast<uint32_t>(keys.size());
     if (list->count > static_cast<uint32_t>(options_.denseEntries)) {
         list->dense = true;
         list->count = 0;
-        list->prims = {};
         return list;
     }
-    // Largest triangles first (ties by id): in an umbra the first of them usually covers
-    // the point's whole first pass, and it never looks at the rest (SampleLight).
-    thread_local std::vector<uint32_t> order;
-    order.resize(list->count);
-    for (uint32_t e = 0; e < list->count; ++e) order[e] = e;
-    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-        const float sa = area_[list->prims[a]], sb = area_[list->prims[b]];
-        return sa > sb || (sa == sb && list->prims[a] < list->prims[b]);
-    });
-    std::vector<uint32_t> prims(list->count);
+    std::sort(keys.begin(), keys.end());
+    // Each vector sized once, to what it holds.
+    const size_t groups = (list->count + 3) / 4;
+    list->prims.assign(groups * 4, 0);
     list->codes.resize(list->count);
-    for (uint32_t e = 0; e < list->count; ++e) prims[e] = list->prims[order[e]], list->codes[e] = codes[order[e]];
+    list->planes.assign(groups * 16, 0.0f);
+    for (size_t e = 0; e < groups * 4; ++e) {
+        float* g = &list->planes[(e / 4) * 16 + e % 4];
+        if (e >= list->count) {
+            g[12] = 1.0f;  // padding: never negative
+            continue;
+        }
+        const uint32_t id = static_cast<uint32_t>(keys[e] >> 2) & kPrimMask, code = static_cast<uint32_t>(keys[e]) & 3;
+        list->prims[e] = id;
+        list->codes[e] = code;
+        if (code) {
+            const Triangle& t = tris_[id];
+            const Vec3 m = V3(t.n) * (code == kInFront ? 1.0f : -1.0f);
+            g[0] = m.x, g[4] = m.y, g[8] = m.z, g[12] = -Dot(m, V3(t.v0));
+        } else {
+            g[12] = -1.0f;  // the light straddles the plane: 0·x − 1
+        }
+    }
     // The receivers: the triangles whose bounds meet the cell (grown a little, as in
     // BuildReceiver), ascending.
+    thread_local std::vector<uint32_t> receivers;
+    receivers.clear();
     const float grow = 1e-4f * h_ + 1e-5f * MaxComponent(Max(Abs(box.lo), Abs(box.hi)));
     for (uint32_t id : ids) {
         const Triangle& t = tris_[id];
         const Vec3 lo = Min(Min(V3(t.v0), V3(t.v1)), V3(t.v2)), hi = Max(Max(V3(t.v0), V3(t.v1)), V3(t.v2));
         if (lo.x <= box.hi.x + grow && lo.y <= box.hi.y + grow && lo.z <= box.hi.z + grow && hi.x >= box.lo.x - grow &&
             hi.y >= box.lo.y - grow && hi.z >= box.lo.z - grow)
-            list->receivers.push_back(id);
+            receivers.push_back(id);
     }
-    std::sort(list->receivers.begin(), list->receivers.end());
+    std::sort(receivers.begin(), receivers.end());
+    list->receivers.assign(receivers.begin(), receivers.end());
     list->recv.reset(new std::atomic<const Receiver*>[list->receivers.size()]);
     for (size_t i = 0; i < list->receivers.size(); ++i) list->recv[i].store(nullptr, std::memory_order_relaxed);
-    const size_t groups = (list->count + 3) / 4;
-    list->prims = prims;
-    list->prims.resize(groups * 4, 0);
-    list->planes.assign(groups * 16, 0.0f);
-    for (size_t e = 0; e < groups * 4; ++e) {
-        const Plane p = e < list->count ? planes[order[e]] : Plane{0, 0, 0, 1};
-        float* g = &list->planes[(e / 4) * 16 + e % 4];
-        g[0] = p.x, g[4] = p.y, g[8] = p.z, g[12] = p.w;
-    }
     return list;
 }
 
