@@ -62,7 +62,18 @@ void WriteAll(const char* text, size_t n) {
     }
 }
 
+// Set by the first signal handled. A process-directed signal can reach any thread, and
+// `timeout` sends its signal twice (to the child, then to its process group): a second one,
+// on another thread, must not print the line again, interleaved with the first.
+std::atomic<bool> gInterruptHandled{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "the interrupt handler's flag must be lock-free");
+
 extern "C" void OnInterrupt(int sig) {
+    // The first handler ends the process; a later one waits for that (async-signal-safe:
+    // a lock-free atomic and pause(2)). The handlers block each other's signals in their
+    // own thread (InstallInterruptCleanup's mask), so this never waits on itself.
+    if (gInterruptHandled.exchange(true))
+        for (;;) pause();
     for (int i = 0; i < kMaxPending; ++i)
         if (gPendingUsed[i].load()) unlink(gPending[i]);
     // Async-signal-safe: write(2) only. SIGHUP (the terminal closed) has no one to tell.
@@ -101,6 +112,9 @@ void InstallInterruptCleanup() {
     struct sigaction sa {};
     sa.sa_handler = OnInterrupt;
     sigemptyset(&sa.sa_mask);
+    sigaddset(&sa.sa_mask, SIGINT);
+    sigaddset(&sa.sa_mask, SIGTERM);
+    sigaddset(&sa.sa_mask, SIGHUP);
     sigaction(SIGINT, &sa, nullptr);
     sigaction(SIGTERM, &sa, nullptr);
     sigaction(SIGHUP, &sa, nullptr);  // the terminal closed: the same clean-up
