@@ -145,14 +145,22 @@ Texel Texture::Fetch(const Level& level, int x, int y) const {
     return {level.hdr[i], level.hdr[i + 1], level.hdr[i + 2], level.hdr[i + 3]};
 }
 
-Texel Texture::Bilinear(const Level& level, float u, float v, TextureWrap wrapU, TextureWrap wrapV) const {
-    const float x = Tame(u) * static_cast<float>(level.w) - 0.5f;
-    const float y = (1.0f - Tame(v)) * static_cast<float>(level.h) - 0.5f;
+/// Where (u, v) falls among a w × h level's texel centres: the texel (x0, y0) below and left
+/// of it (v runs up the image) and the fractions (fx, fy) towards the next ones.
+static inline void TexelPosition(int w, int h, float u, float v, int* x0, int* y0, float* fx, float* fy) {
+    const float x = Tame(u) * static_cast<float>(w) - 0.5f;
+    const float y = (1.0f - Tame(v)) * static_cast<float>(h) - 0.5f;
     // floor without a libm call (x is within ±2^24 after Tame)
-    int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
-    x0 -= static_cast<float>(x0) > x;
-    y0 -= static_cast<float>(y0) > y;
-    const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
+    *x0 = static_cast<int>(x), *y0 = static_cast<int>(y);
+    *x0 -= static_cast<float>(*x0) > x;
+    *y0 -= static_cast<float>(*y0) > y;
+    *fx = x - static_cast<float>(*x0), *fy = y - static_cast<float>(*y0);
+}
+
+Texel Texture::Bilinear(const Level& level, float u, float v, TextureWrap wrapU, TextureWrap wrapV) const {
+    int x0, y0;
+    float fx, fy;
+    TexelPosition(level.w, level.h, u, v, &x0, &y0, &fx, &fy);
     // One wrap per axis; the neighbour is the next texel unless that leaves the image.
     const int xa = WrapIndex(x0, level.w, wrapU), ya = WrapIndex(y0, level.h, wrapV);
     // (Repeat: x0 + 1 wraps to xa + 1 below the edge; Clamp and Mirror: where x0 is in
@@ -220,12 +228,9 @@ float Texture::TexelOpacity(int x, int y, TextureWrap wrapU, TextureWrap wrapV, 
 
 float Texture::Opacity(float u, float v, TextureWrap wrapU, TextureWrap wrapV, int channel) const {
     const Level& level = levels_[0];
-    const float x = Tame(u) * static_cast<float>(level.w) - 0.5f;
-    const float y = (1.0f - Tame(v)) * static_cast<float>(level.h) - 0.5f;
-    int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
-    x0 -= static_cast<float>(x0) > x;
-    y0 -= static_cast<float>(y0) > y;
-    const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
+    int x0, y0;
+    float fx, fy;
+    TexelPosition(level.w, level.h, u, v, &x0, &y0, &fx, &fy);
     int xa, xb, ya, yb;
     // Repeat on a side of 2^k texels (most images): a mask instead of a division.
     if (wrapU == TextureWrap::Repeat && (level.w & (level.w - 1)) == 0) {
