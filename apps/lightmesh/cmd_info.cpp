@@ -6,6 +6,7 @@
 
 #include "lightmesh/accel/accelerator.h"
 #include "lightmesh/geometry/cutouts.h"
+#include "lightmesh/geometry/instances.h"
 #include "lightmesh/util/log.h"
 
 namespace lm::cli {
@@ -14,12 +15,43 @@ int RunInfo(const CommonOptions& common, const std::string& accelName, int grid)
     ApplyLogLevel(common);
     lm::Scene scene = LoadWithWarnings(common);
     const lm::Bounds3 b = scene.mesh.Bounds();
-    const lm::EdgeReport edges = lm::AnalyzeEdges(scene.mesh);
+    lm::EdgeReport edges = lm::AnalyzeEdges(scene.mesh);
+    // Instances: each counted as its prototype (copies share no vertex).
+    std::vector<size_t> placed;  // instances per prototype
+    if (scene.mesh.instances) {
+        const auto& inst = *scene.mesh.instances;
+        placed.assign(inst.Prototypes().size(), 0);
+        for (const lm::MeshInstance& in : inst.Instances()) ++placed[in.prototype];
+        for (size_t p = 0; p < placed.size(); ++p) {
+            const lm::EdgeReport e = lm::AnalyzeEdges(inst.Prototypes()[p]);
+            edges.edges += e.edges * placed[p], edges.open += e.open * placed[p];
+            edges.nonManifold += e.nonManifold * placed[p];
+        }
+    }
     std::printf("scene      %s\n", scene.name.c_str());
     for (const std::string& s : scene.report.sources) std::printf("source     %s\n", s.c_str());
     std::printf("triangles  %s (removed: %s degenerate, %s duplicate; meshes excluded: %zu)\n",
-                Count(scene.mesh.TriangleCount()).c_str(), Count(scene.report.degenerateRemoved).c_str(),
+                Count(scene.mesh.PrimCount()).c_str(), Count(scene.report.degenerateRemoved).c_str(),
                 Count(scene.report.duplicatesRemoved).c_str(), scene.report.meshesExcluded);
+    if (scene.mesh.instances) {
+        const auto& inst = *scene.mesh.instances;
+        size_t protoTriangles = 0;
+        for (const lm::TriangleMesh& p : inst.Prototypes()) protoTriangles += p.TriangleCount();
+        // What the instanced triangles would take flattened: 3 positions' worth of vertices
+        // shared as in their prototypes, the indices and material ids.
+        size_t flatBytes = 0;
+        for (const lm::MeshInstance& in : inst.Instances()) {
+            const lm::TriangleMesh& p = inst.Prototypes()[in.prototype];
+            flatBytes += p.positions.size() * sizeof(lm::Vec3) + p.normals.size() * sizeof(lm::Vec3) +
+                         p.uvs.size() * sizeof(lm::TexCoord) + p.triangles.size() * 16;
+        }
+        std::printf("instances  %s of %zu prototype%s (%s triangles), standing for %s triangles; %s (flattened: %s); "
+                    "%s flat triangles\n",
+                    Count(inst.Instances().size()).c_str(), inst.Prototypes().size(),
+                    inst.Prototypes().size() == 1 ? "" : "s", Count(protoTriangles).c_str(),
+                    Count(inst.TriangleCount()).c_str(), lm::FormatBytes(inst.Bytes()).c_str(),
+                    lm::FormatBytes(flatBytes).c_str(), Count(scene.mesh.TriangleCount()).c_str());
+    }
     std::printf("vertices   %s%s\n", Count(scene.mesh.positions.size()).c_str(),
                 scene.mesh.normals.empty() ? "" : " (with shading normals)");
     std::printf("bounds     [%g %g %g] - [%g %g %g], size %g x %g x %g\n", b.lo.x, b.lo.y, b.lo.z,
@@ -63,6 +95,8 @@ int RunInfo(const CommonOptions& common, const std::string& accelName, int grid)
     }
     std::vector<size_t> uses(scene.materials.size());
     for (uint32_t m : scene.mesh.materialIds) ++uses[m];
+    for (size_t p = 0; p < placed.size(); ++p)
+        for (uint32_t m : scene.mesh.instances->Prototypes()[p].materialIds) uses[m] += placed[p];
     std::printf("materials  %zu\n", scene.materials.size());
     for (size_t i = 0; i < scene.materials.size(); ++i) {
         const lm::Material& m = scene.materials[i];

@@ -14,6 +14,7 @@
 #ifdef LIGHTMESH_HAS_MPI
 #include "lightmesh/distributed/mpi_render.h"
 #endif
+#include "lightmesh/geometry/instances.h"
 #include "lightmesh/io/image.h"
 #include "lightmesh/render/render_job.h"
 #include "lightmesh/render/whitted.h"
@@ -139,6 +140,8 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
                        options.width, options.height, lm::FormatBytes(imageBytes).c_str(),
                        lm::FormatBytes(physical).c_str());
 
+    // The light mesh reads triangles as one array: instances are flattened for it.
+    if (options.shadows == "lmm") lm::FlattenInstances(&scene.mesh);
     prepared->job = std::make_unique<lm::RenderJob>(scene, options);
     return prepared;
 }
@@ -165,7 +168,7 @@ void PrintRender(const RenderCommand& cmd, const PreparedRender& p, const lm::Re
     const lm::RenderOptions& options = p.job->Options();
     std::printf("%s: %dx%d, shadows %s, accel %s, %s, %s: render %.3f s\n", p.output.c_str(), options.width,
                 options.height, std::string(p.job->Shadows().Name()).c_str(),
-                std::string(p.job->Accel().Name()).c_str(), Counted(p.scene.mesh.TriangleCount(), "triangle").c_str(),
+                std::string(p.job->Accel().Name()).c_str(), Counted(p.scene.mesh.PrimCount(), "triangle").c_str(),
                 Counted(p.scene.lights.size(), "light").c_str(), result.seconds);
     if (!cmd.stats) return;
     const lm::RenderCounters& c = result.counters;

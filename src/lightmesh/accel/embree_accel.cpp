@@ -13,9 +13,11 @@
 #include <string>
 
 #include "lightmesh/geometry/cutouts.h"
+#include "lightmesh/geometry/instances.h"
 #include "lightmesh/geometry/triangle.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/log.h"
+#include "lightmesh/util/system.h"
 
 namespace lm {
 namespace {
@@ -119,6 +121,23 @@ struct EmbreeAccel::Impl {
     std::vector<std::array<uint32_t, 3>> split[2];
     std::vector<uint32_t> ids[2];
     uint32_t Prim(unsigned geomID, unsigned primID) const { return cut ? ids[geomID][primID] : primID; }
+
+    // Instances (TriangleMesh::instances): one scene per prototype, and an instance
+    // geometry per instance in the top scene, with geometry ids instBase, instBase + 1, …
+    // A hit in instance i is the global triangle flat + first(i) + primID; under a
+    // mirroring transform the world triangle's corners 1 and 2 are the prototype's 2 and 1,
+    // so Embree's (u, v) swap.
+    std::vector<RTCScene> protoScenes;
+    std::vector<std::vector<float>> protoVertices;
+    unsigned instBase = 0;
+    std::vector<uint32_t> instFirst;  // flat + first, per instance
+    std::vector<uint8_t> instMirrors;
+    size_t protoBytes = 0;  // the prototypes' vertex copies
+    Hit MakeHit(float t, unsigned geomID, unsigned primID, unsigned instID, float u, float v) const {
+        if (instID == RTC_INVALID_GEOMETRY_ID) return Hit{t, Prim(geomID, primID), u, v};
+        const unsigned i = instID - instBase;
+        return instMirrors[i] ? Hit{t, instFirst[i] + primID, v, u} : Hit{t, instFirst[i] + primID, u, v};
+    }
     static void CutoutFilter(const RTCFilterFunctionNArguments* args) {
         const Impl& m = *static_cast<const Impl*>(args->geometryUserPtr);
         for (unsigned i = 0; i < args->N; ++i) {
@@ -133,6 +152,7 @@ struct EmbreeAccel::Impl {
     ~Impl() {
         if (countScene) rtcReleaseScene(countScene);
         if (scene) rtcReleaseScene(scene);
+        for (RTCScene p : protoScenes) rtcReleaseScene(p);
         if (device) rtcReleaseDevice(device);
     }
 
@@ -152,9 +172,10 @@ struct EmbreeAccel::Impl {
 
     static void PrimBounds(const RTCBoundsFunctionArguments* args) {
         const Impl& m = *static_cast<const Impl*>(args->geometryUserPtr);
-        const auto& t = m.mesh.triangles[args->primID];
-        Bounds3 b;
-        for (uint32_t v : t) b.Extend(m.mesh.positions[v]);
+        Vec3 p[3];
+        m.mesh.Corners(args->primID, p);
+        Bounds3 b(p[0], p[1]);
+        b.Extend(p[2]);
         RTCBounds* o = args->bounds_o;
         o->lower_x = b.lo.x - m.pad;
         o->lower_y = b.lo.y - m.pad;
@@ -171,8 +192,9 @@ struct EmbreeAccel::Impl {
             if (args->valid[i] == 0) continue;
             const uint32_t prim = args->primID;
             TriangleHit th;
-            if (IntersectTriangle(*c->ray, c->mesh->Vertex(prim, 0), c->mesh->Vertex(prim, 1),
-                                  c->mesh->Vertex(prim, 2), &th) &&
+            Vec3 p[3];
+            c->mesh->Corners(prim, p);
+            if (IntersectTriangle(*c->ray, p[0], p[1], p[2], &th) &&
                 (!c->mesh->cutouts || c->mesh->cutouts->Solid(*c->mesh, prim, th.b1, th.b2)))
                 c->hits->push_back(prim);
         }
@@ -183,9 +205,9 @@ struct EmbreeAccel::Impl {
         pad = 1e-5f * extent;
         countScene = rtcNewScene(device);
         rtcSetSceneFlags(countScene, RTC_SCENE_FLAG_ROBUST);
-        if (!mesh.triangles.empty()) {
+        if (mesh.PrimCount() > 0) {
             RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
-            rtcSetGeometryUserPrimitiveCount(geom, unsigned(mesh.triangles.size()));
+            rtcSetGeometryUserPrimitiveCount(geom, unsigned(mesh.PrimCount()));
             rtcSetGeometryUserData(geom, this);
             rtcSetGeometryBoundsFunction(geom, &PrimBounds, this);
             rtcSetGeometryIntersectFunction(geom, &PrimIntersect);
@@ -253,6 +275,44 @@ EmbreeAccel::EmbreeAccel(const TriangleMesh& mesh) : impl_(std::make_unique<Impl
             rtcReleaseGeometry(geom);          // the scene holds it now
         }
     }
+    if (mesh.instances) {
+        const InstancedMeshes& inst = *mesh.instances;
+        for (const TriangleMesh& proto : inst.Prototypes()) {
+            std::vector<float>& v = m.protoVertices.emplace_back(proto.positions.size() * 4 + 4, 0.0f);
+            for (size_t i = 0; i < proto.positions.size(); ++i) {
+                v[4 * i + 0] = proto.positions[i].x;
+                v[4 * i + 1] = proto.positions[i].y;
+                v[4 * i + 2] = proto.positions[i].z;
+            }
+            m.protoBytes += v.size() * sizeof(float);
+            RTCScene ps = rtcNewScene(m.device);
+            m.protoScenes.push_back(ps);
+            rtcSetSceneFlags(ps, RTC_SCENE_FLAG_ROBUST);
+            RTCGeometry geom = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+            rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, v.data(), 0,
+                                       4 * sizeof(float), proto.positions.size());
+            rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, proto.triangles.data(), 0,
+                                       3 * sizeof(uint32_t), proto.triangles.size());
+            rtcCommitGeometry(geom);
+            rtcAttachGeometry(ps, geom);
+            rtcReleaseGeometry(geom);
+            rtcCommitScene(ps);
+        }
+        const uint32_t flat = static_cast<uint32_t>(mesh.triangles.size());
+        for (size_t i = 0; i < inst.Instances().size(); ++i) {
+            const MeshInstance& in = inst.Instances()[i];
+            RTCGeometry geom = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_INSTANCE);
+            rtcSetGeometryInstancedScene(geom, m.protoScenes[in.prototype]);
+            rtcSetGeometryTimeStepCount(geom, 1);
+            rtcSetGeometryTransform(geom, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, &in.toWorld.m[0][0]);
+            rtcCommitGeometry(geom);
+            const unsigned id = rtcAttachGeometry(m.scene, geom);
+            rtcReleaseGeometry(geom);
+            if (i == 0) m.instBase = id;
+            m.instFirst.push_back(flat + in.first);
+            m.instMirrors.push_back(in.toWorld.Determinant() < 0 ? 1 : 0);
+        }
+    }
     rtcCommitScene(m.scene);  // builds the BVH
     m.CheckError("building the scene");
     m.bvhBytes = m.embreeBytes.load();
@@ -277,9 +337,10 @@ bool EmbreeAccel::Intersect(const Ray& ray, Hit* hit) const {
     SetRay(&rh.ray, r.o, ray.d, r.tnear, r.tfar);
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(impl_->scene, &context, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
-    *hit = Hit{rh.ray.tfar + r.shift, impl_->Prim(rh.hit.geomID, rh.hit.primID), rh.hit.u, rh.hit.v};
+    *hit = impl_->MakeHit(rh.ray.tfar + r.shift, rh.hit.geomID, rh.hit.primID, rh.hit.instID[0], rh.hit.u, rh.hit.v);
     return true;
 }
 
@@ -337,14 +398,15 @@ void IntersectPacket(RTCScene scene, const Ray* rays, size_t count, Hit* hits, T
         shift[k] = k < static_cast<int>(count) && rays[k].tMin < 0 ? rays[k].tMin : 0.0f;
         packet.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
         packet.hit.primID[k] = RTC_INVALID_GEOMETRY_ID;
+        packet.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
     }
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     trace(valid, scene, &context, &packet);
     for (size_t k = 0; k < count; ++k)
         hits[k] = valid[k] && packet.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID
-                      ? Hit{packet.ray.tfar[k] + shift[k], prim(packet.hit.geomID[k], packet.hit.primID[k]),
-                            packet.hit.u[k], packet.hit.v[k]}
+                      ? prim(packet.ray.tfar[k] + shift[k], packet.hit.geomID[k], packet.hit.primID[k],
+                             packet.hit.instID[0][k], packet.hit.u[k], packet.hit.v[k])
                       : Hit{};
 }
 }  // namespace
@@ -355,7 +417,9 @@ void EmbreeAccel::IntersectMany(const Ray* rays, size_t count, Hit* hits) const 
         return;
     }
     const Impl& m = *impl_;
-    auto prim = [&m](unsigned geomID, unsigned primID) { return m.Prim(geomID, primID); };
+    auto prim = [&m](float t, unsigned geomID, unsigned primID, unsigned instID, float u, float v) {
+        return m.MakeHit(t, geomID, primID, instID, u, v);
+    };
     for (size_t first = 0; first < count;) {
         const size_t n = std::min<size_t>(count - first, impl_->packets16 ? 16 : 8);
         if (n > 8) {
@@ -422,10 +486,10 @@ int EmbreeAccel::CountCrossings(const Ray& ray) const {
 
 AccelFigures EmbreeAccel::Figures() const {
     const Impl& m = *impl_;
-    const size_t tris = std::max<size_t>(m.mesh.triangles.size(), 1);
-    const size_t bytes = m.vertices.size() * sizeof(float) +
+    const size_t tris = std::max<size_t>(m.mesh.PrimCount(), 1);
+    const size_t bytes = m.vertices.size() * sizeof(float) + m.protoBytes +
                          (m.split[0].size() + m.split[1].size()) * (3 * sizeof(uint32_t) + sizeof(uint32_t));
-    return {
+    AccelFigures f = {
         {"embree version", RTC_VERSION_STRING},
         {"embree scene", m.cut ? StringPrintf("2 triangle geometries (%zu opaque, %zu cut-out with intersection and "
                                               "occlusion filters), robust, default build quality",
@@ -439,6 +503,13 @@ AccelFigures EmbreeAccel::Figures() const {
                                       m.cut ? " and the two geometries' indices" : "", bytes)},
         {"embree build ms", StringPrintf("%.1f", m.buildMs)},
     };
+    if (m.mesh.instances)
+        f.insert(f.begin() + 2, {"embree instances", StringPrintf("%s instance geometries of %zu prototype scenes, standing for %s "
+                                                                  "triangles (and %s flat ones)",
+                                                                  FormatCount(m.instFirst.size()).c_str(), m.protoScenes.size(),
+                                                                  FormatCount(m.mesh.instances->TriangleCount()).c_str(),
+                                                                  FormatCount(m.mesh.triangles.size()).c_str())});
+    return f;
 }
 
 }  // namespace lm

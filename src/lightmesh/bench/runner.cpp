@@ -304,6 +304,7 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
     for (const std::string& spec : m.scenes) {
         auto ls = std::make_unique<LoadedScene>();
         SceneLoadOptions load;
+        load.instancing = false;  // every method and back-end on the same flat triangles
         std::vector<std::string> warnings;
         ls->scene = LoadScene(spec, load, &warnings);
         for (const std::string& a : m.accels)

@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cmath>
 #include <cstring>
 #include <unordered_map>
 
 #include "lightmesh/geometry/cutouts.h"
+#include "lightmesh/geometry/instances.h"
 #include "lightmesh/geometry/triangle.h"
 
 namespace lm {
@@ -15,7 +17,36 @@ Bounds3 TriangleMesh::Bounds() const {
     Bounds3 b;
     for (const auto& t : triangles)
         for (uint32_t v : t) b.Extend(positions[v]);
+    if (instances) b.Extend(instances->Bounds());
     return b;
+}
+
+size_t TriangleMesh::PrimCount() const { return triangles.size() + (instances ? instances->TriangleCount() : 0); }
+
+void TriangleMesh::InstancedCorners(uint32_t prim, Vec3 p[3]) const {
+    instances->Corners(prim - static_cast<uint32_t>(triangles.size()), p);
+}
+
+uint32_t TriangleMesh::InstancedMaterial(uint32_t prim) const {
+    return instances->Material(prim - static_cast<uint32_t>(triangles.size()));
+}
+
+bool TriangleMesh::ShadingNormals(uint32_t prim, Vec3 n[3]) const {
+    if (prim < triangles.size()) {
+        if (normals.empty()) return false;
+        for (int k = 0; k < 3; ++k) n[k] = normals[triangles[prim][k]];
+        return true;
+    }
+    return instances->Normals(prim - static_cast<uint32_t>(triangles.size()), n);
+}
+
+bool TriangleMesh::UvsOf(uint32_t prim, TexCoord t[3]) const {
+    if (prim < triangles.size()) {
+        if (uvs.empty()) return false;
+        for (int k = 0; k < 3; ++k) t[k] = uvs[triangles[prim][k]];
+        return true;
+    }
+    return instances->TexCoords(prim - static_cast<uint32_t>(triangles.size()), t);
 }
 
 void TriangleMesh::Append(const TriangleMesh& other, uint32_t materialOffset) {
@@ -171,6 +202,34 @@ int CountCrossings(const TriangleMesh& mesh, const Ray& ray) {
     for (uint32_t i = 0; i < mesh.triangles.size(); ++i)
         n += IntersectTriangle(ray, mesh.Vertex(i, 0), mesh.Vertex(i, 1), mesh.Vertex(i, 2), &th) &&
              (!cut || cut->Solid(mesh, i, th.b1, th.b2));
+    if (!mesh.instances) return n;
+    // Instanced triangles (no cut-outs): those of instances whose box the ray meets.
+    const uint32_t flat = static_cast<uint32_t>(mesh.triangles.size());
+    const InstancedMeshes& inst = *mesh.instances;
+    for (const MeshInstance& in : inst.Instances()) {
+        float t0 = ray.tMin, t1 = ray.tMax;
+        bool meets = true;
+        for (int k = 0; k < 3 && meets; ++k) {
+            // The box grown a little: a ray along a face must still reach the test.
+            const float pad = 1e-5f * (std::abs(in.bounds.lo[k]) + std::abs(in.bounds.hi[k])) + 1e-30f;
+            const float inv = 1.0f / ray.d[k];
+            float a = (in.bounds.lo[k] - pad - ray.o[k]) * inv, b = (in.bounds.hi[k] + pad - ray.o[k]) * inv;
+            if (a > b) std::swap(a, b);
+            if (ray.d[k] == 0) {
+                if (ray.o[k] < in.bounds.lo[k] - pad || ray.o[k] > in.bounds.hi[k] + pad) meets = false;
+                continue;
+            }
+            t0 = std::max(t0, a), t1 = std::min(t1, b);
+            meets = t0 <= t1 + 1e-5f * (std::abs(t0) + std::abs(t1));
+        }
+        if (!meets) continue;
+        const size_t count = inst.Prototypes()[in.prototype].TriangleCount();
+        for (size_t k = 0; k < count; ++k) {
+            Vec3 p[3];
+            mesh.Corners(flat + in.first + static_cast<uint32_t>(k), p);
+            n += IntersectTriangle(ray, p[0], p[1], p[2], &th);
+        }
+    }
     return n;
 }
 

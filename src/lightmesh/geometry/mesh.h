@@ -12,15 +12,19 @@
 namespace lm {
 
 class CutoutMask;
+class InstancedMeshes;
 
 /// Texture coordinates of a vertex (glTF's convention: v grows downwards in the image).
 struct TexCoord {
     float u = 0, v = 0;
 };
 
-/// All triangles of a scene in world space. A primitive id is an index into `triangles`.
-/// Meshes of a scene file are flattened into one (instances expanded), which keeps every
-/// ray-query back-end a plain array walk.
+/// All triangles of a scene in world space, in two levels: `triangles` (the flat ones), and
+/// optionally `instances` (meshes placed many times, geometry/instances.h). A primitive id
+/// below triangles.size() is an index into `triangles`; the instanced triangles follow, in
+/// the order of their instances. The accessors below (Corners, ShadingNormals, UvsOf,
+/// MaterialOf) read either kind; code that reads the arrays directly sees the flat ones
+/// only, and is given a mesh whose instances were flattened (FlattenInstances).
 struct TriangleMesh {
     std::vector<Vec3> positions;
     /// Optional per-vertex shading normals (empty, or one per position).
@@ -36,13 +40,41 @@ struct TriangleMesh {
     /// hit of a cut-out triangle. (Append keeps it; triangles beyond those it was built for
     /// are opaque.)
     std::shared_ptr<const CutoutMask> cutouts;
+    /// Instanced triangles (null: none). Their prototypes carry no cut-outs.
+    std::shared_ptr<const InstancedMeshes> instances;
 
+    /// The flat triangles (`triangles`).
     size_t TriangleCount() const { return triangles.size(); }
+    /// Every triangle: the flat ones and those the instances stand for.
+    size_t PrimCount() const;
+    /// The box of every triangle, instanced ones included.
     Bounds3 Bounds() const;
+    /// Vertex k of a flat triangle.
     const Vec3& Vertex(uint32_t prim, int k) const { return positions[triangles[prim][k]]; }
+
+    /// The world-space corners of any triangle, flat or instanced.
+    void Corners(uint32_t prim, Vec3 p[3]) const {
+        if (prim < triangles.size()) {
+            for (int k = 0; k < 3; ++k) p[k] = positions[triangles[prim][k]];
+            return;
+        }
+        InstancedCorners(prim, p);
+    }
+    /// Its shading normals (false when the mesh has none).
+    bool ShadingNormals(uint32_t prim, Vec3 n[3]) const;
+    /// Its texture coordinates (false when the mesh has none).
+    bool UvsOf(uint32_t prim, TexCoord t[3]) const;
+    /// Its material index.
+    uint32_t MaterialOf(uint32_t prim) const {
+        return prim < materialIds.size() ? materialIds[prim] : InstancedMaterial(prim);
+    }
 
     /// Appends another mesh (its material ids offset by `materialOffset`).
     void Append(const TriangleMesh& other, uint32_t materialOffset = 0);
+
+  private:
+    void InstancedCorners(uint32_t prim, Vec3 p[3]) const;
+    uint32_t InstancedMaterial(uint32_t prim) const;
 };
 
 /// What CleanMesh removed.

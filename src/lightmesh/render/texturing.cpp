@@ -9,17 +9,19 @@ namespace lm {
 
 Color TexturedDiffuse(const Scene& scene, const Material& mat, const Ray& ray, const Hit& hit, float spread) {
     const TriangleMesh& mesh = scene.mesh;
-    if (mesh.uvs.empty() || mat.texture < 0) return mat.kd;
+    TexCoord uv[3];
+    if (mat.texture < 0 || !mesh.UvsOf(hit.prim, uv)) return mat.kd;
     const Texture& tex = *scene.textures[static_cast<size_t>(mat.texture)];
-    const auto& t = mesh.triangles[hit.prim];
-    const TexCoord &t0 = mesh.uvs[t[0]], &t1 = mesh.uvs[t[1]], &t2 = mesh.uvs[t[2]];
+    const TexCoord &t0 = uv[0], &t1 = uv[1], &t2 = uv[2];
     const float b0 = 1.0f - hit.b1 - hit.b2;
     const float u = t0.u * b0 + t1.u * hit.b1 + t2.u * hit.b2;
     const float v = t0.v * b0 + t1.v * hit.b1 + t2.v * hit.b2;
 
     // The footprint: texels per unit of surface (the triangle's texture area over its
     // world area), times the cone's width at the hit over the incidence's cosine.
-    const Vec3 &p0 = mesh.positions[t[0]], &p1 = mesh.positions[t[1]], &p2 = mesh.positions[t[2]];
+    Vec3 corners[3];
+    mesh.Corners(hit.prim, corners);
+    const Vec3 &p0 = corners[0], &p1 = corners[1], &p2 = corners[2];
     const Vec3 normal = Cross(p1 - p0, p2 - p0);
     const float worldArea = Length(normal);
     const float texArea = std::abs((t1.u - t0.u) * (t2.v - t0.v) - (t2.u - t0.u) * (t1.v - t0.v)) *

@@ -24,8 +24,9 @@ WhittedRenderer::WhittedRenderer(const Scene& scene, const Accelerator& accel,
 
 ShadingPoint WhittedRenderer::MakeShadingPoint(const TriangleMesh& mesh, const Ray& ray,
                                                const Hit& hit) {
-    const Vec3 &p0 = mesh.Vertex(hit.prim, 0), &p1 = mesh.Vertex(hit.prim, 1),
-               &p2 = mesh.Vertex(hit.prim, 2);
+    Vec3 corners[3];
+    mesh.Corners(hit.prim, corners);
+    const Vec3 &p0 = corners[0], &p1 = corners[1], &p2 = corners[2];
     const float b0 = 1.0f - hit.b1 - hit.b2;
     ShadingPoint sp;
     sp.prim = hit.prim;
@@ -50,15 +51,13 @@ void WhittedRenderer::PrepareShading(const Ray& ray, const Hit& hit, Lighting* l
     ++counters.shadingPoints;
     const TriangleMesh& mesh = scene_.mesh;
     const ShadingPoint sp = MakeShadingPoint(mesh, ray, hit);
-    const Material& mat = scene_.materials[mesh.materialIds[hit.prim]];
+    const Material& mat = scene_.materials[mesh.MaterialOf(hit.prim)];
 
     // Shading normal: interpolated vertex normals when the mesh has them, on the same side
     // as the geometric normal.
     Vec3 ns = sp.n;
-    if (!mesh.normals.empty()) {
-        const auto& t = mesh.triangles[hit.prim];
-        const Vec3 interp = mesh.normals[t[0]] * (1.0f - hit.b1 - hit.b2) +
-                            mesh.normals[t[1]] * hit.b1 + mesh.normals[t[2]] * hit.b2;
+    if (Vec3 vn[3]; mesh.ShadingNormals(hit.prim, vn)) {
+        const Vec3 interp = vn[0] * (1.0f - hit.b1 - hit.b2) + vn[1] * hit.b1 + vn[2] * hit.b2;
         if (LengthSquared(interp) > 0 && IsFinite(interp)) {
             ns = Normalize(interp);
             if (Dot(ns, sp.n) < 0) ns = -ns;

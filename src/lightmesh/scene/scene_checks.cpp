@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "lightmesh/geometry/instances.h"
 #include "lightmesh/geometry/mesh.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/system.h"
@@ -197,6 +198,15 @@ void Validate(const Scene& scene) {
                        id);
     for (const Vec3& p : scene.mesh.positions)
         if (!IsFinite(p)) ThrowErrorAt({name}, "a vertex has a non-finite coordinate");
+    if (!scene.mesh.instances) return;
+    for (const TriangleMesh& proto : scene.mesh.instances->Prototypes()) {
+        if (proto.materialIds.size() != proto.triangles.size()) ThrowErrorAt({name}, "every triangle needs a material");
+        for (uint32_t id : proto.materialIds)
+            if (id >= scene.materials.size())
+                ThrowErrorAt({name}, "a triangle refers to material %u, which does not exist", id);
+    }
+    const Bounds3 b = scene.mesh.instances->Bounds();
+    if (!IsFinite(b.lo) || !IsFinite(b.hi)) ThrowErrorAt({name}, "a vertex has a non-finite coordinate");
 }
 
 }  // namespace lm::scene_load

@@ -69,6 +69,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "lightmesh/geometry/instances.h"
 #include "lightmesh/scene/demo_scene.h"
 #include "lightmesh/scene/json_reader.h"
 #include "lightmesh/scene/mesh_loader.h"
@@ -307,6 +308,13 @@ void ReadRender(const Reader& r, const Json& j, RenderOptions* ro) {
 }
 
 /// One entry of "meshes", read before any file is loaded so JSON mistakes show up first.
+/// Whether `refs` references to a file whose mesh holds `triangles` become instances of
+/// one prototype rather than copies: where that saves memory (docs/scene-format.md).
+bool InstancesSaveMemory(int refs, size_t triangles) {
+    return refs >= 2 && triangles >= kInstanceMinTriangles &&
+           static_cast<double>(refs) * static_cast<double>(triangles) >= static_cast<double>(kInstanceMinTotal);
+}
+
 struct MeshEntry {
     std::string path;      ///< JSON path, "/meshes/0"
     std::string file;      ///< as written
@@ -494,6 +502,20 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
     };
     std::unordered_map<std::string, int> importsLeft;
     for (const MeshEntry& e : entries) ++importsLeft[importKey(e)];
+    // References that become instances (docs/scene-format.md, "Instancing"): those of one
+    // file with the same exclusions and material, imported once as a prototype.
+    auto groupKey = [&](const MeshEntry& e) { return importKey(e) + std::string(1, '\0') + std::to_string(e.material); };
+    std::unordered_map<std::string, int> groupRefs;
+    for (const MeshEntry& e : entries) ++groupRefs[groupKey(e)];
+    std::unordered_map<std::string, uint32_t> prototypeOf;
+    std::shared_ptr<InstancedMeshes> instances;
+    auto place = [&](const MeshEntry& e, uint32_t proto) {
+        const Affine toWorld = e.hasTransform ? e.transform : Affine{};
+        const size_t before = instances->Instances().size();
+        instances->AddInstance(proto, toWorld);
+        const Bounds3& b = instances->Instances()[before].bounds;
+        if (!IsFinite(b.lo) || !IsFinite(b.hi)) r.Fail(e.path, "the transform makes coordinates non-finite (too large)");
+    };
     std::unordered_map<std::string, LoadedMesh> imported;
     std::unordered_set<std::string> said;  // the clean-up's warnings, once per file and message
     TextureCache textureCache;  // each image read once, however many models name it
@@ -542,7 +564,16 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
             r.Warn(r.Where(e.path) + ": every mesh of " + Quoted(e.file) + " was excluded");
             continue;
         }
-        if (e.hasTransform) {
+        const std::string group = groupKey(e);
+        if (const auto p = prototypeOf.find(group); p != prototypeOf.end()) {
+            place(e, p->second);
+            continue;
+        }
+        const bool texturesOn = options.textures && scene.render.textures && e.material < 0;
+        const bool mayCutOut = texturesOn && std::any_of(loaded.materials.begin(), loaded.materials.end(),
+                                                         [](const Material& m) { return m.alphaTexture >= 0; });
+        const bool instanced = options.instancing && !mayCutOut && InstancesSaveMemory(groupRefs[group], loaded.mesh.TriangleCount());
+        if (e.hasTransform && !instanced) {
             TransformMesh(&loaded.mesh, e.transform);
             for (const Vec3& p : loaded.mesh.positions)
                 if (!IsFinite(p))
@@ -557,8 +588,7 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
         for (Material& m : loaded.materials)
             if (std::find(materialNames.begin(), materialNames.end(), m.name) != materialNames.end())
                 m.texture = m.alphaTexture = -1;
-        AttachTextures(r, e.resolved, options.textures && scene.render.textures && e.material < 0, &textureCache,
-                       &loaded, &scene);
+        AttachTextures(r, e.resolved, texturesOn, &textureCache, &loaded, &scene);
         if (e.material >= 0) {
             std::fill(loaded.mesh.materialIds.begin(), loaded.mesh.materialIds.end(),
                       static_cast<uint32_t>(e.material));
@@ -578,6 +608,14 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
             }
             for (uint32_t& id : loaded.mesh.materialIds) id = remap[id];
         }
+        if (instanced) {
+            if (!instances) instances = std::make_shared<InstancedMeshes>();
+            loaded.mesh.cutouts.reset();
+            const uint32_t proto = instances->AddPrototype(std::move(loaded.mesh));
+            prototypeOf[group] = proto;
+            place(e, proto);
+            continue;
+        }
         scene.mesh.Append(loaded.mesh);
     }
     // Triangles repeated across meshes (the same file placed twice at the same spot).
@@ -588,7 +626,11 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
         r.Warn(spec + ": dropped " + FormatCount(across.duplicate) +
                (across.duplicate == 1 ? " triangle that duplicates a triangle of another mesh"
                                       : " triangles that duplicate triangles of another mesh"));
-    if (scene.mesh.TriangleCount() == 0) r.Fail("/meshes", NoTrianglesMessage(scene.report, scene.mesh));
+    if (instances) {
+        instances->HarmoniseAttributes(&scene.mesh);
+        scene.mesh.instances = std::move(instances);
+    }
+    if (scene.mesh.PrimCount() == 0) r.Fail("/meshes", NoTrianglesMessage(scene.report, scene.mesh));
     CheckExtent(r, "/meshes", scene);
 
     if (ground.present) {

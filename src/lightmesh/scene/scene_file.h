@@ -11,6 +11,12 @@
 
 namespace lm {
 
+/// The instancing rule: a mesh file referenced at least twice (with the same exclusions and
+/// material) whose mesh holds at least kInstanceMinTriangles triangles, and whose copies
+/// together hold at least kInstanceMinTotal, is imported once and placed as instances.
+constexpr size_t kInstanceMinTriangles = 64;
+constexpr size_t kInstanceMinTotal = 65536;
+
 struct SceneLoadOptions {
     /// Unknown or duplicate keys in a scene file are errors instead of warnings.
     bool strict = false;
@@ -26,6 +32,9 @@ struct SceneLoadOptions {
     /// file's "render": {"textures": false} turns them off as well). Off, no image is read
     /// and the scene is shaded with the materials' flat colours, as without textures.
     bool textures = true;
+    /// References to one mesh file that InstancesSaveMemory's rule picks become instances of
+    /// one prototype (TriangleMesh::instances); false flattens every reference.
+    bool instancing = true;
     /// For tests and fuzzing: loads the mesh files of a JSON scene instead of LoadMeshFile.
     std::function<LoadedMesh(const std::string& path, const MeshLoadOptions&)> loadMesh = nullptr;
 };

@@ -205,6 +205,8 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
     if (lightRadius_ > 0) blockerT_ = ZeroedArray<uint16_t>(lattice.NodeCount() * lights_.size());
     for (const PointLight& l : lights_) ranged_ = ranged_ || std::isfinite(l.range);
     if (variant_.enumeration == SphereEnumeration::Templates) ConvertTemplates();
+    // Its patches and cells read triangles as one array (the caller flattens instances).
+    if (scene.mesh.instances) ThrowError("the light mesh needs a scene whose instances are flattened");
     sceneBox_ = scene.mesh.Bounds();
     // Tolerances at the lattice's scale. delta: how far from a plane a vertex may lie and
     // still count as on it (a few float ulps of the largest coordinate); eps: how far a

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "lightmesh/geometry/cutouts.h"
+#include "lightmesh/geometry/instances.h"
 #include "lightmesh/geometry/triangle.h"
 #include "lightmesh/shadow/area_light.h"
 #include "lightmesh/settings/render_settings.h"
@@ -167,7 +168,11 @@ const SoftShadows::CellList kEmptyList{};
 }  // namespace
 
 SoftShadows::SoftShadows(const Scene& scene, const Accelerator& accel, SoftShadowOptions options)
-    : scene_(scene), accel_(accel), options_(std::move(options)), bvh_(scene.mesh) {
+    : scene_(scene),
+      accel_(accel),
+      options_(std::move(options)),
+      flat_(scene.mesh.instances ? std::make_unique<const TriangleMesh>(Flattened(scene.mesh)) : nullptr),
+      bvh_(flat_ ? *flat_ : scene.mesh) {
     const size_t lights = scene.lights.size();
     if (options_.radii.size() != lights) options_.radii.resize(lights, 0.0f);
     for (float r : options_.radii)
@@ -184,7 +189,7 @@ SoftShadows::SoftShadows(const Scene& scene, const Accelerator& accel, SoftShado
         throw Error(StringPrintf("soft shadows: dense threshold %d: must be 1 to %d", options_.denseEntries, kMaxCandidates));
 
     // What the per-point tests read of each triangle, in one cache line.
-    const auto& mesh = scene.mesh;
+    const auto& mesh = flat_ ? *flat_ : scene.mesh;
     // A receiver's entry and a list's sort key keep a triangle id in 30 bits.
     if (mesh.TriangleCount() > size_t{kPrimMask} + 1)
         throw Error(StringPrintf("soft shadows: %s triangles: at most %s; use --shadows rt",
@@ -885,7 +890,7 @@ ShadowFigures SoftShadows::Figures() const {
                              FormatCount(r.size()).c_str());
     }
     const uint64_t cells = cellsBuilt_.load(), entries = entriesBuilt_.load();
-    return {{"light radii", radii.empty() ? "-" : radii},
+    ShadowFigures lines = {{"light radii", radii.empty() ? "-" : radii},
             {"cells", StringPrintf("CC %d, h %g, %d x %d x %d", options_.cc, static_cast<double>(h_), nx_, ny_, nz_)},
             {"samples", StringPrintf("%d per light where a triangle is in the cone, %d rays in dense cells (lists > %d)",
                                      options_.samples, options_.denseSamples, options_.denseEntries)},
@@ -897,6 +902,14 @@ ShadowFigures SoftShadows::Figures() const {
                                         cells ? static_cast<double>(entries) / static_cast<double>(cells) : 0.0,
                                         static_cast<unsigned long long>(denseBuilt_.load()),
                                         FormatBytes(bytesBuilt_.load()).c_str())}};
+    if (flat_)
+        lines.push_back({"flattened copy", StringPrintf("%s triangles (the instances expanded), %.1f MB, and %.1f MB "
+                                                        "of per-triangle tables",
+                                                        FormatCount(flat_->TriangleCount()).c_str(),
+                                                        static_cast<double>(flat_->positions.size() * 12 + flat_->normals.size() * 12 +
+                                                                            flat_->uvs.size() * 8 + flat_->triangles.size() * 16) / 1e6,
+                                                        static_cast<double>(tris_.size() * sizeof(Triangle) + area_.size() * 4) / 1e6)});
+    return lines;
 }
 
 StatsLines SoftShadows::CounterLines(const RenderCounters& counters) const {

@@ -93,6 +93,9 @@ class SoftShadows final : public ShadowMethod {
     const Scene& scene_;
     const Accelerator& accel_;
     SoftShadowOptions options_;
+    /// A scene with instances: its triangles flattened (geometry/instances.h), which the
+    /// hierarchy and tris_ read by id; null otherwise.
+    std::unique_ptr<const TriangleMesh> flat_;
     OccluderBvh bvh_;
     std::vector<Triangle> tris_;
     std::vector<float> area_;  ///< |n|², the order of a cell's entries
