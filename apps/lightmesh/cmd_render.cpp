@@ -42,6 +42,7 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
     lm::Scene& scene = prepared->scene;
     CommonOptions common = cmd.common;
     common.textures = !cmd.noTextures;
+    common.instancing = !cmd.noInstancing;
     scene = LoadWithWarnings(common, cmd.width.value_or(0), cmd.height.value_or(0));
     prepared->loadSeconds = SecondsSince(t0);
 
@@ -89,6 +90,7 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
         {"soft_samples", cmd.softSamples.has_value()},
         {"grid", cmd.grid.has_value()},
         {"textures", cmd.noTextures},
+        {"instancing", cmd.noInstancing},
     };
     for (const auto& [key, isGiven] : given) {
         if (!isGiven) continue;

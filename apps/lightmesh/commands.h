@@ -50,6 +50,7 @@ struct CommonOptions {
     bool verbose = false;
     int threads = 0;
     bool textures = true;  ///< false: --no-textures (SceneLoadOptions::textures)
+    bool instancing = true;  ///< false: --no-instancing (SceneLoadOptions::instancing)
 };
 void AddCommonOptions(CLI::App* cmd, CommonOptions* o);
 lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth = 0, int frameHeight = 0);
@@ -101,6 +102,7 @@ struct RenderCommand {
     std::optional<std::string> shadows, accel, variant, templateDir, cellSummaries, thinCheck;
     bool stats = false;
     bool noTextures = false;
+    bool noInstancing = false;
 };
 int RunRender(const RenderCommand& cmd);
 /// `mpirun -np N lightmesh render …` (built with MPI only).

@@ -38,6 +38,7 @@ lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth, int frameHeig
     lm::SceneLoadOptions load;
     load.strict = o.strict;
     load.textures = o.textures;
+    load.instancing = o.instancing;
     load.frameWidth = frameWidth;
     load.frameHeight = frameHeight;
     std::vector<std::string> warnings;

@@ -52,6 +52,8 @@ int main(int argc, char** argv) {
     AddSetting(renderCmd, "samples", &render.samples);
     AddSetting(renderCmd, "soft_samples", &render.softSamples);
     renderCmd->add_flag(lm::RenderSettingFor("textures").flag, render.noTextures, lm::RenderSettingFor("textures").help);
+    renderCmd->add_flag(lm::RenderSettingFor("instancing").flag, render.noInstancing,
+                        lm::RenderSettingFor("instancing").help);
     renderCmd->add_flag("--stats", render.stats, "Print rays by kind, time by phase, back-end figures, peak memory");
 
     CommonOptions info;

@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "lightmesh/geometry/mesh.h"
@@ -46,10 +47,16 @@ class HullPieces {
 };
 
 /// A binary BVH (median splits on the longest axis of the centroids, up to 4 triangles a
-/// leaf) over a TriangleMesh, which must outlive it.
+/// leaf) over a TriangleMesh, which must outlive it. With instances (mesh.h), two levels:
+/// the top one over the flat triangles and the instances' world boxes, and one hierarchy
+/// per prototype in its own space, shared by its instances, whose node boxes are mapped to
+/// world space (the box of the transformed box, a little grown) as a query descends; at its
+/// leaves each triangle's world box (the min and max of its world-space corners) is tested
+/// as a flat triangle's is. So a query lists the same triangles as over the mesh flattened.
 class OccluderBvh {
   public:
     explicit OccluderBvh(const TriangleMesh& mesh);
+    ~OccluderBvh();
 
     /// Appends to *out the ids of the triangles whose bounding boxes may meet `hull`. It is
     /// conservative: every triangle that meets the hull is listed, and some near it may be.
@@ -58,10 +65,10 @@ class OccluderBvh {
     /// Stops, returning false, once more than `limit` ids have been appended.
     bool Query(const BallHull& hull, std::vector<uint32_t>* out, size_t limit = SIZE_MAX) const;
 
-    size_t NodeCount() const { return nodes_.size(); }
-    size_t Bytes() const {
-        return nodes_.size() * sizeof(Node) + prims_.size() * sizeof(uint32_t) + boxes_.size() * sizeof(PrimBox);
-    }
+    size_t NodeCount() const;
+    size_t Bytes() const;
+    /// The prototypes' hierarchies (0 without instances).
+    size_t PrototypeCount() const { return protos_.size(); }
     double BuildSeconds() const { return buildSeconds_; }
 
     static constexpr int kLeafSize = 4;
@@ -79,6 +86,11 @@ class OccluderBvh {
         uint32_t prim;
     };
     uint32_t Build(BuildItem* items, size_t count, size_t first, int depth);
+    /// The hierarchy over `items` (triangles, or instances marked by kInstanceBit).
+    void BuildOver(std::vector<BuildItem> items);
+    /// Query's walk of prototype hierarchy `p` placed by instance `i`.
+    void QueryInstance(const HullPieces& pieces, uint32_t i, std::vector<uint32_t>* out) const;
+    static constexpr uint32_t kInstanceBit = 0x80000000u;
 
     /// A triangle's bounding box (the min and max of its vertices), in prims_' order: the
     /// leaves' tests read them in sequence.
@@ -90,6 +102,7 @@ class OccluderBvh {
     std::vector<Node> nodes_;
     std::vector<uint32_t> prims_;
     std::vector<PrimBox> boxes_;
+    std::vector<std::unique_ptr<OccluderBvh>> protos_;
     double buildSeconds_ = 0;
 };
 

@@ -301,6 +301,7 @@ void ReadRender(const Reader& r, const Json& j, RenderOptions* ro) {
     if (const Json* v = o.Find("samples")) ro->areaLight.samples = integer(*v, "samples");
     if (const Json* v = o.Find("soft_samples")) ro->soft.samples = integer(*v, "soft_samples");
     if (const Json* v = o.Find("textures")) ro->textures = Bool(r, *v, o.Child("textures"));
+    if (const Json* v = o.Find("instancing")) ro->instancing = Bool(r, *v, o.Child("instancing"));
     // Where each value came from, for the messages of the factories that read it.
     for (const RenderSetting& s : RenderSettings())
         if (o.Find(s.key)) ro->origins[s.key] = SourceLoc(r.File(), 0, 0, o.Child(s.key));
@@ -572,7 +573,7 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
         const bool texturesOn = options.textures && scene.render.textures && e.material < 0;
         const bool mayCutOut = texturesOn && std::any_of(loaded.materials.begin(), loaded.materials.end(),
                                                          [](const Material& m) { return m.alphaTexture >= 0; });
-        const bool instanced = options.instancing && !mayCutOut && InstancesSaveMemory(groupRefs[group], loaded.mesh.TriangleCount());
+        const bool instanced = options.instancing && scene.render.instancing && !mayCutOut && InstancesSaveMemory(groupRefs[group], loaded.mesh.TriangleCount());
         if (e.hasTransform && !instanced) {
             TransformMesh(&loaded.mesh, e.transform);
             for (const Vec3& p : loaded.mesh.positions)

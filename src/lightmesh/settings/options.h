@@ -110,6 +110,9 @@ struct RenderOptions {
     /// Whether materials use their images (a scene file's "textures"; --no-textures
     /// reaches the loader instead: SceneLoadOptions::textures).
     bool textures = true;
+    /// Whether mesh files referenced many times become instances (a scene file's
+    /// "instancing"; --no-instancing reaches the loader: SceneLoadOptions::instancing).
+    bool instancing = true;
     /// Where each knob's value came from, by scene-file key: "scene.json /render/ki" or
     /// "--ki" (the CLI's value replaces the file's); a knob left at its default is absent.
     std::map<std::string, SourceLoc> origins;

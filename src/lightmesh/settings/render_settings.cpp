@@ -72,6 +72,10 @@ const std::vector<RenderSetting>& RenderSettings() {
          "Leave the materials' images out (colour textures and alpha cut-outs): flat colours and solid "
          "surfaces (default: textures on)",
          nullptr, {}},
+        {"instancing", "--no-instancing", K::Bool, 0, 0, {},
+         "Copy every reference to a mesh file into the scene's triangles instead of placing a file referenced "
+         "many times as instances of one import (default: instancing on)",
+         nullptr, {}},
     };
     return rows;
 }

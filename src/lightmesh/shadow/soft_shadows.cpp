@@ -171,8 +171,7 @@ SoftShadows::SoftShadows(const Scene& scene, const Accelerator& accel, SoftShado
     : scene_(scene),
       accel_(accel),
       options_(std::move(options)),
-      flat_(scene.mesh.instances ? std::make_unique<const TriangleMesh>(Flattened(scene.mesh)) : nullptr),
-      bvh_(flat_ ? *flat_ : scene.mesh) {
+      bvh_(scene.mesh) {
     const size_t lights = scene.lights.size();
     if (options_.radii.size() != lights) options_.radii.resize(lights, 0.0f);
     for (float r : options_.radii)
@@ -189,26 +188,16 @@ SoftShadows::SoftShadows(const Scene& scene, const Accelerator& accel, SoftShado
         throw Error(StringPrintf("soft shadows: dense threshold %d: must be 1 to %d", options_.denseEntries, kMaxCandidates));
 
     // What the per-point tests read of each triangle, in one cache line.
-    const auto& mesh = flat_ ? *flat_ : scene.mesh;
+    const auto& mesh = scene.mesh;
     // A receiver's entry and a list's sort key keep a triangle id in 30 bits.
-    if (mesh.TriangleCount() > size_t{kPrimMask} + 1)
+    if (mesh.PrimCount() > size_t{kPrimMask} + 1)
         throw Error(StringPrintf("soft shadows: %s triangles: at most %s; use --shadows rt",
-                                 FormatCount(mesh.TriangleCount()).c_str(), FormatCount(size_t{kPrimMask} + 1).c_str()));
+                                 FormatCount(mesh.PrimCount()).c_str(), FormatCount(size_t{kPrimMask} + 1).c_str()));
+    flatCount_ = static_cast<uint32_t>(mesh.TriangleCount());
     tris_.resize(mesh.TriangleCount());
     area_.resize(mesh.TriangleCount());
-    for (uint32_t i = 0; i < tris_.size(); ++i) {
-        const Vec3 &p0 = mesh.Vertex(i, 0), &p1 = mesh.Vertex(i, 1), &p2 = mesh.Vertex(i, 2);
-        const Vec3 n = TriangleNormal(p0, p1, p2);
-        const Vec3 c = (p0 + p1 + p2) * (1.0f / 3.0f);
-        const float r = std::sqrt(std::max({LengthSquared(p0 - c), LengthSquared(p1 - c), LengthSquared(p2 - c)}));
-        Triangle& t = tris_[i];
-        for (int k = 0; k < 3; ++k) {
-            t.v0[k] = p0[k], t.v1[k] = p1[k], t.v2[k] = p2[k];
-            t.n[k] = n[k], t.c[k] = c[k];
-        }
-        t.r = r * (1.0f + 1e-5f) + 1e-6f * MaxComponent(Abs(c));
-        area_[i] = LengthSquared(n);
-    }
+    for (uint32_t i = 0; i < tris_.size(); ++i)
+        MakeTriangle(mesh.Vertex(i, 0), mesh.Vertex(i, 1), mesh.Vertex(i, 2), &tris_[i], &area_[i]);
 
     // The lattice: the scene's box grown by a cell on every side (shading origins sit a
     // hair off their surfaces), h = longest side / CC.
@@ -246,6 +235,26 @@ SoftShadows::SoftShadows(const Scene& scene, const Accelerator& accel, SoftShado
     densePattern_ = MakeDiscPattern(options_.denseSamples);
 }
 
+void SoftShadows::MakeTriangle(const Vec3& p0, const Vec3& p1, const Vec3& p2, Triangle* t, float* area) {
+    const Vec3 n = TriangleNormal(p0, p1, p2);
+    const Vec3 c = (p0 + p1 + p2) * (1.0f / 3.0f);
+    const float r = std::sqrt(std::max({LengthSquared(p0 - c), LengthSquared(p1 - c), LengthSquared(p2 - c)}));
+    for (int k = 0; k < 3; ++k) {
+        t->v0[k] = p0[k], t->v1[k] = p1[k], t->v2[k] = p2[k];
+        t->n[k] = n[k], t->c[k] = c[k];
+    }
+    t->r = r * (1.0f + 1e-5f) + 1e-6f * MaxComponent(Abs(c));
+    *area = LengthSquared(n);
+}
+
+const SoftShadows::Triangle& SoftShadows::InstancedTri(uint32_t id, Triangle* scratch) const {
+    Vec3 p[3];
+    scene_.mesh.Corners(id, p);
+    float area;
+    MakeTriangle(p[0], p[1], p[2], scratch, &area);
+    return *scratch;
+}
+
 SoftShadows::~SoftShadows() {
     const size_t lights = scene_.lights.size();
     for (size_t b = 0; b < blockCount_; ++b) {
@@ -268,7 +277,8 @@ std::unique_ptr<SoftShadows::Receiver> SoftShadows::BuildReceiver(const CellList
     const Bounds3 grown(box.lo - Vec3(grow, grow, grow), box.hi + Vec3(grow, grow, grow));
     auto rec = std::make_unique<Receiver>();
     Vec3 poly[9];
-    const Triangle& rt = tris_[id];
+    Triangle rtScratch;
+    const Triangle& rt = Tri(id, &rtScratch);
     const Vec3 r0 = V3(rt.v0), r1 = V3(rt.v1), r2 = V3(rt.v2);
     const Vec3 rlo = Min(Min(r0, r1), r2), rhi = Max(Max(r0, r1), r2);
     const int nv = ClipToBox(r0, r1, r2, grown, poly);
@@ -295,7 +305,8 @@ std::unique_ptr<SoftShadows::Receiver> SoftShadows::BuildReceiver(const CellList
     rec->side = side;
     for (size_t e = 0; e < list.count; ++e) {
         const uint32_t prim = list.prims[e];
-        const Triangle& t = tris_[prim];
+        Triangle tScratch;
+        const Triangle& t = Tri(prim, &tScratch);
         const Vec3 v0 = V3(t.v0), v1 = V3(t.v1), v2 = V3(t.v2);
         if (side != 0) {
             const float tol = 1e-5f * lenR * (MaxComponent(Abs(r0)) + MaxComponent(Max(Abs(v0), Max(Abs(v1), Abs(v2)))));
@@ -331,7 +342,8 @@ std::unique_ptr<SoftShadows::Receiver> SoftShadows::BuildReceiver(const CellList
         const uint32_t code = rec->entries[e] >> kSideShift;
         if (!code) continue;
         if (cut && cut->IsCutout(rec->entries[e] & kPrimMask)) continue;  // holes let light through
-        const Triangle& t = tris_[rec->entries[e] & kPrimMask];
+        Triangle tScratch;
+        const Triangle& t = Tri(rec->entries[e] & kPrimMask, &tScratch);
         const Vec3 n = V3(t.n) * (code == kInFront ? 1.0f : -1.0f), v0 = V3(t.v0), v1 = V3(t.v1), v2 = V3(t.v2);
         const float lenT = Length(n);
         bool covers = true;
@@ -362,7 +374,8 @@ std::unique_ptr<SoftShadows::Receiver> SoftShadows::BuildReceiver(const CellList
             continue;
         }
         const uint32_t code = rec->entries[e] >> kSideShift;
-        const Triangle& t = tris_[rec->entries[e] & kPrimMask];
+        Triangle tScratch;
+        const Triangle& t = Tri(rec->entries[e] & kPrimMask, &tScratch);
         const float sign = code == kInFront ? 1.0f : -1.0f;
         const Vec3 n = V3(t.n) * sign;
         if (code)
@@ -397,7 +410,8 @@ std::unique_ptr<SoftShadows::CellList> SoftShadows::BuildList(const BallHull& hu
     thread_local std::vector<uint64_t> keys;
     keys.clear();
     for (uint32_t id : ids) {
-        const Triangle& t = tris_[id];
+        Triangle tScratch;
+        const Triangle& t = Tri(id, &tScratch);
         const Vec3 n = V3(t.n), v0 = V3(t.v0);
         const float len = Length(n);
         if (!(len > 0)) continue;
@@ -413,7 +427,8 @@ std::unique_ptr<SoftShadows::CellList> SoftShadows::BuildList(const BallHull& hu
             if (sC > extent * 1.0001f + 1e-5f * len * Length(boxCenter - v0)) continue;
         }
         const uint32_t code = side > 0 ? kInFront : side < 0 ? kBehind : 0;
-        keys.push_back(static_cast<uint64_t>(~std::bit_cast<uint32_t>(area_[id])) << 32 | uint64_t{id} << 2 | code);
+        const float area = id < flatCount_ ? area_[id] : LengthSquared(n);  // the same value
+        keys.push_back(static_cast<uint64_t>(~std::bit_cast<uint32_t>(area)) << 32 | uint64_t{id} << 2 | code);
     }
     list->count = static_cast<uint32_t>(keys.size());
     if (list->count > static_cast<uint32_t>(options_.denseEntries)) {
@@ -437,7 +452,8 @@ std::unique_ptr<SoftShadows::CellList> SoftShadows::BuildList(const BallHull& hu
         list->prims[e] = id;
         list->codes[e] = code;
         if (code) {
-            const Triangle& t = tris_[id];
+            Triangle tScratch;
+            const Triangle& t = Tri(id, &tScratch);
             const Vec3 m = V3(t.n) * (code == kInFront ? 1.0f : -1.0f);
             g[0] = m.x, g[4] = m.y, g[8] = m.z, g[12] = -Dot(m, V3(t.v0));
         } else {
@@ -450,7 +466,8 @@ std::unique_ptr<SoftShadows::CellList> SoftShadows::BuildList(const BallHull& hu
     receivers.clear();
     const float grow = 1e-4f * h_ + 1e-5f * MaxComponent(Max(Abs(box.lo), Abs(box.hi)));
     for (uint32_t id : ids) {
-        const Triangle& t = tris_[id];
+        Triangle tScratch;
+        const Triangle& t = Tri(id, &tScratch);
         const Vec3 lo = Min(Min(V3(t.v0), V3(t.v1)), V3(t.v2)), hi = Max(Max(V3(t.v0), V3(t.v1)), V3(t.v2));
         if (lo.x <= box.hi.x + grow && lo.y <= box.hi.y + grow && lo.z <= box.hi.z + grow && hi.x >= box.lo.x - grow &&
             hi.y >= box.lo.y - grow && hi.z >= box.lo.z - grow)
@@ -632,7 +649,8 @@ float SoftShadows::HardLight(const ShadingPoint& sp, size_t light, Each&& each) 
     bool blocked = false;
     const CutoutMask* cut = scene_.mesh.cutouts.get();
     each(cone, [&](uint32_t prim) {
-        const Triangle& t = tris_[prim];
+        Triangle tScratch;
+        const Triangle& t = Tri(prim, &tScratch);
         TriangleHit hit;
         blocked = IntersectTriangle(ray, V3(t.v0), V3(t.v1), V3(t.v2), &hit) &&
                   (!cut || cut->Solid(scene_.mesh, prim, hit.b1, hit.b2));
@@ -748,7 +766,8 @@ float SoftShadows::SampleLight(const ShadingPoint& sp, size_t light, Each&& each
     const PointCone cone{O, u, d, tanT, invCos};
     each(cone, [&](uint32_t prim) {
         ++counters.method[kSoftBallPass];
-        const Triangle& t = tris_[prim];
+        Triangle tScratch;
+        const Triangle& t = Tri(prim, &tScratch);
         const Vec3 pa = V3(t.v0) - O, pb = V3(t.v1) - O, pc = V3(t.v2) - O;
         Vec3 m0 = Cross(pa, pb), m1 = Cross(pb, pc), m2 = Cross(pc, pa);
         const float det = Dot(m0, pc);
@@ -840,7 +859,8 @@ float SoftShadows::LightVisibility(const ShadingPoint& sp, size_t light, RenderC
             } else
                 rec = expected;  // another thread published the same receiver first
         }
-        const Triangle& t = tris_[sp.prim];
+        Triangle tScratch;
+        const Triangle& t = Tri(sp.prim, &tScratch);
         if (!rec->missed && (rec->side == 0 || Dot(V3(t.n), O - V3(t.v0)) * rec->side > 0)) {
             receiver = true;
             if (rec->dark) {
@@ -866,7 +886,8 @@ float SoftShadows::LightVisibility(const ShadingPoint& sp, size_t light, RenderC
             return;
         }
         ForSeparating(*list, O, [&](uint32_t prim) {
-            const Triangle& t = tris_[prim];
+            Triangle tScratch;
+            const Triangle& t = Tri(prim, &tScratch);
             return !BallMeetsCone(cone, t.c, t.r) || f(prim);
         });
     };
@@ -902,13 +923,12 @@ ShadowFigures SoftShadows::Figures() const {
                                         cells ? static_cast<double>(entries) / static_cast<double>(cells) : 0.0,
                                         static_cast<unsigned long long>(denseBuilt_.load()),
                                         FormatBytes(bytesBuilt_.load()).c_str())}};
-    if (flat_)
-        lines.push_back({"flattened copy", StringPrintf("%s triangles (the instances expanded), %.1f MB, and %.1f MB "
-                                                        "of per-triangle tables",
-                                                        FormatCount(flat_->TriangleCount()).c_str(),
-                                                        static_cast<double>(flat_->positions.size() * 12 + flat_->normals.size() * 12 +
-                                                                            flat_->uvs.size() * 8 + flat_->triangles.size() * 16) / 1e6,
-                                                        static_cast<double>(tris_.size() * sizeof(Triangle) + area_.size() * 4) / 1e6)});
+    if (scene_.mesh.instances)
+        lines.push_back({"instances", StringPrintf("%zu prototype hierarchies under one over %s instances and %s flat triangles; "
+                                                   "per-triangle tables %.1f MB (flat triangles only)",
+                                                   bvh_.PrototypeCount(), FormatCount(scene_.mesh.instances->Instances().size()).c_str(),
+                                                   FormatCount(flatCount_).c_str(),
+                                                   static_cast<double>(tris_.size() * sizeof(Triangle) + area_.size() * 4) / 1e6)});
     return lines;
 }
 

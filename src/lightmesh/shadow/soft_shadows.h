@@ -93,12 +93,18 @@ class SoftShadows final : public ShadowMethod {
     const Scene& scene_;
     const Accelerator& accel_;
     SoftShadowOptions options_;
-    /// A scene with instances: its triangles flattened (geometry/instances.h), which the
-    /// hierarchy and tris_ read by id; null otherwise.
-    std::unique_ptr<const TriangleMesh> flat_;
     OccluderBvh bvh_;
+    /// What the per-point tests read of each flat triangle (TriangleMesh::triangles), and its
+    /// |n|² (the order of a cell's entries). An instanced triangle's are computed when read,
+    /// from its world-space corners (the same values as over the mesh flattened).
     std::vector<Triangle> tris_;
-    std::vector<float> area_;  ///< |n|², the order of a cell's entries
+    std::vector<float> area_;
+    uint32_t flatCount_ = 0;
+    static void MakeTriangle(const Vec3& p0, const Vec3& p1, const Vec3& p2, Triangle* t, float* area);
+    const Triangle& Tri(uint32_t id, Triangle* scratch) const {
+        return id < flatCount_ ? tris_[id] : InstancedTri(id, scratch);
+    }
+    const Triangle& InstancedTri(uint32_t id, Triangle* scratch) const;
     // The lattice of cells: cell (i, j, k) is origin_ + [i, i+1)·h × ... Cells are grouped
     // in blocks of 4³, allocated on first use; a block holds an atomic pointer per cell and
     // light, published once (compare-and-swap; the loser frees its own copy, which is
