@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <thread>
@@ -162,6 +163,53 @@ TEST(Cli, InfoSumsUpManyLights) {
     ASSERT_EQ(all.exitCode, 0) << all.output;
     EXPECT_NE(all.output.find("  light 19  at [19 5 0]"), std::string::npos) << all.output;
     EXPECT_EQ(all.output.find("more: radius"), std::string::npos) << all.output;
+}
+
+// A file referenced 64 times (65,536 triangles in copies) is placed as instances: info
+// lists them, --stats gives each part's figures, every method and back-end renders it, and
+// --no-instancing copies the references.
+TEST(Cli, InstancesInInfoStatsAndEveryMethod) {
+    std::string obj;
+    const int rings = 17, segments = 32;  // 2 * 32 * 16 = 1,024 triangles
+    for (int i = 0; i <= rings; ++i)
+        for (int j = 0; j < segments; ++j) {
+            const double th = M_PI * i / rings, ph = 2 * M_PI * j / segments;
+            obj += "v " + std::to_string(std::sin(th) * std::cos(ph)) + " " + std::to_string(std::cos(th)) + " " +
+                   std::to_string(std::sin(th) * std::sin(ph)) + "\n";
+        }
+    auto v = [&](int i, int j) { return std::to_string(1 + i * segments + j % segments); };
+    for (int i = 0; i < rings; ++i)
+        for (int j = 0; j < segments; ++j) {
+            if (i > 0) obj += "f " + v(i, j) + " " + v(i, j + 1) + " " + v(i + 1, j) + "\n";
+            if (i < rings - 1) obj += "f " + v(i, j + 1) + " " + v(i + 1, j + 1) + " " + v(i + 1, j) + "\n";
+        }
+    std::ofstream(Temp("ball.obj")) << obj;
+    std::string meshes;
+    for (int k = 0; k < 64; ++k)
+        meshes += (k ? ", " : "") + std::string(R"({"file": "ball.obj", "transform": {"translate": [)") +
+                  std::to_string(3 * (k % 8)) + ", 1, " + std::to_string(3 * (k / 8)) + "]}}";
+    std::ofstream(Temp("balls.json")) << R"({"camera": {"position": [10, 20, 40], "look_at": [10, 0, 10]},
+        "lights": [{"position": [0, 30, 5], "radius": 0.5}], "meshes": [)" << meshes << R"(], "ground": {"up": "y"}})";
+    const CliRun info = Lightmesh("info " + Temp("balls.json"));
+    ASSERT_EQ(info.exitCode, 0) << info.output;
+    EXPECT_NE(info.output.find("triangles  65,548 "), std::string::npos) << info.output;
+    EXPECT_NE(info.output.find("instances  64 of 1 prototype (1,024 triangles), standing for 65,536 triangles;"),
+              std::string::npos)
+        << info.output;
+    EXPECT_NE(info.output.find("embree instances 64 instance geometries of 1 prototype scenes"), std::string::npos)
+        << info.output;
+    const CliRun soft = Lightmesh("render " + Temp("balls.json") + " --width 64 --height 48 --stats -o " + Temp("balls.png"));
+    ASSERT_EQ(soft.exitCode, 0) << soft.output;
+    EXPECT_NE(soft.output.find("1 prototype hierarchies under one over 64 instances"), std::string::npos) << soft.output;
+    for (const char* args : {"--shadows lmm", "--shadows area --accel grid", "--shadows rt --accel brute"}) {
+        const CliRun r = Lightmesh("render " + Temp("balls.json") + " --width 32 --height 24 -q " + args + " -o " +
+                                   Temp("balls2.png"));
+        EXPECT_EQ(r.exitCode, 0) << args << r.output;
+    }
+    const CliRun copies = Lightmesh("render --no-instancing " + Temp("balls.json") + " --width 64 --height 48 --stats -o " +
+                                    Temp("balls3.png"));
+    ASSERT_EQ(copies.exitCode, 0) << copies.output;
+    EXPECT_EQ(copies.output.find("instances"), std::string::npos) << copies.output;
 }
 
 // Lights have sizes: info lists them; --shadows area samples them without a warning;
