@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <unordered_map>
+#include <utility>
 
 #include "lightmesh/accel/accelerator.h"
 #include "lightmesh/geometry/cutouts.h"
@@ -29,7 +31,16 @@ int RunInfo(const CommonOptions& common, const std::string& accelName, int grid)
         }
     }
     std::printf("scene      %s\n", scene.name.c_str());
-    for (const std::string& s : scene.report.sources) std::printf("source     %s\n", s.c_str());
+    // Each file once, with how many times the scene places it.
+    std::vector<std::pair<std::string, size_t>> sources;
+    std::unordered_map<std::string, size_t> sourceIndex;
+    for (const std::string& s : scene.report.sources) {
+        const auto [it, added] = sourceIndex.emplace(s, sources.size());
+        if (added) sources.emplace_back(s, 1);
+        else ++sources[it->second].second;
+    }
+    for (const auto& [s, n] : sources)
+        std::printf("source     %s%s\n", s.c_str(), n > 1 ? lm::StringPrintf(" (placed %s times)", Count(n).c_str()).c_str() : "");
     std::printf("triangles  %s (removed: %s degenerate, %s duplicate; meshes excluded: %zu)\n",
                 Count(scene.mesh.PrimCount()).c_str(), Count(scene.report.degenerateRemoved).c_str(),
                 Count(scene.report.duplicatesRemoved).c_str(), scene.report.meshesExcluded);
@@ -52,8 +63,14 @@ int RunInfo(const CommonOptions& common, const std::string& accelName, int grid)
                     Count(inst.TriangleCount()).c_str(), lm::FormatBytes(inst.Bytes()).c_str(),
                     lm::FormatBytes(flatBytes).c_str(), Count(scene.mesh.TriangleCount()).c_str());
     }
-    std::printf("vertices   %s%s\n", Count(scene.mesh.positions.size()).c_str(),
-                scene.mesh.normals.empty() ? "" : " (with shading normals)");
+    size_t protoVertices = 0;
+    if (scene.mesh.instances)
+        for (const lm::TriangleMesh& p : scene.mesh.instances->Prototypes()) protoVertices += p.positions.size();
+    std::printf("vertices   %s%s%s\n", Count(scene.mesh.positions.size()).c_str(),
+                protoVertices ? lm::StringPrintf(" and %s in prototypes", Count(protoVertices).c_str()).c_str() : "",
+                scene.mesh.normals.empty() && (!protoVertices || scene.mesh.instances->Prototypes()[0].normals.empty())
+                    ? ""
+                    : " (with shading normals)");
     std::printf("bounds     [%g %g %g] - [%g %g %g], size %g x %g x %g\n", b.lo.x, b.lo.y, b.lo.z,
                 b.hi.x, b.hi.y, b.hi.z, b.Diagonal().x, b.Diagonal().y, b.Diagonal().z);
     std::printf("edges      %s: %s open, %s non-manifold -> %s\n", Count(edges.edges).c_str(),

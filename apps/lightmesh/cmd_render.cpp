@@ -143,7 +143,16 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
                        lm::FormatBytes(physical).c_str());
 
     // The light mesh reads triangles as one array: instances are flattened for it.
-    if (options.shadows == "lmm") lm::FlattenInstances(&scene.mesh);
+    if (options.shadows == "lmm" && scene.mesh.instances) {
+        const size_t instances = scene.mesh.instances->Instances().size();
+        lm::FlattenInstances(&scene.mesh);
+        const lm::TriangleMesh& m = scene.mesh;
+        lm::LogInfo(lm::StringPrintf("--shadows lmm: %s instances flattened into %s triangles (%s)",
+                                     lm::FormatCount(instances).c_str(), lm::FormatCount(m.TriangleCount()).c_str(),
+                                     lm::FormatBytes(m.positions.size() * sizeof(lm::Vec3) + m.normals.size() * sizeof(lm::Vec3) +
+                                                     m.uvs.size() * sizeof(lm::TexCoord) + m.triangles.size() * 16)
+                                         .c_str()));
+    }
     prepared->job = std::make_unique<lm::RenderJob>(scene, options);
     return prepared;
 }

@@ -245,7 +245,7 @@ std::string TempFolder() {
 }
 
 /// An OBJ of two objects, "left" and "right", each a UV sphere of 2 × (rings − 1) × 64
-/// triangles.
+/// triangles with vertex normals.
 std::string TwoSpheresObj(int rings) {
     std::string text;
     int base = 1;
@@ -257,14 +257,17 @@ std::string TwoSpheresObj(int rings) {
                 const double th = M_PI * i / rings, ph = 2 * M_PI * j / segments;
                 text += "v " + std::to_string(std::sin(th) * std::cos(ph) + 3 * side) + " " + std::to_string(std::cos(th)) +
                         " " + std::to_string(std::sin(th) * std::sin(ph)) + "\n";
+                text += "vn " + std::to_string(std::sin(th) * std::cos(ph)) + " " + std::to_string(std::cos(th)) + " " +
+                        std::to_string(std::sin(th) * std::sin(ph)) + "\n";
             }
-        auto v = [&](int i, int j) { return base + i * segments + j % segments; };
+        auto v = [&](int i, int j) {
+            const std::string k = std::to_string(base + i * segments + j % segments);
+            return k + "//" + k;
+        };
         for (int i = 0; i < rings; ++i)
             for (int j = 0; j < segments; ++j) {
-                if (i > 0) text += "f " + std::to_string(v(i, j)) + " " + std::to_string(v(i, j + 1)) + " " + std::to_string(v(i + 1, j)) + "\n";
-                if (i < rings - 1)
-                    text += "f " + std::to_string(v(i, j + 1)) + " " + std::to_string(v(i + 1, j + 1)) + " " +
-                            std::to_string(v(i + 1, j)) + "\n";
+                if (i > 0) text += "f " + v(i, j) + " " + v(i, j + 1) + " " + v(i + 1, j) + "\n";
+                if (i < rings - 1) text += "f " + v(i, j + 1) + " " + v(i + 1, j + 1) + " " + v(i + 1, j) + "\n";
             }
         base += (rings + 1) * segments;
     }
@@ -319,6 +322,19 @@ TEST(Instances, SceneFileRuleAndExclusionsPerReference) {
     EXPECT_EQ(mixed.mesh.instances->Instances().size(), 16u);
     EXPECT_EQ(mixed.mesh.TriangleCount(), 16u * 2048u);
     EXPECT_EQ(mixed.mesh.PrimCount(), 16u * 4096u + 16u * 2048u);
+    // With a ground, shading normals as the copies would have them: the slab gets normals
+    // like the instances', and every triangle reads the flattened mesh's normals.
+    const Scene grounded = LoadText(folder, SceneWith(32, "", R"(, "ground": {"up": "y"})"));
+    ASSERT_TRUE(grounded.mesh.instances);
+    EXPECT_TRUE(grounded.mesh.HasShadingNormals());
+    const TriangleMesh copies = Flattened(grounded.mesh);
+    ASSERT_FALSE(copies.normals.empty());
+    for (uint32_t id = 0; id < copies.TriangleCount(); id += 53) {
+        Vec3 a[3], b[3];
+        ASSERT_TRUE(grounded.mesh.ShadingNormals(id, a));
+        ASSERT_TRUE(copies.ShadingNormals(id, b));
+        for (int k = 0; k < 3; ++k) EXPECT_TRUE(Same(a[k], b[k])) << id;
+    }
     // Few copies stay flat (byte-identical to before instancing).
     EXPECT_FALSE(LoadText(folder, SceneWith(8, "")).mesh.instances);
 }

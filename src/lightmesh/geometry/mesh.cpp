@@ -31,21 +31,17 @@ uint32_t TriangleMesh::InstancedMaterial(uint32_t prim) const {
     return instances->Material(prim - static_cast<uint32_t>(triangles.size()));
 }
 
-bool TriangleMesh::ShadingNormals(uint32_t prim, Vec3 n[3]) const {
-    if (prim < triangles.size()) {
-        if (normals.empty()) return false;
-        for (int k = 0; k < 3; ++k) n[k] = normals[triangles[prim][k]];
-        return true;
-    }
+bool TriangleMesh::HasShadingNormals() const {
+    if (!normals.empty() || !positions.empty() || !instances) return !normals.empty();
+    const auto& protos = instances->Prototypes();
+    return std::all_of(protos.begin(), protos.end(), [](const TriangleMesh& p) { return !p.normals.empty(); });
+}
+
+bool TriangleMesh::InstancedNormals(uint32_t prim, Vec3 n[3]) const {
     return instances->Normals(prim - static_cast<uint32_t>(triangles.size()), n);
 }
 
-bool TriangleMesh::UvsOf(uint32_t prim, TexCoord t[3]) const {
-    if (prim < triangles.size()) {
-        if (uvs.empty()) return false;
-        for (int k = 0; k < 3; ++k) t[k] = uvs[triangles[prim][k]];
-        return true;
-    }
+bool TriangleMesh::InstancedUvs(uint32_t prim, TexCoord t[3]) const {
     return instances->TexCoords(prim - static_cast<uint32_t>(triangles.size()), t);
 }
 

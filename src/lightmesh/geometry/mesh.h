@@ -60,10 +60,23 @@ struct TriangleMesh {
         }
         InstancedCorners(prim, p);
     }
+    /// Whether its triangles have shading normals: the flat ones', or, with no flat
+    /// triangles yet, the prototypes' (InstancedMeshes::HarmoniseAttributes makes them agree).
+    bool HasShadingNormals() const;
     /// Its shading normals (false when the mesh has none).
-    bool ShadingNormals(uint32_t prim, Vec3 n[3]) const;
+    bool ShadingNormals(uint32_t prim, Vec3 n[3]) const {
+        if (prim >= triangles.size()) return InstancedNormals(prim, n);
+        if (normals.empty()) return false;
+        for (int k = 0; k < 3; ++k) n[k] = normals[triangles[prim][k]];
+        return true;
+    }
     /// Its texture coordinates (false when the mesh has none).
-    bool UvsOf(uint32_t prim, TexCoord t[3]) const;
+    bool UvsOf(uint32_t prim, TexCoord t[3]) const {
+        if (prim >= triangles.size()) return InstancedUvs(prim, t);
+        if (uvs.empty()) return false;
+        for (int k = 0; k < 3; ++k) t[k] = uvs[triangles[prim][k]];
+        return true;
+    }
     /// Its material index.
     uint32_t MaterialOf(uint32_t prim) const {
         return prim < materialIds.size() ? materialIds[prim] : InstancedMaterial(prim);
@@ -75,6 +88,8 @@ struct TriangleMesh {
   private:
     void InstancedCorners(uint32_t prim, Vec3 p[3]) const;
     uint32_t InstancedMaterial(uint32_t prim) const;
+    bool InstancedNormals(uint32_t prim, Vec3 n[3]) const;
+    bool InstancedUvs(uint32_t prim, TexCoord t[3]) const;
 };
 
 /// What CleanMesh removed.

@@ -19,9 +19,11 @@ Color TexturedDiffuse(const Scene& scene, const Material& mat, const Ray& ray, c
 
     // The footprint: texels per unit of surface (the triangle's texture area over its
     // world area), times the cone's width at the hit over the incidence's cosine.
-    Vec3 corners[3];
-    mesh.Corners(hit.prim, corners);
-    const Vec3 &p0 = corners[0], &p1 = corners[1], &p2 = corners[2];
+    const bool flat = hit.prim < mesh.TriangleCount();
+    Vec3 placed[3];
+    if (!flat) mesh.Corners(hit.prim, placed);
+    const Vec3 &p0 = flat ? mesh.Vertex(hit.prim, 0) : placed[0], &p1 = flat ? mesh.Vertex(hit.prim, 1) : placed[1],
+               &p2 = flat ? mesh.Vertex(hit.prim, 2) : placed[2];
     const Vec3 normal = Cross(p1 - p0, p2 - p0);
     const float worldArea = Length(normal);
     const float texArea = std::abs((t1.u - t0.u) * (t2.v - t0.v) - (t2.u - t0.u) * (t1.v - t0.v)) *

@@ -24,9 +24,12 @@ WhittedRenderer::WhittedRenderer(const Scene& scene, const Accelerator& accel,
 
 ShadingPoint WhittedRenderer::MakeShadingPoint(const TriangleMesh& mesh, const Ray& ray,
                                                const Hit& hit) {
-    Vec3 corners[3];
-    mesh.Corners(hit.prim, corners);
-    const Vec3 &p0 = corners[0], &p1 = corners[1], &p2 = corners[2];
+    // A flat triangle's vertices read in place; an instanced one's computed.
+    const bool flat = hit.prim < mesh.TriangleCount();
+    Vec3 placed[3];
+    if (!flat) mesh.Corners(hit.prim, placed);
+    const Vec3 &p0 = flat ? mesh.Vertex(hit.prim, 0) : placed[0], &p1 = flat ? mesh.Vertex(hit.prim, 1) : placed[1],
+               &p2 = flat ? mesh.Vertex(hit.prim, 2) : placed[2];
     const float b0 = 1.0f - hit.b1 - hit.b2;
     ShadingPoint sp;
     sp.prim = hit.prim;

@@ -53,7 +53,7 @@ void AddGround(Scene* scene, const Bounds3& box, int axis, float height, float s
     ShapeBuilder(&slab).OrientedBox(centre, eu, ev, eup, material);
     // Keep the scene's vertex normals (Append drops them all if one part has none); the
     // slab's shared corners get the up normal, right for the top face that is seen.
-    if (!scene->mesh.normals.empty()) {
+    if (scene->mesh.HasShadingNormals()) {
         Vec3 n;
         n[axis] = 1;
         slab.normals.assign(slab.positions.size(), n);
