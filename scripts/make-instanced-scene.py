@@ -3,9 +3,9 @@
 instancing: an OBJ (a UV sphere of 1,024 triangles with normals, or a cube of 12) and a
 scene file that places it N times. Deterministic.
 
-  scripts/make-instanced-scene.py [--copies N] [--shape sphere|cube] [--varied] OUT_DIR
+  scripts/make-instanced-scene.py [--copies N] [--shape sphere|cube] [--slices S] [--varied] OUT_DIR
 
---varied turns, scales non-uniformly and mirrors some copies (for the differential tests).
+--slices sets the sphere's detail (32: 1,024 triangles; 448: 199,808). --varied turns, scales non-uniformly and mirrors some copies (for the differential tests).
 `lightmesh render OUT_DIR/SHAPE-N.json -o x.png`; `lightmesh info` lists the instances.
 """
 import argparse, json, math, os
@@ -45,12 +45,14 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--copies", type=int, default=5000)
     ap.add_argument("--shape", choices=["sphere", "cube"], default="sphere")
+    ap.add_argument("--slices", type=int, default=32)
     ap.add_argument("--varied", action="store_true")
     ap.add_argument("out")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
-    text, tris = sphere_obj() if a.shape == "sphere" else cube_obj()
-    with open(os.path.join(a.out, a.shape + ".obj"), "w") as f:
+    text, tris = sphere_obj(a.slices // 2 + 1, a.slices) if a.shape == "sphere" else cube_obj()
+    mesh = a.shape + ("" if a.shape == "cube" or a.slices == 32 else str(a.slices)) + ".obj"
+    with open(os.path.join(a.out, mesh), "w") as f:
         f.write(text)
     side = math.ceil(math.sqrt(a.copies))
     meshes = []
@@ -60,7 +62,7 @@ def main():
         if a.varied:
             t = {"scale": [1.0 + 0.3 * (k % 3), 0.6 + 0.2 * (k % 4), 1.0 - 0.4 * (k % 5 == 2) - 1.8 * (k % 7 == 3)],
                  "rotate": [[0.3, 1, 0.2, 17.0 * k]], "translate": t["translate"]}
-        meshes.append({"file": a.shape + ".obj", "transform": t})
+        meshes.append({"file": mesh, "transform": t})
     extent = 3.0 * side
     scene = {
         "camera": {"position": [0.3 * extent, 0.45 * extent, 0.75 * extent], "look_at": [0, 0, 0], "fov": 40},
@@ -70,7 +72,7 @@ def main():
         "ground": {"up": "y", "height": 0},
         "render": {"width": 320, "height": 240},
     }
-    name = "%s-%d%s.json" % (a.shape, a.copies, "-varied" if a.varied else "")
+    name = "%s-%d%s.json" % (mesh[:-4], a.copies, "-varied" if a.varied else "")
     with open(os.path.join(a.out, name), "w") as f:
         json.dump(scene, f, indent=1)
     print(os.path.join(a.out, name), a.copies * tris, "triangles")

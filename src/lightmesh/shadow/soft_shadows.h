@@ -102,9 +102,11 @@ class SoftShadows final : public ShadowMethod {
     uint32_t flatCount_ = 0;
     static void MakeTriangle(const Vec3& p0, const Vec3& p1, const Vec3& p2, Triangle* t, float* area);
     const Triangle& Tri(uint32_t id, Triangle* scratch) const {
-        return id < flatCount_ ? tris_[id] : InstancedTri(id, scratch);
+        if (id < flatCount_) [[likely]]
+            return tris_[id];
+        return InstancedTri(id, scratch);
     }
-    const Triangle& InstancedTri(uint32_t id, Triangle* scratch) const;
+    [[gnu::noinline]] const Triangle& InstancedTri(uint32_t id, Triangle* scratch) const;
     // The lattice of cells: cell (i, j, k) is origin_ + [i, i+1)·h × ... Cells are grouped
     // in blocks of 4³, allocated on first use; a block holds an atomic pointer per cell and
     // light, published once (compare-and-swap; the loser frees its own copy, which is
