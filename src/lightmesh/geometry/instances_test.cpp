@@ -20,6 +20,7 @@
 #include "lightmesh/accel/occluder_bvh.h"
 #include "lightmesh/geometry/triangle.h"
 #include "lightmesh/io/compare.h"
+#include "lightmesh/io/image.h"
 #include "lightmesh/render/render_job.h"
 #include "lightmesh/render/whitted.h"
 #include "lightmesh/scene/scene_file.h"
@@ -246,8 +247,8 @@ std::string TempFolder() {
 
 /// An OBJ of two objects, "left" and "right", each a UV sphere of 2 × (rings − 1) × 64
 /// triangles with vertex normals.
-std::string TwoSpheresObj(int rings) {
-    std::string text;
+std::string TwoSpheresObj(int rings, const std::string& material = "") {
+    std::string text = material.empty() ? "" : "mtllib balls.mtl\nusemtl " + material + "\n";
     int base = 1;
     for (int side = 0; side < 2; ++side) {
         text += side ? "o right\n" : "o left\n";
@@ -259,10 +260,12 @@ std::string TwoSpheresObj(int rings) {
                         " " + std::to_string(std::sin(th) * std::sin(ph)) + "\n";
                 text += "vn " + std::to_string(std::sin(th) * std::cos(ph)) + " " + std::to_string(std::cos(th)) + " " +
                         std::to_string(std::sin(th) * std::sin(ph)) + "\n";
+                text += "vt " + std::to_string(static_cast<double>(j) / segments) + " " +
+                        std::to_string(static_cast<double>(i) / rings) + "\n";
             }
         auto v = [&](int i, int j) {
             const std::string k = std::to_string(base + i * segments + j % segments);
-            return k + "//" + k;
+            return k + "/" + k + "/" + k;
         };
         for (int i = 0; i < rings; ++i)
             for (int j = 0; j < segments; ++j) {
@@ -337,6 +340,36 @@ TEST(Instances, SceneFileRuleAndExclusionsPerReference) {
     }
     // Few copies stay flat (byte-identical to before instancing).
     EXPECT_FALSE(LoadText(folder, SceneWith(8, "")).mesh.instances);
+}
+
+// A textured file is instanced and its texels read through the instances, as the copies'
+// are; a file whose material cuts holes (map_d) is copied.
+TEST(Instances, TexturedFilesAreInstancedAndCutOutOnesCopied) {
+#ifndef LIGHTMESH_HAS_EMBREE
+    GTEST_SKIP() << "no Embree";
+#endif
+    const std::string folder = TempFolder();
+    Image stripes(8, 8);
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x) stripes.At(x, y) = x % 2 ? Color(0.9f, 0.2f, 0.1f) : Color(0.1f, 0.3f, 0.9f);
+    WriteImage(folder + "/stripes.png", stripes);
+    std::ofstream(folder + "/balls.mtl") << "newmtl skin\nKd 1 1 1\nmap_Kd stripes.png\n"
+                                            "newmtl holes\nKd 1 1 1\nmap_d stripes.png\n";
+    std::ofstream(folder + "/balls.obj") << TwoSpheresObj(17, "skin");
+    const Scene s = LoadText(folder, SceneWith(32, ""));
+    ASSERT_TRUE(s.mesh.instances);
+    ASSERT_GE(s.materials.size(), 1u);
+    EXPECT_GE(s.materials.back().texture, 0);
+    const Scene flat = LoadText(folder, SceneWith(32, "", R"(, "render": {"instancing": false})"));
+    ASSERT_FALSE(flat.mesh.instances);
+    RenderOptions o = s.render;
+    o.width = 96, o.height = 72, o.accel = "embree", o.shadows = "rt";
+    const RenderResult a = RenderJob(s, o).Render(), b = RenderJob(flat, o).Render();
+    EXPECT_GT(CompareImages(a.image, b.image).psnr, 60.0);
+    std::ofstream(folder + "/balls.obj") << TwoSpheresObj(17, "holes");
+    const Scene cut = LoadText(folder, SceneWith(32, ""));
+    EXPECT_FALSE(cut.mesh.instances);
+    EXPECT_TRUE(cut.mesh.cutouts);
 }
 
 TEST(Instances, ATransformTooLargeIsRefusedForAnInstance) {
