@@ -127,16 +127,38 @@ struct EmbreeAccel::Impl {
     // A hit in instance i is the global triangle flat + first(i) + primID; under a
     // mirroring transform the world triangle's corners 1 and 2 are the prototype's 2 and 1,
     // so Embree's (u, v) swap.
+    // A prototype with cut-outs is split as the flat mesh is (its cut-out triangles in a
+    // geometry of their own, id 1, whose filters ask its own mask with Embree's (u, v) in
+    // its space).
+    struct Proto {
+        const TriangleMesh* mesh = nullptr;
+        const CutoutMask* cut = nullptr;
+        std::vector<std::array<uint32_t, 3>> split[2];
+        std::vector<uint32_t> ids[2];
+        uint32_t Prim(unsigned geomID, unsigned primID) const { return cut ? ids[geomID][primID] : primID; }
+    };
+    static void ProtoCutoutFilter(const RTCFilterFunctionNArguments* args) {
+        const Proto& p = *static_cast<const Proto*>(args->geometryUserPtr);
+        for (unsigned i = 0; i < args->N; ++i) {
+            if (args->valid[i] == 0) continue;
+            const uint32_t prim = p.ids[1][RTCHitN_primID(args->hit, args->N, i)];
+            if (!p.cut->Solid(*p.mesh, prim, RTCHitN_u(args->hit, args->N, i), RTCHitN_v(args->hit, args->N, i)))
+                args->valid[i] = 0;
+        }
+    }
+    std::vector<Proto> protos;
     std::vector<RTCScene> protoScenes;
     std::vector<std::vector<float>> protoVertices;
     unsigned instBase = 0;
     std::vector<uint32_t> instFirst;  // flat + first, per instance
+    std::vector<uint32_t> instProto;
     std::vector<uint8_t> instMirrors;
-    size_t protoBytes = 0;  // the prototypes' vertex copies
+    size_t protoBytes = 0;  // the prototypes' vertex copies (and split indices)
     Hit MakeHit(float t, unsigned geomID, unsigned primID, unsigned instID, float u, float v) const {
         if (instID == RTC_INVALID_GEOMETRY_ID) return Hit{t, Prim(geomID, primID), u, v};
         const unsigned i = instID - instBase;
-        return instMirrors[i] ? Hit{t, instFirst[i] + primID, v, u} : Hit{t, instFirst[i] + primID, u, v};
+        const uint32_t prim = instFirst[i] + protos[instProto[i]].Prim(geomID, primID);
+        return instMirrors[i] ? Hit{t, prim, v, u} : Hit{t, prim, u, v};
     }
     static void CutoutFilter(const RTCFilterFunctionNArguments* args) {
         const Impl& m = *static_cast<const Impl*>(args->geometryUserPtr);
@@ -277,7 +299,12 @@ EmbreeAccel::EmbreeAccel(const TriangleMesh& mesh) : impl_(std::make_unique<Impl
     }
     if (mesh.instances) {
         const InstancedMeshes& inst = *mesh.instances;
-        for (const TriangleMesh& proto : inst.Prototypes()) {
+        m.protos.resize(inst.Prototypes().size());  // not resized again: the filters point into it
+        for (size_t pi = 0; pi < inst.Prototypes().size(); ++pi) {
+            const TriangleMesh& proto = inst.Prototypes()[pi];
+            Impl::Proto& pr = m.protos[pi];
+            pr.mesh = &proto;
+            pr.cut = proto.cutouts && proto.cutouts->Count() > 0 ? proto.cutouts.get() : nullptr;
             std::vector<float>& v = m.protoVertices.emplace_back(proto.positions.size() * 4 + 4, 0.0f);
             for (size_t i = 0; i < proto.positions.size(); ++i) {
                 v[4 * i + 0] = proto.positions[i].x;
@@ -288,14 +315,31 @@ EmbreeAccel::EmbreeAccel(const TriangleMesh& mesh) : impl_(std::make_unique<Impl
             RTCScene ps = rtcNewScene(m.device);
             m.protoScenes.push_back(ps);
             rtcSetSceneFlags(ps, RTC_SCENE_FLAG_ROBUST);
-            RTCGeometry geom = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
-            rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, v.data(), 0,
-                                       4 * sizeof(float), proto.positions.size());
-            rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, proto.triangles.data(), 0,
-                                       3 * sizeof(uint32_t), proto.triangles.size());
-            rtcCommitGeometry(geom);
-            rtcAttachGeometry(ps, geom);
-            rtcReleaseGeometry(geom);
+            if (pr.cut) {
+                for (uint32_t i = 0; i < proto.triangles.size(); ++i) {
+                    const int g = pr.cut->IsCutout(i) ? 1 : 0;
+                    pr.split[g].push_back(proto.triangles[i]);
+                    pr.ids[g].push_back(i);
+                }
+                m.protoBytes += proto.triangles.size() * (3 * sizeof(uint32_t) + sizeof(uint32_t));
+            }
+            for (unsigned g = 0; g < (pr.cut ? 2u : 1u); ++g) {
+                const auto& tris = pr.cut ? pr.split[g] : proto.triangles;
+                RTCGeometry geom = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+                rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, v.data(), 0,
+                                           4 * sizeof(float), proto.positions.size());
+                rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                           tris.empty() ? static_cast<const void*>(v.data()) : tris.data(), 0,
+                                           3 * sizeof(uint32_t), tris.size());
+                if (g == 1) {
+                    rtcSetGeometryUserData(geom, &pr);
+                    rtcSetGeometryIntersectFilterFunction(geom, &Impl::ProtoCutoutFilter);
+                    rtcSetGeometryOccludedFilterFunction(geom, &Impl::ProtoCutoutFilter);
+                }
+                rtcCommitGeometry(geom);
+                rtcAttachGeometry(ps, geom);  // geometry id g
+                rtcReleaseGeometry(geom);
+            }
             rtcCommitScene(ps);
         }
         const uint32_t flat = static_cast<uint32_t>(mesh.triangles.size());
@@ -310,6 +354,7 @@ EmbreeAccel::EmbreeAccel(const TriangleMesh& mesh) : impl_(std::make_unique<Impl
             rtcReleaseGeometry(geom);
             if (i == 0) m.instBase = id;
             m.instFirst.push_back(flat + in.first);
+            m.instProto.push_back(in.prototype);
             m.instMirrors.push_back(in.toWorld.Determinant() < 0 ? 1 : 0);
         }
     }

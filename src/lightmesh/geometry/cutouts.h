@@ -26,27 +26,35 @@ struct CutoutMaterial {
 
 /// The cut-out triangles of a mesh and their materials. Held by the mesh it was built for
 /// (TriangleMesh::cutouts), which every back-end and shadow method sees; a mesh without
-/// cut-outs holds none and pays one null test per candidate hit.
+/// cut-outs holds none and pays one null test per candidate hit. With instances
+/// (geometry/instances.h), ids past the flat triangles are answered by the instance's
+/// prototype's own mask (its local id; the barycentrics swapped under a mirroring
+/// transform), so every caller asks by the mesh's ids alike, instanced or flattened.
 class CutoutMask {
   public:
     /// `materialOf[prim]` is an index into `materials` for a cut-out triangle, -1 for an
-    /// opaque one (one entry per triangle of the mesh).
-    CutoutMask(const std::vector<int32_t>& materialOf, std::vector<CutoutMaterial> materials);
+    /// opaque one (one entry per flat triangle of the mesh); `instances`: the mesh's, whose
+    /// prototypes carry their own masks (or null).
+    CutoutMask(const std::vector<int32_t>& materialOf, std::vector<CutoutMaterial> materials,
+               std::shared_ptr<const InstancedMeshes> instances = nullptr);
 
     /// Whether triangle `prim` is a cut-out one (its hits need Solid).
-    bool IsCutout(uint32_t prim) const { return prim < entry_.size() && entry_[prim] != 0; }
+    bool IsCutout(uint32_t prim) const {
+        return prim < entry_.size() ? entry_[prim] != 0 : instances_ && InstancedMaterial(prim);
+    }
     /// Whether the point of triangle `prim` at barycentrics (b1, b2) is surface (true) or a
     /// hole: the material's opacity at the point's texture coordinates, bilinear on the full
     /// image (Texture::Alpha). True for opaque triangles. The same answer for every caller.
     bool Solid(const TriangleMesh& mesh, uint32_t prim, float b1, float b2) const;
-    /// The number of cut-out triangles.
+    /// The number of cut-out triangles (instanced ones included).
     size_t Count() const { return count_; }
 
     /// Solid's parts, for a caller that tests many points of one triangle (the soft
     /// shadows' directions): the triangle's material (null: opaque), its vertices' texture
     /// coordinates, and the test at barycentrics (b1, b2), Solid's arithmetic exactly.
     const CutoutMaterial* MaterialOf(uint32_t prim) const {
-        return prim < entry_.size() && entry_[prim] ? &materials_[entry_[prim] - 1u] : nullptr;
+        if (prim >= entry_.size()) return instances_ ? InstancedMaterial(prim) : nullptr;
+        return entry_[prim] ? &materials_[entry_[prim] - 1u] : nullptr;
     }
     static bool SolidAt(const CutoutMaterial& m, const TexCoord& t0, const TexCoord& t1, const TexCoord& t2, float b1,
                         float b2) {
@@ -57,9 +65,11 @@ class CutoutMask {
     }
 
   private:
+    const CutoutMaterial* InstancedMaterial(uint32_t prim) const;
     std::vector<uint16_t> entry_;  // per triangle: 1 + index into materials_, 0 opaque
     std::vector<CutoutMaterial> materials_;
     size_t count_ = 0;
+    std::shared_ptr<const InstancedMeshes> instances_;
 };
 
 }  // namespace lm

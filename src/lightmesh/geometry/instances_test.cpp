@@ -18,6 +18,7 @@
 
 #include "lightmesh/accel/accelerator.h"
 #include "lightmesh/accel/occluder_bvh.h"
+#include "lightmesh/geometry/cutouts.h"
 #include "lightmesh/geometry/triangle.h"
 #include "lightmesh/io/compare.h"
 #include "lightmesh/io/image.h"
@@ -277,10 +278,13 @@ std::string TwoSpheresObj(int rings, const std::string& material = "") {
     return text;
 }
 
-std::string SceneWith(int refs, const std::string& extra, const std::string& render = "") {
+/// `refs` references to balls.obj in a grid; `extra` added to every other one, which is
+/// mirrored (x → −x) if `mirrorOdd`.
+std::string SceneWith(int refs, const std::string& extra, const std::string& render = "", bool mirrorOdd = false) {
     std::string meshes;
     for (int k = 0; k < refs; ++k)
-        meshes += std::string(k ? "," : "") + R"({"file": "balls.obj", "transform": {"translate": [)" +
+        meshes += std::string(k ? "," : "") + R"({"file": "balls.obj", "transform": {)" +
+                  (mirrorOdd && k % 2 ? R"("scale": [-1, 1, 1], )" : "") + R"("translate": [)" +
                   std::to_string(8 * (k % 8)) + ", 0, " + std::to_string(8 * (k / 8)) + "]}" + (k % 2 ? extra : "") + "}";
     return R"({"camera": {"position": [30, 40, 80], "look_at": [30, 0, 30]}, "lights": [{"position": [0, 50, 0]}],
                "meshes": [)" + meshes + "]" + render + "}";
@@ -343,8 +347,8 @@ TEST(Instances, SceneFileRuleAndExclusionsPerReference) {
 }
 
 // A textured file is instanced and its texels read through the instances, as the copies'
-// are; a file whose material cuts holes (map_d) is copied.
-TEST(Instances, TexturedFilesAreInstancedAndCutOutOnesCopied) {
+// are; so is one whose material cuts holes (map_d), its holes where the copies' are.
+TEST(Instances, TexturedAndCutOutFilesAreInstancedAsTheirCopies) {
 #ifndef LIGHTMESH_HAS_EMBREE
     GTEST_SKIP() << "no Embree";
 #endif
@@ -367,9 +371,27 @@ TEST(Instances, TexturedFilesAreInstancedAndCutOutOnesCopied) {
     const RenderResult a = RenderJob(s, o).Render(), b = RenderJob(flat, o).Render();
     EXPECT_GT(CompareImages(a.image, b.image).psnr, 60.0);
     std::ofstream(folder + "/balls.obj") << TwoSpheresObj(17, "holes");
-    const Scene cut = LoadText(folder, SceneWith(32, ""));
-    EXPECT_FALSE(cut.mesh.instances);
-    EXPECT_TRUE(cut.mesh.cutouts);
+    const Scene cut = LoadText(folder, SceneWith(32, "", "", true));
+    const Scene cutFlat = LoadText(folder, SceneWith(32, "", R"(, "render": {"instancing": false})", true));
+    ASSERT_TRUE(cut.mesh.instances);
+    ASSERT_TRUE(cut.mesh.cutouts);
+    ASSERT_TRUE(cutFlat.mesh.cutouts);
+    EXPECT_GT(cut.mesh.cutouts->Count(), 60000u);
+    EXPECT_EQ(cut.mesh.cutouts->Count(), cutFlat.mesh.cutouts->Count());
+    // The mask answers alike by id (half the references mirrored: barycentrics swapped).
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(0, 1);
+    for (uint32_t id = 0; id < cutFlat.mesh.TriangleCount(); id += 31) {
+        float b1 = u(rng), b2 = u(rng);
+        if (b1 + b2 > 1) b1 = 1 - b1, b2 = 1 - b2;
+        ASSERT_EQ(cut.mesh.cutouts->IsCutout(id), cutFlat.mesh.cutouts->IsCutout(id));
+        ASSERT_EQ(cut.mesh.cutouts->Solid(cut.mesh, id, b1, b2), cutFlat.mesh.cutouts->Solid(cutFlat.mesh, id, b1, b2)) << id;
+    }
+    for (const char* method : {"rt", "soft", "area"}) {
+        o.shadows = method;
+        const RenderResult ci = RenderJob(cut, o).Render(), cf = RenderJob(cutFlat, o).Render();
+        EXPECT_GT(CompareImages(ci.image, cf.image).psnr, 40.0) << method;
+    }
 }
 
 TEST(Instances, ATransformTooLargeIsRefusedForAnInstance) {

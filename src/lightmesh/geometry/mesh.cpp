@@ -199,7 +199,7 @@ int CountCrossings(const TriangleMesh& mesh, const Ray& ray) {
         n += IntersectTriangle(ray, mesh.Vertex(i, 0), mesh.Vertex(i, 1), mesh.Vertex(i, 2), &th) &&
              (!cut || cut->Solid(mesh, i, th.b1, th.b2));
     if (!mesh.instances) return n;
-    // Instanced triangles (no cut-outs): those of instances whose box the ray meets.
+    // Instanced triangles: those of instances whose box the ray meets.
     const uint32_t flat = static_cast<uint32_t>(mesh.triangles.size());
     const InstancedMeshes& inst = *mesh.instances;
     for (const MeshInstance& in : inst.Instances()) {
@@ -221,9 +221,10 @@ int CountCrossings(const TriangleMesh& mesh, const Ray& ray) {
         if (!meets) continue;
         const size_t count = inst.Prototypes()[in.prototype].TriangleCount();
         for (size_t k = 0; k < count; ++k) {
+            const uint32_t id = flat + in.first + static_cast<uint32_t>(k);
             Vec3 p[3];
-            mesh.Corners(flat + in.first + static_cast<uint32_t>(k), p);
-            n += IntersectTriangle(ray, p[0], p[1], p[2], &th);
+            mesh.Corners(id, p);
+            n += IntersectTriangle(ray, p[0], p[1], p[2], &th) && (!cut || cut->Solid(mesh, id, th.b1, th.b2));
         }
     }
     return n;

@@ -40,7 +40,8 @@ struct TriangleMesh {
     /// hit of a cut-out triangle. (Append keeps it; triangles beyond those it was built for
     /// are opaque.)
     std::shared_ptr<const CutoutMask> cutouts;
-    /// Instanced triangles (null: none). Their prototypes carry no cut-outs.
+    /// Instanced triangles (null: none). A prototype's cut-outs are its own `cutouts`, which
+    /// the mesh's mask answers for its instances' ids.
     std::shared_ptr<const InstancedMeshes> instances;
 
     /// The flat triangles (`triangles`).

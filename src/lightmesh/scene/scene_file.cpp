@@ -316,15 +316,6 @@ bool InstancesSaveMemory(int refs, size_t triangles) {
            static_cast<double>(refs) * static_cast<double>(triangles) >= static_cast<double>(kInstanceMinTotal);
 }
 
-/// Whether a material of `materials` may cut holes once its images are read (BuildCutouts'
-/// conditions: an alpha image, and for a base-colour image's alpha, one below 1 somewhere).
-bool MayCutOut(const std::vector<Material>& materials, const std::vector<std::shared_ptr<const Texture>>& textures) {
-    return std::any_of(materials.begin(), materials.end(), [&](const Material& m) {
-        if (m.alphaTexture < 0 || m.alphaSource == Material::AlphaSource::None) return false;
-        return m.alphaSource != Material::AlphaSource::AlphaIfAny || textures[static_cast<size_t>(m.alphaTexture)]->HasAlpha();
-    });
-}
-
 struct MeshEntry {
     std::string path;      ///< JSON path, "/meshes/0"
     std::string file;      ///< as written
@@ -580,23 +571,8 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
             continue;
         }
         const bool texturesOn = options.textures && scene.render.textures && e.material < 0;
-        auto attachTextures = [&] {
-            // A file material the scene replaces by name reads no image (its look is the scene's).
-            for (Material& m : loaded.materials)
-                if (std::find(materialNames.begin(), materialNames.end(), m.name) != materialNames.end())
-                    m.texture = m.alphaTexture = -1;
-            AttachTextures(r, e.resolved, texturesOn, &textureCache, &loaded, &scene);
-        };
-        bool instanced = options.instancing && scene.render.instancing &&
-                         InstancesSaveMemory(groupRefs[group], loaded.mesh.TriangleCount());
-        bool attached = false;
-        if (instanced) {
-            // The images first: a file whose materials may cut holes is copied, not instanced
-            // (prototypes carry no cut-outs).
-            attachTextures();
-            attached = true;
-            instanced = !MayCutOut(loaded.materials, scene.textures);
-        }
+        const bool instanced = options.instancing && scene.render.instancing &&
+                               InstancesSaveMemory(groupRefs[group], loaded.mesh.TriangleCount());
         if (e.hasTransform && !instanced) {
             TransformMesh(&loaded.mesh, e.transform);
             for (const Vec3& p : loaded.mesh.positions)
@@ -608,7 +584,11 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
         scene.report.duplicatesRemoved += clean.duplicate;
         if (clean.degenerate || clean.duplicate)
             if (const std::string w = e.resolved + ": " + DroppedMessage(clean); said.insert(w).second) r.Warn(w);
-        if (!attached) attachTextures();
+        // A file material the scene replaces by name reads no image (its look is the scene's).
+        for (Material& m : loaded.materials)
+            if (std::find(materialNames.begin(), materialNames.end(), m.name) != materialNames.end())
+                m.texture = m.alphaTexture = -1;
+        AttachTextures(r, e.resolved, texturesOn, &textureCache, &loaded, &scene);
         if (e.material >= 0) {
             std::fill(loaded.mesh.materialIds.begin(), loaded.mesh.materialIds.end(),
                       static_cast<uint32_t>(e.material));
@@ -630,7 +610,8 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
         }
         if (instanced) {
             if (!instances) instances = std::make_shared<InstancedMeshes>();
-            loaded.mesh.cutouts.reset();
+            // Its cut-outs in its own ids (the scene's mask answers for its instances).
+            loaded.mesh.cutouts = MakeCutouts(loaded.mesh, scene, nullptr);
             const uint32_t proto = instances->AddPrototype(std::move(loaded.mesh));
             prototypeOf[group] = proto;
             place(e, proto);

@@ -49,8 +49,13 @@ void AttachTextures(const json::Reader& r, const std::string& model, bool enable
                     LoadedMesh* loaded, Scene* scene);
 
 /// The mesh's cut-outs (TriangleMesh::cutouts) from the materials' alpha images: called
-/// once the mesh is final (ground included). No cut-out material, no mask.
+/// once the mesh is final (ground included). No cut-out material, no mask. With instances,
+/// also when only their prototypes (whose masks MakeCutouts built) have cut-outs.
 void BuildCutouts(Scene* scene);
+/// The cut-outs of `mesh`'s flat triangles by `scene`'s materials and images; null when
+/// none is cut out and `instances` (the mesh's) hold no prototype with cut-outs.
+std::shared_ptr<const CutoutMask> MakeCutouts(const TriangleMesh& mesh, const Scene& scene,
+                                              std::shared_ptr<const InstancedMeshes> instances);
 
 // ---- Ground slab and framing (framing.cpp) ---------------------------------------------
 /// A thin closed slab under `box` whose top face is the ground at `height` along `axis`.

@@ -5,6 +5,7 @@
 #include "lightmesh/scene/scene_load.h"
 
 #include "lightmesh/geometry/cutouts.h"
+#include "lightmesh/geometry/instances.h"
 
 namespace lm::scene_load {
 
@@ -54,12 +55,21 @@ bool WhollySolid(const TriangleMesh& mesh, uint32_t t, const CutoutMaterial& m) 
 
 void BuildCutouts(Scene* scene) {
     scene->mesh.cutouts.reset();
+    scene->mesh.cutouts = MakeCutouts(scene->mesh, *scene, scene->mesh.instances);
+}
+
+std::shared_ptr<const CutoutMask> MakeCutouts(const TriangleMesh& mesh, const Scene& scene,
+                                              std::shared_ptr<const InstancedMeshes> instances) {
+    bool instancedCutouts = false;
+    if (instances)
+        for (const TriangleMesh& p : instances->Prototypes()) instancedCutouts |= p.cutouts != nullptr;
+    if (!instancedCutouts) instances.reset();
     std::vector<CutoutMaterial> entries;
-    std::vector<int32_t> entryOf(scene->materials.size(), -1);
-    for (size_t i = 0; i < scene->materials.size(); ++i) {
-        const Material& m = scene->materials[i];
+    std::vector<int32_t> entryOf(scene.materials.size(), -1);
+    for (size_t i = 0; i < scene.materials.size(); ++i) {
+        const Material& m = scene.materials[i];
         if (m.alphaTexture < 0 || m.alphaSource == Material::AlphaSource::None) continue;
-        const auto& image = scene->textures[static_cast<size_t>(m.alphaTexture)];
+        const auto& image = scene.textures[static_cast<size_t>(m.alphaTexture)];
         const bool hasAlpha = image->HasAlpha();
         if (m.alphaSource == Material::AlphaSource::AlphaIfAny && !hasAlpha) continue;
         CutoutMaterial c;
@@ -71,20 +81,22 @@ void BuildCutouts(Scene* scene) {
         entryOf[i] = static_cast<int32_t>(entries.size());
         entries.push_back(std::move(c));
     }
-    if (entries.empty() || scene->mesh.uvs.empty()) return;
-    std::vector<int32_t> perTriangle(scene->mesh.TriangleCount(), -1);
+    std::vector<int32_t> perTriangle(mesh.TriangleCount(), -1);
     bool any = false;
-    for (size_t t = 0; t < perTriangle.size(); ++t) {
-        const uint32_t m = scene->mesh.materialIds[t];
-        if (m < entryOf.size()) perTriangle[t] = entryOf[m];
-        // A triangle whose image is solid under all of it is opaque: no alpha test on its
-        // hits, and it may certify umbrae.
-        if (perTriangle[t] >= 0 && WhollySolid(scene->mesh, static_cast<uint32_t>(t),
-                                               entries[static_cast<size_t>(perTriangle[t])]))
-            perTriangle[t] = -1;
-        any = any || perTriangle[t] >= 0;
+    if (!entries.empty() && !mesh.uvs.empty()) {
+        for (size_t t = 0; t < perTriangle.size(); ++t) {
+            const uint32_t m = mesh.materialIds[t];
+            if (m < entryOf.size()) perTriangle[t] = entryOf[m];
+            // A triangle whose image is solid under all of it is opaque: no alpha test on its
+            // hits, and it may certify umbrae.
+            if (perTriangle[t] >= 0 &&
+                WhollySolid(mesh, static_cast<uint32_t>(t), entries[static_cast<size_t>(perTriangle[t])]))
+                perTriangle[t] = -1;
+            any = any || perTriangle[t] >= 0;
+        }
     }
-    if (any) scene->mesh.cutouts = std::make_shared<const CutoutMask>(perTriangle, std::move(entries));
+    if (!any && !instances) return nullptr;
+    return std::make_shared<const CutoutMask>(perTriangle, std::move(entries), std::move(instances));
 }
 
 }  // namespace lm::scene_load

@@ -5,6 +5,7 @@
 
 #include "lightmesh/accel/accelerator.h"
 #include "lightmesh/geometry/cutouts.h"
+#include "lightmesh/geometry/instances.h"
 #include "lightmesh/render/whitted.h"
 #include "lightmesh/scene/scene_file.h"
 #include "support/cutout_scenes.h"
@@ -52,6 +53,46 @@ TEST(CutoutShadows, ACheckersShadowIsACheckerForEveryMethodOnEveryBackEnd) {
             SCOPED_TRACE(accelName + " " + method);
             EXPECT_NEAR(LitFraction(cut, *accel, method), 0.5, 0.04);
             EXPECT_LT(LitFraction(solid, *solidAccel, method), 0.01);
+        }
+    }
+}
+
+/// The checker scene with its quad as an instance of a prototype (its own cut-out mask),
+/// placed mirrored (x → −x: the prototype's barycentrics swap) where it was.
+Scene InstancedChecker() {
+    Scene s = CheckerScene(true);
+    const CutoutMask& cut = *s.mesh.cutouts;
+    TriangleMesh quad = s.mesh, rest = s.mesh;
+    quad.triangles.clear(), quad.materialIds.clear(), rest.triangles.clear(), rest.materialIds.clear();
+    quad.cutouts.reset(), rest.cutouts.reset();
+    std::vector<CutoutMaterial> materials;
+    for (uint32_t t = 0; t < s.mesh.TriangleCount(); ++t) {
+        TriangleMesh& to = cut.IsCutout(t) ? quad : rest;
+        to.triangles.push_back(s.mesh.triangles[t]);
+        to.materialIds.push_back(s.mesh.materialIds[t]);
+        if (cut.IsCutout(t) && materials.empty()) materials.push_back(*cut.MaterialOf(t));
+    }
+    EXPECT_EQ(quad.TriangleCount(), 2u);
+    quad.cutouts = std::make_shared<const CutoutMask>(std::vector<int32_t>(quad.TriangleCount(), 0), materials);
+    auto instances = std::make_shared<InstancedMeshes>();
+    instances->AddInstance(instances->AddPrototype(quad), Affine::Scale({-1, 1, 1}));
+    instances->HarmoniseAttributes(&rest);
+    rest.instances = instances;
+    rest.cutouts = std::make_shared<const CutoutMask>(std::vector<int32_t>(rest.TriangleCount(), -1),
+                                                      std::vector<CutoutMaterial>{}, instances);
+    s.mesh = std::move(rest);
+    return s;
+}
+
+TEST(CutoutShadows, AnInstancedCheckersShadowIsAChecker) {
+    const Scene cut = InstancedChecker();
+    ASSERT_TRUE(cut.mesh.instances);
+    EXPECT_EQ(cut.mesh.cutouts->Count(), 2u);
+    for (const std::string& accelName : AcceleratorNames()) {
+        const auto accel = CreateAccelerator(accelName, cut.mesh);
+        for (const char* method : {"rt", "area", "soft"}) {
+            SCOPED_TRACE(accelName + " " + method);
+            EXPECT_NEAR(LitFraction(cut, *accel, method), 0.5, 0.04);
         }
     }
 }

@@ -701,8 +701,15 @@ bool MarkBlockedCutout(const Candidate& c, const TriangleMesh& mesh, const Cutou
     uint64_t hit[kMaxSamples / 64] = {};
     MarkBlocked(c, wx, wy, wz, tk, s0, s1, hit);
     const CutoutMaterial* material = cut.MaterialOf(prim);
-    const auto& tri = mesh.triangles[prim];
-    const TexCoord t0 = mesh.uvs[tri[0]], t1 = mesh.uvs[tri[1]], t2 = mesh.uvs[tri[2]];
+    TexCoord t0, t1, t2;
+    if (prim < mesh.TriangleCount()) {
+        const auto& tri = mesh.triangles[prim];
+        t0 = mesh.uvs[tri[0]], t1 = mesh.uvs[tri[1]], t2 = mesh.uvs[tri[2]];
+    } else {  // an instanced one's, in its world corners' order
+        TexCoord uv[3];
+        mesh.UvsOf(prim, uv);
+        t0 = uv[0], t1 = uv[1], t2 = uv[2];
+    }
     for (int word = s0 >> 6; word <= (s1 - 1) >> 6; ++word)
         for (uint64_t m = hit[word]; m; m &= m - 1) {
             const int s = word * 64 + __builtin_ctzll(m);
