@@ -690,6 +690,14 @@ inline void MarkBlocked(const Candidate& c, const float* wx, const float* wy, co
     }
 }
 
+/// An instanced triangle's texture coordinates, in its world corners' order (out of line:
+/// MarkBlockedCutout stays small enough for its alpha lookups to be inlined).
+[[gnu::noinline]] void InstancedUvs(const TriangleMesh& mesh, uint32_t prim, TexCoord* t0, TexCoord* t1, TexCoord* t2) {
+    TexCoord uv[3];
+    mesh.UvsOf(prim, uv);
+    *t0 = uv[0], *t1 = uv[1], *t2 = uv[2];
+}
+
 /// MarkBlocked for a cut-out triangle `prim`: a direction that meets it is blocked only
 /// where the point it meets is solid (CutoutMask::Solid at that point's barycentrics: the
 /// edge planes' values along w are proportional to them, d1 : d2 : d0 for vertices 0, 1, 2).
@@ -705,10 +713,8 @@ bool MarkBlockedCutout(const Candidate& c, const TriangleMesh& mesh, const Cutou
     if (prim < mesh.TriangleCount()) {
         const auto& tri = mesh.triangles[prim];
         t0 = mesh.uvs[tri[0]], t1 = mesh.uvs[tri[1]], t2 = mesh.uvs[tri[2]];
-    } else {  // an instanced one's, in its world corners' order
-        TexCoord uv[3];
-        mesh.UvsOf(prim, uv);
-        t0 = uv[0], t1 = uv[1], t2 = uv[2];
+    } else {
+        InstancedUvs(mesh, prim, &t0, &t1, &t2);
     }
     for (int word = s0 >> 6; word <= (s1 - 1) >> 6; ++word)
         for (uint64_t m = hit[word]; m; m &= m - 1) {
