@@ -262,7 +262,18 @@ float Texture::Opacity(float u, float v, TextureWrap wrapU, TextureWrap wrapV, i
     return (a00 * (1 - fx) + a10 * fx) * (1 - fy) + (a01 * (1 - fx) + a11 * fx) * fy;
 }
 
-std::shared_ptr<const Texture> DecodeTexture(const std::string& bytes) {
+bool DecodedImage::Consistent() const {
+    if (width < 1 || height < 1 || width > kMaxTextureSize || height > kMaxTextureSize) return false;
+    const size_t n = static_cast<size_t>(width) * static_cast<size_t>(height) * 4;
+    return (ldr.size() == n && hdr.empty()) || (hdr.size() == n && ldr.empty());
+}
+
+std::shared_ptr<const Texture> DecodedImage::MakeTexture() && {
+    if (!ldr.empty()) return std::make_shared<Texture>(width, height, std::move(ldr));
+    return std::make_shared<Texture>(width, height, std::move(hdr));
+}
+
+DecodedImage DecodeImageBytes(const std::string& bytes) {
     const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
     if (bytes.empty()) ThrowError("the image is empty");
     if (bytes.size() > static_cast<size_t>(INT32_MAX)) ThrowError("the image is larger than 2 GiB");
@@ -274,46 +285,56 @@ std::shared_ptr<const Texture> DecodeTexture(const std::string& bytes) {
         ThrowError("the image is %d x %d, beyond the %d x %d textures may have", w, h, kMaxTextureSize,
                    kMaxTextureSize);
     const size_t texels = static_cast<size_t>(w) * static_cast<size_t>(h);
+    DecodedImage image;
     if (stbi_is_16_bit_from_memory(data, size)) {
         stbi_us* p = stbi_load_16_from_memory(data, size, &w, &h, &n, 4);
         if (!p) ThrowError("cannot decode the image (%s)", stbi_failure_reason());
-        std::vector<float> rgba(texels * 4);
+        image.hdr.resize(texels * 4);
         for (size_t i = 0; i < texels * 4; ++i) {
             const float x = static_cast<float>(p[i]) / 65535.0f;
-            rgba[i] = i % 4 == 3 ? x : SrgbDecode(x);
+            image.hdr[i] = i % 4 == 3 ? x : SrgbDecode(x);
         }
         stbi_image_free(p);
-        return std::make_shared<Texture>(w, h, std::move(rgba));
+    } else {
+        stbi_uc* p = stbi_load_from_memory(data, size, &w, &h, &n, 4);
+        if (!p) ThrowError("cannot decode the image (%s)", stbi_failure_reason());
+        image.ldr.assign(p, p + texels * 4);
+        stbi_image_free(p);
     }
-    stbi_uc* p = stbi_load_from_memory(data, size, &w, &h, &n, 4);
-    if (!p) ThrowError("cannot decode the image (%s)", stbi_failure_reason());
-    std::vector<uint8_t> rgba(p, p + texels * 4);
-    stbi_image_free(p);
-    return std::make_shared<Texture>(w, h, std::move(rgba));
+    image.width = w, image.height = h;
+    return image;
 }
 
-std::shared_ptr<const Texture> ReadTextureFile(const std::string& path) {
+DecodedImage ReadImageFile(const std::string& path) {
     std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : "";
     for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     if (ext == ".exr") {
-        const Image image = ReadImage(path);
-        if (image.width > kMaxTextureSize || image.height > kMaxTextureSize)
-            ThrowError("the image is %d x %d, beyond the %d x %d textures may have", image.width, image.height,
+        const Image exr = ReadImage(path);
+        if (exr.width > kMaxTextureSize || exr.height > kMaxTextureSize)
+            ThrowError("the image is %d x %d, beyond the %d x %d textures may have", exr.width, exr.height,
                        kMaxTextureSize, kMaxTextureSize);
-        std::vector<float> rgba(image.pixels.size() * 4);
-        for (size_t i = 0; i < image.pixels.size(); ++i) {
-            rgba[4 * i] = image.pixels[i].r;
-            rgba[4 * i + 1] = image.pixels[i].g;
-            rgba[4 * i + 2] = image.pixels[i].b;
-            rgba[4 * i + 3] = 1;
+        DecodedImage image;
+        image.width = exr.width, image.height = exr.height;
+        image.hdr.resize(exr.pixels.size() * 4);
+        for (size_t i = 0; i < exr.pixels.size(); ++i) {
+            image.hdr[4 * i] = exr.pixels[i].r;
+            image.hdr[4 * i + 1] = exr.pixels[i].g;
+            image.hdr[4 * i + 2] = exr.pixels[i].b;
+            image.hdr[4 * i + 3] = 1;
         }
-        return std::make_shared<Texture>(image.width, image.height, std::move(rgba));
+        return image;
     }
     std::ifstream in(path, std::ios::binary);
     if (!in) ThrowError("cannot open it");
     const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     if (in.bad()) ThrowError("cannot read it");
-    return DecodeTexture(bytes);
+    return DecodeImageBytes(bytes);
 }
+
+std::shared_ptr<const Texture> DecodeTexture(const std::string& bytes) {
+    return DecodeImageBytes(bytes).MakeTexture();
+}
+
+std::shared_ptr<const Texture> ReadTextureFile(const std::string& path) { return ReadImageFile(path).MakeTexture(); }
 
 }  // namespace lm

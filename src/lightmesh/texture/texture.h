@@ -71,11 +71,28 @@ class Texture {
     bool hasAlpha_ = false;
 };
 
+/// An image's full-resolution texels as a decoder gives them, before the mip-maps: 8-bit
+/// RGBA (colour sRGB-encoded) or linear float RGBA, row 0 at the top. What crosses from the
+/// decoding child process (texture_cache.h) to the renderer.
+struct DecodedImage {
+    int width = 0, height = 0;
+    std::vector<uint8_t> ldr;  ///< 4 bytes a texel, or empty
+    std::vector<float> hdr;    ///< 4 floats a texel, or empty
+    /// Whether the texels are as many as width × height says, in one of the two forms.
+    bool Consistent() const;
+    /// The texture with its mip-maps.
+    std::shared_ptr<const Texture> MakeTexture() &&;
+};
+
 /// Decodes an image file's bytes (PNG, JPEG, TGA, BMP; 8 or 16 bits per channel; grey,
 /// grey+alpha, RGB or RGBA). Throws Error with the decoder's reason.
-std::shared_ptr<const Texture> DecodeTexture(const std::string& bytes);
-/// Reads an image file: OpenEXR by its extension (.exr), else DecodeTexture. Throws Error
+DecodedImage DecodeImageBytes(const std::string& bytes);
+/// Reads an image file: OpenEXR by its extension (.exr), else DecodeImageBytes. Throws Error
 /// naming the problem (not the file: the caller names it).
+DecodedImage ReadImageFile(const std::string& path);
+/// DecodeImageBytes and ReadImageFile as textures, decoded in this process (tests; the
+/// renderer decodes in a child process, texture_cache.h).
+std::shared_ptr<const Texture> DecodeTexture(const std::string& bytes);
 std::shared_ptr<const Texture> ReadTextureFile(const std::string& path);
 
 /// The largest width or height accepted (8192² RGBA8 texels are 341 MiB with the mips).
