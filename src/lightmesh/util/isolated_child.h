@@ -85,6 +85,8 @@ class ChildWriter {
         Bytes(v.data(), v.size() * sizeof(T), false);
     }
     void Bools(const std::vector<bool>& v);
+    /// `n` bytes at `data`, which must outlive WriteTo (written in place, no length).
+    void Raw(const void* data, size_t n) { Bytes(data, n, false); }
     /// Writes everything at offset 0 of `fd` (truncating it); false on failure.
     bool WriteTo(int fd) const;
     /// Writes everything at the end of `fd` (a record after the ones before it); false on
@@ -133,6 +135,13 @@ class ChildReader {
         return v;
     }
     std::vector<bool> Bools();
+    /// The next `n` bytes, in place.
+    std::string_view Raw(size_t n) {
+        Need(n);
+        const std::string_view v = bytes_.substr(at_, n);
+        at_ += n;
+        return v;
+    }
     bool AtEnd() const { return at_ == bytes_.size(); }
     size_t Offset() const { return at_; }
 
