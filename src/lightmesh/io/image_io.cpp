@@ -511,10 +511,9 @@ Image ReadImageIsolated(const std::string& path) {
     if (const char* v = std::getenv("LIGHTMESH_IMPORT_IN_PROCESS"); v && *v && std::string(v) != "0")
         return ReadImage(path);
     enum : uint8_t { kImage = 1, kError = 2 };
-    // A deadline generous next to any real file: 60 s + 2 s per MB.
     struct stat st {};
-    const double mb = stat(path.c_str(), &st) == 0 ? static_cast<double>(st.st_size) / 1e6 : 0;
-    const ChildLimits limits{PhysicalMemoryBytes() / 2, std::min(60.0 + 2.0 * mb, 600.0)};
+    const ChildLimits limits{PhysicalMemoryBytes() / 2,
+                             ChildDeadlineSeconds(stat(path.c_str(), &st) == 0 ? static_cast<uint64_t>(st.st_size) : 0)};
     const ChildOutcome child = RunInChild("lightmesh-image", limits, [&](int fd) {
         ChildWriter w;
         Image image;

@@ -161,14 +161,8 @@ std::string ImporterSignal(int sig) {
 /// parses tens of MB per second), at most kMaxDefaultImportSeconds (a 20 GB file of zeros
 /// had 11 hours).
 double ImportTimeoutSeconds(const std::string& path) {
-    if (const char* env = std::getenv("LIGHTMESH_IMPORT_TIMEOUT"); env && *env) {
-        char* end = nullptr;
-        const double v = std::strtod(env, &end);
-        if (end != env && *end == 0 && v > 0 && v < 1e7) return v;
-    }
     struct stat st {};
-    const double mb = stat(path.c_str(), &st) == 0 ? static_cast<double>(st.st_size) / 1e6 : 0;
-    return std::min(60.0 + 2.0 * mb, kMaxDefaultImportSeconds);
+    return ChildDeadlineSeconds(stat(path.c_str(), &st) == 0 ? static_cast<uint64_t>(st.st_size) : 0);
 }
 
 namespace {

@@ -24,22 +24,15 @@ std::string KeyOf(const TextureSource& s) {
            std::to_string(s.bytes.size()) + ":" + std::to_string(std::hash<std::string>()(s.bytes));
 }
 
-/// The decoding child's deadline: LIGHTMESH_IMPORT_TIMEOUT (seconds) when set, as for the
-/// importers, else 60 s + 2 s per MB of the images (stb_image decodes tens of MB a second),
-/// at most 600 s.
+/// The decoding child's deadline: ChildDeadlineSeconds of the images' bytes.
 double DecodeSeconds(const std::vector<const TextureSource*>& sources) {
-    if (const char* env = std::getenv("LIGHTMESH_IMPORT_TIMEOUT"); env && *env) {
-        char* end = nullptr;
-        const double v = std::strtod(env, &end);
-        if (end != env && *end == 0 && v > 0 && v < 1e7) return v;
-    }
-    double mb = 0;
+    uint64_t bytes = 0;
     for (const TextureSource* s : sources) {
         std::error_code ec;
         const auto size = s->file.empty() ? s->bytes.size() : std::filesystem::file_size(s->file, ec);
-        if (!ec) mb += static_cast<double>(size) / 1e6;
+        if (!ec) bytes += size;
     }
-    return std::min(60.0 + 2.0 * mb, 600.0);
+    return ChildDeadlineSeconds(bytes);
 }
 
 enum : uint8_t { kDecoded = 1, kFailed = 2 };

@@ -16,6 +16,7 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <mutex>
 
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
@@ -137,6 +138,15 @@ ChildOutcome RunInChild(const char* name, const ChildLimits& limits, const std::
     }
     close(fd);
     return out;
+}
+
+double ChildDeadlineSeconds(uint64_t bytes) {
+    if (const char* env = std::getenv("LIGHTMESH_IMPORT_TIMEOUT"); env && *env) {
+        char* end = nullptr;
+        const double v = std::strtod(env, &end);
+        if (end != env && *end == 0 && v > 0 && v < 1e7) return v;
+    }
+    return std::min(60.0 + 2.0 * static_cast<double>(bytes) / 1e6, kMaxDefaultChildSeconds);
 }
 
 std::string SignalName(int sig) {

@@ -63,6 +63,13 @@ class ChildOutcome {
 /// inside a library's global state when a child copies the process). `name` names the memfd.
 ChildOutcome RunInChild(const char* name, const ChildLimits& limits, const std::function<void(int fd)>& work);
 
+/// The most ChildDeadlineSeconds gives without LIGHTMESH_IMPORT_TIMEOUT.
+inline constexpr double kMaxDefaultChildSeconds = 600;
+/// A child's deadline for reading `bytes` of input: LIGHTMESH_IMPORT_TIMEOUT (seconds, any
+/// value up to 1e7) when set, else 60 s + 2 s per MB (importers and decoders read tens of
+/// MB a second), at most kMaxDefaultChildSeconds (a 20 GB file of zeros had 11 hours).
+double ChildDeadlineSeconds(uint64_t bytes);
+
 /// "SIGSEGV", "SIGKILL", … for a signal number ("signal N" for others).
 std::string SignalName(int sig);
 
