@@ -226,30 +226,37 @@ float Texture::TexelOpacity(int x, int y, TextureWrap wrapU, TextureWrap wrapV, 
     return !level.ldr.empty() ? static_cast<float>(level.ldr[i]) * (1.0f / 255.0f) : level.hdr[i];
 }
 
-float Texture::Opacity(float u, float v, TextureWrap wrapU, TextureWrap wrapV, int channel) const {
+Texture::TexelCell Texture::CellAt(float u, float v, TextureWrap wrapU, TextureWrap wrapV) const {
     const Level& level = levels_[0];
     int x0, y0;
-    float fx, fy;
-    TexelPosition(level.w, level.h, u, v, &x0, &y0, &fx, &fy);
-    int xa, xb, ya, yb;
+    TexelCell c;
+    TexelPosition(level.w, level.h, u, v, &x0, &y0, &c.fx, &c.fy);
     // Repeat on a side of 2^k texels (most images): a mask instead of a division.
     if (wrapU == TextureWrap::Repeat && (level.w & (level.w - 1)) == 0) {
-        xa = x0 & (level.w - 1), xb = (x0 + 1) & (level.w - 1);
+        c.xa = x0 & (level.w - 1), c.xb = (x0 + 1) & (level.w - 1);
     } else {
-        xa = WrapIndex(x0, level.w, wrapU);
-        xb = (wrapU == TextureWrap::Repeat || x0 == xa) && xa + 1 < level.w ? xa + 1 : WrapIndex(x0 + 1, level.w, wrapU);
+        c.xa = WrapIndex(x0, level.w, wrapU);
+        c.xb = (wrapU == TextureWrap::Repeat || x0 == c.xa) && c.xa + 1 < level.w ? c.xa + 1
+                                                                                : WrapIndex(x0 + 1, level.w, wrapU);
     }
     if (wrapV == TextureWrap::Repeat && (level.h & (level.h - 1)) == 0) {
-        ya = y0 & (level.h - 1), yb = (y0 + 1) & (level.h - 1);
+        c.ya = y0 & (level.h - 1), c.yb = (y0 + 1) & (level.h - 1);
     } else {
-        ya = WrapIndex(y0, level.h, wrapV);
-        yb = (wrapV == TextureWrap::Repeat || y0 == ya) && ya + 1 < level.h ? ya + 1 : WrapIndex(y0 + 1, level.h, wrapV);
+        c.ya = WrapIndex(y0, level.h, wrapV);
+        c.yb = (wrapV == TextureWrap::Repeat || y0 == c.ya) && c.ya + 1 < level.h ? c.ya + 1
+                                                                                : WrapIndex(y0 + 1, level.h, wrapV);
     }
+    return c;
+}
+
+float Texture::OpacityOf(const TexelCell& cell, int channel) const {
+    const Level& level = levels_[0];
+    const float fx = cell.fx, fy = cell.fy;
     const size_t w = static_cast<size_t>(level.w), c = static_cast<size_t>(channel);
-    const size_t i00 = (static_cast<size_t>(ya) * w + static_cast<size_t>(xa)) * 4 + c,
-                 i10 = (static_cast<size_t>(ya) * w + static_cast<size_t>(xb)) * 4 + c,
-                 i01 = (static_cast<size_t>(yb) * w + static_cast<size_t>(xa)) * 4 + c,
-                 i11 = (static_cast<size_t>(yb) * w + static_cast<size_t>(xb)) * 4 + c;
+    const size_t i00 = (static_cast<size_t>(cell.ya) * w + static_cast<size_t>(cell.xa)) * 4 + c,
+                 i10 = (static_cast<size_t>(cell.ya) * w + static_cast<size_t>(cell.xb)) * 4 + c,
+                 i01 = (static_cast<size_t>(cell.yb) * w + static_cast<size_t>(cell.xa)) * 4 + c,
+                 i11 = (static_cast<size_t>(cell.yb) * w + static_cast<size_t>(cell.xb)) * 4 + c;
     float a00, a10, a01, a11;
     if (!level.ldr.empty()) {
         const uint8_t* p = level.ldr.data();
@@ -260,6 +267,10 @@ float Texture::Opacity(float u, float v, TextureWrap wrapU, TextureWrap wrapV, i
         a00 = p[i00], a10 = p[i10], a01 = p[i01], a11 = p[i11];
     }
     return (a00 * (1 - fx) + a10 * fx) * (1 - fy) + (a01 * (1 - fx) + a11 * fx) * fy;
+}
+
+float Texture::Opacity(float u, float v, TextureWrap wrapU, TextureWrap wrapV, int channel) const {
+    return OpacityOf(CellAt(u, v, wrapU, wrapV), channel);
 }
 
 bool DecodedImage::Consistent() const {

@@ -53,6 +53,15 @@ class Texture {
     /// Channel `channel` (0 red … 3 alpha) at (u, v), bilinear on the full image, as stored:
     /// an 8-bit byte / 255 with no sRGB decoding (an opacity map is data, not colour).
     float Opacity(float u, float v, TextureWrap wrapU, TextureWrap wrapV, int channel) const;
+    /// The four texels Opacity at (u, v) reads on the full image, (xa, ya), (xb, ya), (xa, yb)
+    /// and (xb, yb) (wrapped), and the fractions towards (xb, yb).
+    struct TexelCell {
+        int xa, xb, ya, yb;
+        float fx, fy;
+    };
+    TexelCell CellAt(float u, float v, TextureWrap wrapU, TextureWrap wrapV) const;
+    /// Opacity's bilinear value in `cell`: Opacity(u, v, …) is OpacityOf(CellAt(u, v, …), …).
+    float OpacityOf(const TexelCell& cell, int channel) const;
     /// Channel `channel` of texel (x, y) of the full image (indices wrapped as lookups wrap
     /// them), as Opacity reads it.
     float TexelOpacity(int x, int y, TextureWrap wrapU, TextureWrap wrapV, int channel) const;
