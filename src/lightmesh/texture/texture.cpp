@@ -42,7 +42,9 @@ const std::array<float, 256>& SrgbTable() {
     return table;
 }
 
-int WrapIndex(int i, int n, TextureWrap wrap) {
+}  // namespace
+
+int texel::WrapIndex(int i, int n, TextureWrap wrap) {
     switch (wrap) {
         case TextureWrap::Clamp: return std::clamp(i, 0, n - 1);
         case TextureWrap::Mirror: {
@@ -57,16 +59,6 @@ int WrapIndex(int i, int n, TextureWrap wrap) {
         }
     }
 }
-
-/// A texture coordinate as a finite value whose texel index stays in int range (a huge or
-/// NaN coordinate would overflow the index arithmetic).
-float Tame(float u) {
-    if (!std::isfinite(u)) return 0.0f;
-    if (!(std::abs(u) < 1e5f)) return std::fmod(u, 1.0f);  // texel indices stay within int
-    return u;
-}
-
-}  // namespace
 
 Texture::Texture(int width, int height, std::vector<uint8_t> rgba8) {
     Level l;
@@ -145,30 +137,18 @@ Texel Texture::Fetch(const Level& level, int x, int y) const {
     return {level.hdr[i], level.hdr[i + 1], level.hdr[i + 2], level.hdr[i + 3]};
 }
 
-/// Where (u, v) falls among a w × h level's texel centres: the texel (x0, y0) below and left
-/// of it (v runs up the image) and the fractions (fx, fy) towards the next ones.
-static inline void TexelPosition(int w, int h, float u, float v, int* x0, int* y0, float* fx, float* fy) {
-    const float x = Tame(u) * static_cast<float>(w) - 0.5f;
-    const float y = (1.0f - Tame(v)) * static_cast<float>(h) - 0.5f;
-    // floor without a libm call (x is within ±2^24 after Tame)
-    *x0 = static_cast<int>(x), *y0 = static_cast<int>(y);
-    *x0 -= static_cast<float>(*x0) > x;
-    *y0 -= static_cast<float>(*y0) > y;
-    *fx = x - static_cast<float>(*x0), *fy = y - static_cast<float>(*y0);
-}
-
 Texel Texture::Bilinear(const Level& level, float u, float v, TextureWrap wrapU, TextureWrap wrapV) const {
     int x0, y0;
     float fx, fy;
-    TexelPosition(level.w, level.h, u, v, &x0, &y0, &fx, &fy);
+    texel::Position(level.w, level.h, u, v, &x0, &y0, &fx, &fy);
     // One wrap per axis; the neighbour is the next texel unless that leaves the image.
-    const int xa = WrapIndex(x0, level.w, wrapU), ya = WrapIndex(y0, level.h, wrapV);
+    const int xa = texel::WrapIndex(x0, level.w, wrapU), ya = texel::WrapIndex(y0, level.h, wrapV);
     // (Repeat: x0 + 1 wraps to xa + 1 below the edge; Clamp and Mirror: where x0 is in
     // the image itself.)
     const int xb = (wrapU == TextureWrap::Repeat || x0 == xa) && xa + 1 < level.w ? xa + 1
-                                                                                   : WrapIndex(x0 + 1, level.w, wrapU);
+                                                                                   : texel::WrapIndex(x0 + 1, level.w, wrapU);
     const int yb = (wrapV == TextureWrap::Repeat || y0 == ya) && ya + 1 < level.h ? ya + 1
-                                                                                   : WrapIndex(y0 + 1, level.h, wrapV);
+                                                                                   : texel::WrapIndex(y0 + 1, level.h, wrapV);
     const float w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
     const size_t row0 = static_cast<size_t>(ya) * static_cast<size_t>(level.w),
                  row1 = static_cast<size_t>(yb) * static_cast<size_t>(level.w);
@@ -221,32 +201,9 @@ Texel Texture::SampleTrilinear(float u, float v, float lod, TextureWrap wrapU, T
 
 float Texture::TexelOpacity(int x, int y, TextureWrap wrapU, TextureWrap wrapV, int channel) const {
     const Level& level = levels_[0];
-    const size_t i = (static_cast<size_t>(WrapIndex(y, level.h, wrapV)) * static_cast<size_t>(level.w) +
-                      static_cast<size_t>(WrapIndex(x, level.w, wrapU))) * 4 + static_cast<size_t>(channel);
+    const size_t i = (static_cast<size_t>(texel::WrapIndex(y, level.h, wrapV)) * static_cast<size_t>(level.w) +
+                      static_cast<size_t>(texel::WrapIndex(x, level.w, wrapU))) * 4 + static_cast<size_t>(channel);
     return !level.ldr.empty() ? static_cast<float>(level.ldr[i]) * (1.0f / 255.0f) : level.hdr[i];
-}
-
-Texture::TexelCell Texture::CellAt(float u, float v, TextureWrap wrapU, TextureWrap wrapV) const {
-    const Level& level = levels_[0];
-    int x0, y0;
-    TexelCell c;
-    TexelPosition(level.w, level.h, u, v, &x0, &y0, &c.fx, &c.fy);
-    // Repeat on a side of 2^k texels (most images): a mask instead of a division.
-    if (wrapU == TextureWrap::Repeat && (level.w & (level.w - 1)) == 0) {
-        c.xa = x0 & (level.w - 1), c.xb = (x0 + 1) & (level.w - 1);
-    } else {
-        c.xa = WrapIndex(x0, level.w, wrapU);
-        c.xb = (wrapU == TextureWrap::Repeat || x0 == c.xa) && c.xa + 1 < level.w ? c.xa + 1
-                                                                                : WrapIndex(x0 + 1, level.w, wrapU);
-    }
-    if (wrapV == TextureWrap::Repeat && (level.h & (level.h - 1)) == 0) {
-        c.ya = y0 & (level.h - 1), c.yb = (y0 + 1) & (level.h - 1);
-    } else {
-        c.ya = WrapIndex(y0, level.h, wrapV);
-        c.yb = (wrapV == TextureWrap::Repeat || y0 == c.ya) && c.ya + 1 < level.h ? c.ya + 1
-                                                                                : WrapIndex(y0 + 1, level.h, wrapV);
-    }
-    return c;
 }
 
 float Texture::OpacityOf(const TexelCell& cell, int channel) const {

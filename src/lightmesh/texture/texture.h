@@ -3,6 +3,7 @@
 // TGA and BMP through stb_image, OpenEXR). Loading each image once is texture_cache.h's.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -14,6 +15,29 @@ namespace lm {
 
 /// What a lookup outside [0, 1] reads (glTF's samplers, Assimp's aiTextureMapMode).
 enum class TextureWrap : uint8_t { Repeat, Clamp, Mirror };
+
+namespace texel {
+/// Index i of a side of n texels, wrapped.
+int WrapIndex(int i, int n, TextureWrap wrap);
+/// A texture coordinate as a finite value whose texel index stays in int range (a huge or
+/// NaN coordinate would overflow the index arithmetic).
+inline float Tame(float u) {
+    if (!std::isfinite(u)) return 0.0f;
+    if (!(std::abs(u) < 1e5f)) return std::fmod(u, 1.0f);  // texel indices stay within int
+    return u;
+}
+/// Where (u, v) falls among a w × h level's texel centres: the texel (x0, y0) below and left
+/// of it (v runs up the image) and the fractions (fx, fy) towards the next ones.
+inline void Position(int w, int h, float u, float v, int* x0, int* y0, float* fx, float* fy) {
+    const float x = Tame(u) * static_cast<float>(w) - 0.5f;
+    const float y = (1.0f - Tame(v)) * static_cast<float>(h) - 0.5f;
+    // floor without a libm call (x is within ±2^24 after Tame)
+    *x0 = static_cast<int>(x), *y0 = static_cast<int>(y);
+    *x0 -= static_cast<float>(*x0) > x;
+    *y0 -= static_cast<float>(*y0) > y;
+    *fx = x - static_cast<float>(*x0), *fy = y - static_cast<float>(*y0);
+}
+}  // namespace texel
 
 /// A colour and its coverage, linear.
 struct Texel {
@@ -59,7 +83,30 @@ class Texture {
         int xa, xb, ya, yb;
         float fx, fy;
     };
-    TexelCell CellAt(float u, float v, TextureWrap wrapU, TextureWrap wrapV) const;
+    TexelCell CellAt(float u, float v, TextureWrap wrapU, TextureWrap wrapV) const {
+        const Level& level = levels_[0];
+        int x0, y0;
+        TexelCell c;
+        texel::Position(level.w, level.h, u, v, &x0, &y0, &c.fx, &c.fy);
+        // Repeat on a side of 2^k texels (most images): a mask instead of a division.
+        if (wrapU == TextureWrap::Repeat && (level.w & (level.w - 1)) == 0) {
+            c.xa = x0 & (level.w - 1), c.xb = (x0 + 1) & (level.w - 1);
+        } else {
+            c.xa = texel::WrapIndex(x0, level.w, wrapU);
+            c.xb = (wrapU == TextureWrap::Repeat || x0 == c.xa) && c.xa + 1 < level.w
+                       ? c.xa + 1
+                       : texel::WrapIndex(x0 + 1, level.w, wrapU);
+        }
+        if (wrapV == TextureWrap::Repeat && (level.h & (level.h - 1)) == 0) {
+            c.ya = y0 & (level.h - 1), c.yb = (y0 + 1) & (level.h - 1);
+        } else {
+            c.ya = texel::WrapIndex(y0, level.h, wrapV);
+            c.yb = (wrapV == TextureWrap::Repeat || y0 == c.ya) && c.ya + 1 < level.h
+                       ? c.ya + 1
+                       : texel::WrapIndex(y0 + 1, level.h, wrapV);
+        }
+        return c;
+    }
     /// Opacity's bilinear value in `cell`: Opacity(u, v, …) is OpacityOf(CellAt(u, v, …), …).
     float OpacityOf(const TexelCell& cell, int channel) const;
     /// Channel `channel` of texel (x, y) of the full image (indices wrapped as lookups wrap
