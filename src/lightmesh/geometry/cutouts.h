@@ -70,6 +70,10 @@ class CutoutMask {
         const float b0 = 1.0f - b1 - b2;
         const float u = t0.u * b0 + t1.u * b1 + t2.u * b2;
         const float v = t0.v * b0 + t1.v * b1 + t2.v * b2;
+        return SolidUV(m, u, v);
+    }
+    /// SolidAt at the point's texture coordinates (u, v).
+    static bool SolidUV(const CutoutMaterial& m, float u, float v) {
         const Texture::TexelCell c = m.image->CellAt(u, v, m.wrapU, m.wrapV);
         if (!m.cells.empty()) {
             // A cell whose corners all agree, with the four corners the lookup reads (not an
