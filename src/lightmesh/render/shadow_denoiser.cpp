@@ -253,7 +253,6 @@ void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& co
         std::vector<Ray> shadow(static_cast<size_t>(samples));
         std::vector<Hit> blockers(static_cast<size_t>(samples));
         // Per light, as long as the task: the hit's terms and its pixel's sums.
-        std::unique_ptr<bool[]> neededBuf(new bool[lights]);
         std::vector<Color> omegaBuf(lights), omegaSum(lights);
         std::vector<uint32_t> litIds(lights);
         std::vector<float> num(lights), den(lights), penSum(lights);
@@ -294,7 +293,8 @@ void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& co
                                     continue;
                                 }
                                 Color r;
-                                const ShadingPoint sp = renderer_.ShadeSplit(rays[s], hits[s], neededBuf.get(), omegaBuf.data(), litIds.data(), &r, c);
+                                uint32_t litCount = 0;
+                                const ShadingPoint sp = renderer_.ShadeSplit(rays[s], hits[s], omegaBuf.data(), litIds.data(), &litCount, &r, c);
                                 restSum += r;
                                 const float footprint = hits[s].t * pixelAngle_;
                                 if (s == first) {
@@ -302,18 +302,18 @@ void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& co
                                     frame.normal[i] = sp.n;
                                     frame.footprint[i] = footprint;
                                 }
-                                for (size_t l = 0; l < lights; ++l) {
-                                    if (!neededBuf[l]) continue;
+                                for (uint32_t k = 0; k < litCount; ++k) {
+                                    const uint32_t l = litIds[k];
                                     float penumbra = -1;
                                     const float v = NoisyVisibility(sp, l, footprint, shadow.data(), blockers.data(), &penumbra, c);
                                     if (penumbra >= 0) {
                                         penSum[l] += penumbra;
                                         ++penCount[l];
                                     }
-                                    const float wgt = Luminance(omegaBuf[l]);
+                                    const float wgt = Luminance(omegaBuf[k]);
                                     num[l] += v * wgt;
                                     den[l] += wgt;
-                                    omegaSum[l] += omegaBuf[l];
+                                    omegaSum[l] += omegaBuf[k];
                                 }
                             }
                             rest[i] = restSum * inv;

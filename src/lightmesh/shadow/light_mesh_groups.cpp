@@ -38,55 +38,42 @@ class LightMeshGroups final : public LightMeshShadows {
     }
 
     // Each group that holds a light the point needs answers its lights; the others are not
-    // asked.
-    void Visibility(const ShadingPoint& sp, const bool* needed, float* vis, RenderCounters& counters) const override {
-        bool need[kMaxLightsPerWord];
-        float v[kMaxLightsPerWord];
-        for (size_t g = 0; g < groups_.size(); ++g) {
-            const std::vector<uint32_t>& ids = groups_[g];
-            bool any = false;
-            for (size_t k = 0; k < ids.size(); ++k) any |= (need[k] = needed[ids[k]]);
-            if (!any) continue;
-            std::fill(v, v + ids.size(), 0.0f);
-            meshes_[g]->Visibility(sp, need, v, counters);
-            for (size_t k = 0; k < ids.size(); ++k)
-                if (need[k]) vis[ids[k]] = v[k];
+    // asked. The point's list is split by group (a group's lights are in the scene's order,
+    // so each group's part is ascending too).
+    void Visibility(const ShadingPoint& sp, LightIndices lights, float* vis, RenderCounters& counters) const override {
+        const SplitHold hold(groups_.size());
+        Split& s = *hold;
+        s.Make(&lights, 1, group_, local_);
+        for (const uint32_t g : s.touched) {
+            const uint32_t from = s.start[g], n = s.end[g] - from;
+            meshes_[g]->Visibility(sp, LightIndices(s.local.data() + from, n), s.v.data() + from, counters);
+            for (uint32_t e = from; e < from + n; ++e) vis[s.slot[e]] = s.v[e];
         }
     }
 
     // Group by group, the points that need one of its lights, as one block.
-    void VisibilityMany(const ShadingPoint* sps, size_t count, size_t lights, const bool* needed, float* vis,
+    void VisibilityMany(const ShadingPoint* sps, const LightIndices* lights, float* const* vis, size_t count,
                         RenderCounters& counters) const override {
-        thread_local std::vector<ShadingPoint> points;
-        thread_local std::vector<size_t> which;
-        thread_local std::vector<uint8_t> need;  // bools (vector<bool> has no data())
-        thread_local std::vector<float> v;
-        for (size_t g = 0; g < groups_.size(); ++g) {
-            const std::vector<uint32_t>& ids = groups_[g];
-            const size_t n = ids.size();
-            points.clear(), which.clear(), need.clear();
-            for (size_t i = 0; i < count; ++i) {
-                const bool* pn = needed + i * lights;
-                const size_t at = need.size();
-                bool any = false;
-                for (size_t k = 0; k < n; ++k) {
-                    need.push_back(pn[ids[k]]);
-                    any |= pn[ids[k]];
-                }
-                if (!any) {
-                    need.resize(at);
-                    continue;
-                }
-                points.push_back(sps[i]);
-                which.push_back(i);
+        const SplitHold hold(groups_.size());
+        Split& s = *hold;
+        s.Make(lights, count, group_, local_);
+        std::vector<ShadingPoint>& points = s.points;
+        std::vector<LightIndices>& ids = s.ids;
+        std::vector<float*>& out = s.out;
+        for (const uint32_t g : s.touched) {
+            points.clear(), ids.clear(), out.clear();
+            // The group's entries, point after point: a run per point.
+            for (uint32_t e = s.start[g], end = s.end[g]; e < end;) {
+                const uint32_t p = s.point[e];
+                uint32_t f = e;
+                while (f < end && s.point[f] == p) ++f;
+                points.push_back(sps[p]);
+                ids.emplace_back(s.local.data() + e, f - e);
+                out.push_back(s.v.data() + e);
+                e = f;
             }
-            if (points.empty()) continue;
-            v.assign(points.size() * n, 0.0f);
-            meshes_[g]->VisibilityMany(points.data(), points.size(), n, reinterpret_cast<const bool*>(need.data()),
-                                       v.data(), counters);
-            for (size_t j = 0; j < points.size(); ++j)
-                for (size_t k = 0; k < n; ++k)
-                    if (need[j * n + k]) vis[which[j] * lights + ids[k]] = v[j * n + k];
+            meshes_[g]->VisibilityMany(points.data(), ids.data(), out.data(), points.size(), counters);
+            for (uint32_t e = s.start[g]; e < s.end[g]; ++e) vis[s.point[e]][s.slot[e]] = s.v[e];
         }
     }
 
@@ -155,6 +142,71 @@ class LightMeshGroups final : public LightMeshShadows {
     }
 
   private:
+    // The entries (point, light) of a block's lists, sorted by group (a counting sort, so
+    // each group's entries keep the points' order and each point's list order): entries
+    // start[g] .. end[g] - 1 are group g's, with the point, the light's place in the
+    // point's list (slot), its index in the group (local) and room for its value (v).
+    // touched: the groups with an entry, ascending. Per thread, kept between calls; the work
+    // follows the entries and the groups touched, never the scene's lights.
+    struct Split {
+        std::vector<uint32_t> count, start, end, touched, point, slot, local;
+        std::vector<float> v;
+        // VisibilityMany's block of one group.
+        std::vector<ShadingPoint> points;
+        std::vector<LightIndices> ids;
+        std::vector<float*> out;
+        bool inUse = false;
+        void Make(const LightIndices* lists, size_t points, const std::vector<uint32_t>& group,
+                  const std::vector<uint32_t>& localOf) {
+            touched.clear();
+            size_t total = 0;
+            for (size_t i = 0; i < points; ++i) {
+                total += lists[i].size();
+                for (const uint32_t l : lists[i])
+                    if (count[group[l]]++ == 0) touched.push_back(group[l]);
+            }
+            std::sort(touched.begin(), touched.end());
+            uint32_t at = 0;
+            for (const uint32_t g : touched) {
+                start[g] = at;
+                at += count[g];
+                count[g] = start[g];  // from here: the next free entry of g
+            }
+            point.resize(total), slot.resize(total), local.resize(total), v.resize(total);
+            for (size_t i = 0; i < points; ++i)
+                for (size_t k = 0; k < lists[i].size(); ++k) {
+                    const uint32_t l = lists[i][k], e = count[group[l]]++;
+                    point[e] = static_cast<uint32_t>(i), slot[e] = static_cast<uint32_t>(k), local[e] = localOf[l];
+                }
+            for (const uint32_t g : touched) {
+                end[g] = count[g];
+                count[g] = 0;
+            }
+        }
+    };
+
+    // The thread's Split while a call holds it (a nested call, should a wait in one steal
+    // work, gets one of its own).
+    class SplitHold {
+      public:
+        explicit SplitHold(size_t groups) : s_(mine().inUse ? fresh_ : mine()) {
+            s_.inUse = true;
+            if (s_.count.size() < groups) s_.count.assign(groups, 0), s_.start.assign(groups, 0), s_.end.assign(groups, 0);
+        }
+        ~SplitHold() { s_.inUse = false; }
+        SplitHold(const SplitHold&) = delete;
+        SplitHold& operator=(const SplitHold&) = delete;
+        Split& operator*() const { return s_; }
+
+      private:
+        static Split& mine() {
+            thread_local Split s;
+            return s;
+        }
+        Split fresh_;
+        Split& s_;
+    };
+
     // A node word is written where a group evaluated it: its pages are touched then.
     uint64_t TouchedBytes() const {
         uint64_t bytes = 0;

@@ -87,8 +87,8 @@ TEST(LightMeshGroups, ManyLightsEqualTheLightMeshRunLightByLight) {
         std::vector<float> one(points.size() * n, -1.0f), block(points.size() * n, -1.0f);
         RenderCounters c;
         for (size_t p = 0; p < points.size(); ++p)
-            many.lmm->Visibility(points[p], reinterpret_cast<const bool*>(&needed[p * n]), &one[p * n], c);
-        many.lmm->VisibilityMany(points.data(), points.size(), n, reinterpret_cast<const bool*>(needed.data()), block.data(), c);
+            testing::FlaggedVisibility(*many.lmm, points[p], &needed[p * n], n, &one[p * n], c);
+        testing::FlaggedVisibilityMany(*many.lmm, points.data(), points.size(), needed.data(), n, block.data(), c);
         int partial = 0, checked = 0;
         for (size_t l = 0; l < n; l += 3) {  // every third light alone (a mesh each)
             Scene alone = s;
