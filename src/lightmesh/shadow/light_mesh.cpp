@@ -114,6 +114,23 @@ std::vector<std::string> LightMeshVariantNames() {
     return names;
 }
 
+void LightMeshShadows::VisibilityOfMasks(const ShadingPoint* sps, const uint64_t* needed, LightValues* vis,
+                                         size_t count, RenderCounters& counters) const {
+    std::vector<std::vector<uint32_t>> ids(count);
+    std::vector<LightIndices> lists(count);
+    std::vector<std::vector<float>> values(count);
+    std::vector<float*> out(count);
+    for (size_t i = 0; i < count; ++i) {
+        for (uint64_t m = needed[i]; m; m &= m - 1) ids[i].push_back(static_cast<uint32_t>(__builtin_ctzll(m)));
+        lists[i] = ids[i];
+        values[i].resize(ids[i].size());
+        out[i] = values[i].data();
+    }
+    VisibilityMany(sps, lists.data(), out.data(), count, counters);
+    for (size_t i = 0; i < count; ++i)
+        for (size_t k = 0; k < ids[i].size(); ++k) vis[i][ids[i][k]] = values[i][k];
+}
+
 StatsLines LightMeshShadows::CounterLines(const RenderCounters& counters) const {
     const auto n = [&counters](LightMeshCount k) { return Count(counters, k); };
     const uint64_t interpolations = n(LightMeshCount::kInterpolations), fallbacks = n(LightMeshCount::kFallbacks);
@@ -284,7 +301,7 @@ template <typename Word>
 inline void LightMesh<Word>::Visibility(const ShadingPoint& sp, LightIndices lights, float* vis,
                                         RenderCounters& counters) const {
     const Word needed = NeededMask(lights);
-    LocalVis local;
+    LightValues local;
     const uint64_t ownRays = Interpolate(sp, needed, local, counters);
     if (thinCheck_ != ThinCheck::kOff) CheckThin(sp, needed, ownRays, local, counters);
     for (size_t k = 0; k < lights.size(); ++k) vis[k] = local[lights[k]];
@@ -330,42 +347,13 @@ inline void LightMesh<Word>::ApplyThinCheck(const ShadingPoint& sp, uint64_t che
 template <typename Word>
 inline void LightMesh<Word>::VisibilityMany(const ShadingPoint* sps, const LightIndices* lights, float* const* vis,
                                             size_t count, RenderCounters& counters) const {
-    // Without a light radius there is nothing to batch: point by point.
-    if (lightRadius_ == 0) {
-        ShadowMethod::VisibilityMany(sps, lights, vis, count, counters);
-        return;
-    }
-    // Every point's walk first, its narrow penumbrae's discs queued; then the discs, the
-    // rings of several points to one light together; then the thin check's rays light by
-    // light, as hard shadows trace theirs. Measured: see the README's penumbra benchmark.
     constexpr size_t kChunk = 64;
-    thread_local DiscQueue queue;
-    thread_local std::unique_ptr<LocalVis[]> local(new LocalVis[kChunk]);  // 16 KiB, by point and light
-    struct Restore {
-        DiscQueue* previous;
-        ~Restore() { ThreadDiscQueue() = previous; }
-    } restore{ThreadDiscQueue()};
+    thread_local std::unique_ptr<LightValues[]> local(new LightValues[kChunk]);  // 16 KiB, by point and light
+    uint64_t needed[kChunk];
     for (size_t first = 0; first < count; first += kChunk) {
         const size_t n = std::min(kChunk, count - first);
-        uint64_t checked[kChunk], visible[kChunk];
-        Word needed[kChunk];
-        queue.entries.clear();
-        ThreadDiscQueue() = &queue;
-        for (size_t i = 0; i < n; ++i) {
-            const size_t p = first + i;
-            queue.point = i;
-            needed[i] = NeededMask(lights[p]);
-            const uint64_t ownRays = Interpolate(sps[p], needed[i], local[i], counters);
-            checked[i] = thinCheck_ == ThinCheck::kOff ? 0 : ThinChecked(needed[i], ownRays, local[i]);
-        }
-        ThreadDiscQueue() = restore.previous;
-        TraceDiscs(queue, local.get(), counters);
-        if (thinCheck_ != ThinCheck::kOff) {
-            // (ApplyThinCheck counts the rays, one per checked light, as CheckThin does.)
-            LightsVisibleMany(accel_, sps + first, n, lights_, checked, visible);
-            for (size_t i = 0; i < n; ++i)
-                if (checked[i]) ApplyThinCheck(sps[first + i], checked[i], visible[i], local[i], counters);
-        }
+        for (size_t i = 0; i < n; ++i) needed[i] = NeededMask(lights[first + i]);
+        VisibilityOfMasks(sps + first, needed, local.get(), n, counters);
         for (size_t i = 0; i < n; ++i) {
             const LightIndices ids = lights[first + i];
             for (size_t k = 0; k < ids.size(); ++k) vis[first + i][k] = local[i][ids[k]];
@@ -374,7 +362,49 @@ inline void LightMesh<Word>::VisibilityMany(const ShadingPoint* sps, const Light
 }
 
 template <typename Word>
-inline void LightMesh<Word>::TraceDiscs(const DiscQueue& queue, LocalVis* vis, RenderCounters& counters) const {
+inline void LightMesh<Word>::VisibilityOfMasks(const ShadingPoint* sps, const uint64_t* needed, LightValues* vis,
+                                               size_t count, RenderCounters& counters) const {
+    // Without a light radius there is nothing to batch: point by point.
+    if (lightRadius_ == 0) {
+        for (size_t i = 0; i < count; ++i) {
+            const uint64_t ownRays = Interpolate(sps[i], static_cast<Word>(needed[i]), vis[i], counters);
+            if (thinCheck_ != ThinCheck::kOff) CheckThin(sps[i], static_cast<Word>(needed[i]), ownRays, vis[i], counters);
+        }
+        return;
+    }
+    // Every point's walk first, its narrow penumbrae's discs queued; then the discs, the
+    // rings of several points to one light together; then the thin check's rays light by
+    // light, as hard shadows trace theirs. Measured: see the README's penumbra benchmark.
+    constexpr size_t kChunk = 64;
+    thread_local DiscQueue queue;
+    struct Restore {
+        DiscQueue* previous;
+        ~Restore() { ThreadDiscQueue() = previous; }
+    } restore{ThreadDiscQueue()};
+    for (size_t first = 0; first < count; first += kChunk) {
+        const size_t n = std::min(kChunk, count - first);
+        uint64_t checked[kChunk], visible[kChunk];
+        queue.entries.clear();
+        ThreadDiscQueue() = &queue;
+        for (size_t i = 0; i < n; ++i) {
+            const size_t p = first + i;
+            queue.point = i;
+            const Word mask = static_cast<Word>(needed[p]);
+            const uint64_t ownRays = Interpolate(sps[p], mask, vis[p], counters);
+            checked[i] = thinCheck_ == ThinCheck::kOff ? 0 : ThinChecked(mask, ownRays, vis[p]);
+        }
+        ThreadDiscQueue() = restore.previous;
+        TraceDiscs(queue, vis + first, counters);
+        if (thinCheck_ == ThinCheck::kOff) continue;
+        // (ApplyThinCheck counts the rays, one per checked light, as CheckThin does.)
+        LightsVisibleMany(accel_, sps + first, n, lights_, checked, visible);
+        for (size_t i = 0; i < n; ++i)
+            if (checked[i]) ApplyThinCheck(sps[first + i], checked[i], visible[i], vis[first + i], counters);
+    }
+}
+
+template <typename Word>
+inline void LightMesh<Word>::TraceDiscs(const DiscQueue& queue, LightValues* vis, RenderCounters& counters) const {
     // Per light, the outer rings of kGroup queued points in one packet, then the inner
     // rings of those the outer ring left undecided, likewise. Each ray's answer is the one
     // it gets alone, so every value is DiscLightVisibility's.

@@ -29,51 +29,80 @@ class LightMeshGroups final : public LightMeshShadows {
     LightMeshGroups(const Scene& scene, std::vector<std::vector<uint32_t>> groups,
                     std::vector<std::unique_ptr<LightMeshShadows>> meshes)
         : scene_(scene), groups_(std::move(groups)), meshes_(std::move(meshes)), group_(scene.lights.size()),
-          local_(scene.lights.size()) {
+          local_(scene.lights.size()), place_(scene.lights.size()) {
         for (size_t g = 0; g < groups_.size(); ++g)
             for (size_t k = 0; k < groups_[g].size(); ++k) {
                 group_[groups_[g][k]] = static_cast<uint32_t>(g);
                 local_[groups_[g][k]] = static_cast<uint32_t>(k);
+                place_[groups_[g][k]] = static_cast<uint32_t>(g << 6 | k);
             }
     }
 
     // Each group that holds a light the point needs answers its lights; the others are not
-    // asked. The point's list is split by group (a group's lights are in the scene's order,
-    // so each group's part is ascending too).
+    // asked. As a block of one point.
     void Visibility(const ShadingPoint& sp, LightIndices lights, float* vis, RenderCounters& counters) const override {
-        const SplitHold hold(groups_.size());
-        Split& s = *hold;
-        s.Make(&lights, 1, group_, local_);
-        for (const uint32_t g : s.touched) {
-            const uint32_t from = s.start[g], n = s.end[g] - from;
-            meshes_[g]->Visibility(sp, LightIndices(s.local.data() + from, n), s.v.data() + from, counters);
-            for (uint32_t e = from; e < from + n; ++e) vis[s.slot[e]] = s.v[e];
-        }
+        float* out[1] = {vis};
+        VisibilityMany(&sp, &lights, out, 1, counters);
     }
 
-    // Group by group, the points that need one of its lights, as one block.
+    // Group by group, the points that need one of its lights, as one block. One pass over
+    // the points' lists makes each point's mask per group (bit: the light's place in the
+    // group) and notes where each listed light's value goes; each group answers its points'
+    // masks by light (VisibilityOfMasks), and the values go to their places.
     void VisibilityMany(const ShadingPoint* sps, const LightIndices* lights, float* const* vis, size_t count,
                         RenderCounters& counters) const override {
-        const SplitHold hold(groups_.size());
+        constexpr size_t kChunk = 64;
+        const size_t groups = groups_.size();
+        const SplitHold hold(kChunk * groups, (groups + 63) / 64);
         Split& s = *hold;
-        s.Make(lights, count, group_, local_);
-        std::vector<ShadingPoint>& points = s.points;
-        std::vector<LightIndices>& ids = s.ids;
-        std::vector<float*>& out = s.out;
-        for (const uint32_t g : s.touched) {
-            points.clear(), ids.clear(), out.clear();
-            // The group's entries, point after point: a run per point.
-            for (uint32_t e = s.start[g], end = s.end[g]; e < end;) {
-                const uint32_t p = s.point[e];
-                uint32_t f = e;
-                while (f < end && s.point[f] == p) ++f;
-                points.push_back(sps[p]);
-                ids.emplace_back(s.local.data() + e, f - e);
-                out.push_back(s.v.data() + e);
-                e = f;
+        uint64_t* touched = s.touched.data();  // the groups some point of the chunk needs
+        for (size_t first = 0; first < count; first += kChunk) {
+            const size_t n = std::min(kChunk, count - first);
+            std::fill(s.masks.begin(), s.masks.begin() + static_cast<std::ptrdiff_t>(n * groups), uint64_t(0));
+            for (size_t i = 0; i < n; ++i) {
+                const LightIndices ids = lights[first + i];
+                uint64_t* masks = s.masks.data() + i * groups;
+                uint32_t* slots = s.slots.data() + i * groups * 64;
+                // A run of lights of one group (nearby lights: often several in a row) adds
+                // to a mask in a register, not through memory.
+                uint32_t group = 0;
+                uint64_t mask = 0;
+                for (size_t k = 0; k < ids.size(); ++k) {
+                    const uint32_t where = place_[ids[k]], g = where >> 6, l = where & 63;
+                    if (g != group) {
+                        masks[group] |= mask;
+                        group = g, mask = 0;
+                    }
+                    mask |= uint64_t(1) << l;
+                    slots[where] = static_cast<uint32_t>(k);
+                }
+                masks[group] |= mask;
             }
-            meshes_[g]->VisibilityMany(points.data(), ids.data(), out.data(), points.size(), counters);
-            for (uint32_t e = s.start[g]; e < s.end[g]; ++e) vis[s.point[e]][s.slot[e]] = s.v[e];
+            std::fill(s.touched.begin(), s.touched.end(), uint64_t(0));
+            for (size_t i = 0; i < n; ++i)
+                for (size_t g = 0; g < groups; ++g)
+                    if (s.masks[i * groups + g]) touched[g >> 6] |= uint64_t(1) << (g & 63);
+            for (size_t word = 0; word < s.touched.size(); ++word)
+                for (uint64_t t = touched[word]; t; t &= t - 1) {
+                    const size_t g = word * 64 + static_cast<size_t>(__builtin_ctzll(t));
+                    size_t m = 0;
+                    for (size_t i = 0; i < n; ++i) {
+                        const uint64_t mask = s.masks[i * groups + g];
+                        if (!mask) continue;
+                        s.points[m] = sps[first + i], s.needed[m] = mask, s.which[m] = static_cast<uint32_t>(i);
+                        ++m;
+                    }
+                    meshes_[g]->VisibilityOfMasks(s.points.data(), s.needed.data(), s.values.get(), m, counters);
+                    for (size_t j = 0; j < m; ++j) {
+                        const size_t i = s.which[j];
+                        const uint32_t* slots = s.slots.data() + (i * groups + g) * 64;
+                        float* out = vis[first + i];
+                        for (uint64_t b = s.needed[j]; b; b &= b - 1) {
+                            const int l = __builtin_ctzll(b);
+                            out[slots[l]] = s.values[j][l];
+                        }
+                    }
+                }
         }
     }
 
@@ -142,46 +171,27 @@ class LightMeshGroups final : public LightMeshShadows {
     }
 
   private:
-    // The entries (point, light) of a block's lists, sorted by group (a counting sort, so
-    // each group's entries keep the points' order and each point's list order): entries
-    // start[g] .. end[g] - 1 are group g's, with the point, the light's place in the
-    // point's list (slot), its index in the group (local) and room for its value (v).
-    // touched: the groups with an entry, ascending. Per thread, kept between calls; the work
-    // follows the entries and the groups touched, never the scene's lights.
+    // VisibilityMany's scratch, per thread, kept between calls (only the entries of the
+    // lights listed are touched): per point and group the mask of lights needed and, per
+    // light of the group, its place in the point's list (slots); one group's block.
     struct Split {
-        std::vector<uint32_t> count, start, end, touched, point, slot, local;
-        std::vector<float> v;
-        // VisibilityMany's block of one group.
+        std::vector<uint64_t> masks;
+        std::vector<uint32_t> slots;
         std::vector<ShadingPoint> points;
-        std::vector<LightIndices> ids;
-        std::vector<float*> out;
+        std::vector<uint64_t> needed;
+        std::vector<uint32_t> which;
+        std::vector<uint64_t> touched;  // a bit per group
+        std::unique_ptr<LightMeshShadows::LightValues[]> values;
+        size_t room = 0;  // point × group entries
         bool inUse = false;
-        void Make(const LightIndices* lists, size_t points, const std::vector<uint32_t>& group,
-                  const std::vector<uint32_t>& localOf) {
-            touched.clear();
-            size_t total = 0;
-            for (size_t i = 0; i < points; ++i) {
-                total += lists[i].size();
-                for (const uint32_t l : lists[i])
-                    if (count[group[l]]++ == 0) touched.push_back(group[l]);
-            }
-            std::sort(touched.begin(), touched.end());
-            uint32_t at = 0;
-            for (const uint32_t g : touched) {
-                start[g] = at;
-                at += count[g];
-                count[g] = start[g];  // from here: the next free entry of g
-            }
-            point.resize(total), slot.resize(total), local.resize(total), v.resize(total);
-            for (size_t i = 0; i < points; ++i)
-                for (size_t k = 0; k < lists[i].size(); ++k) {
-                    const uint32_t l = lists[i][k], e = count[group[l]]++;
-                    point[e] = static_cast<uint32_t>(i), slot[e] = static_cast<uint32_t>(k), local[e] = localOf[l];
-                }
-            for (const uint32_t g : touched) {
-                end[g] = count[g];
-                count[g] = 0;
-            }
+        void Reserve(size_t entries, size_t groupWords) {
+            touched.resize(groupWords);
+            if (room >= entries) return;
+            room = entries;
+            masks.resize(entries), slots.resize(entries * 64);
+            constexpr size_t kBlock = 64;
+            points.resize(kBlock), needed.resize(kBlock), which.resize(kBlock);
+            values.reset(new LightMeshShadows::LightValues[kBlock]);
         }
     };
 
@@ -189,9 +199,9 @@ class LightMeshGroups final : public LightMeshShadows {
     // work, gets one of its own).
     class SplitHold {
       public:
-        explicit SplitHold(size_t groups) : s_(mine().inUse ? fresh_ : mine()) {
+        SplitHold(size_t entries, size_t groupWords) : s_(mine().inUse ? fresh_ : mine()) {
             s_.inUse = true;
-            if (s_.count.size() < groups) s_.count.assign(groups, 0), s_.start.assign(groups, 0), s_.end.assign(groups, 0);
+            s_.Reserve(entries, groupWords);
         }
         ~SplitHold() { s_.inUse = false; }
         SplitHold(const SplitHold&) = delete;
@@ -218,6 +228,7 @@ class LightMeshGroups final : public LightMeshShadows {
     const std::vector<std::vector<uint32_t>> groups_;
     const std::vector<std::unique_ptr<LightMeshShadows>> meshes_;
     std::vector<uint32_t> group_, local_;  // per scene light: its group, its place there
+    std::vector<uint32_t> place_;          // the two in one: group · 64 + place
 };
 
 }  // namespace

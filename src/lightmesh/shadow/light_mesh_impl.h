@@ -148,7 +148,7 @@ class LightMesh final : public LightMeshShadows {
     // Formula (2) at P for every light needed (light_mesh.cpp), then, with a light radius,
     // the thin-occluder check (CheckThin).
     // Inside, the lights needed are a mask of this mesh's lights (at most 62) and the values
-    // go to an array indexed by light (LocalVis) before they are handed out in the list's order.
+    // go to an array indexed by light (LightValues) before they are handed out in the list's order.
     void Visibility(const ShadingPoint& sp, LightIndices lights, float* vis, RenderCounters& counters) const override;
     // With a light radius, a block of points in stages: every point's walk, its narrow
     // penumbrae's discs queued (DiscQueue); the discs, light by light (TraceDiscs); the
@@ -156,6 +156,9 @@ class LightMesh final : public LightMeshShadows {
     // each point gets what Visibility gives it. Without one, point by point.
     void VisibilityMany(const ShadingPoint* sps, const LightIndices* lights, float* const* vis, size_t count,
                         RenderCounters& counters) const override;
+    // The work of both, by mask and light (VisibilityMany gathers the lists' values from it).
+    void VisibilityOfMasks(const ShadingPoint* sps, const uint64_t* needed, LightValues* vis, size_t count,
+                           RenderCounters& counters) const override;
 
     ShadowFigures Figures() const override;
 
@@ -579,8 +582,6 @@ class LightMesh final : public LightMeshShadows {
     // answer is P's own rays' either way, so this is leak-free too; only the kernel's
     // nodes (weights) still need their segments.
     bool OwnRayChecksAgreement() const { return thinCheck_ == ThinCheck::kAll; }
-    // A point's values by light of this mesh (entries of the lights needed only).
-    using LocalVis = float[64];
     static Word NeededMask(LightIndices lights) {
         Word mask = 0;
         for (const uint32_t l : lights) mask |= Word(1) << l;
@@ -615,7 +616,7 @@ class LightMesh final : public LightMeshShadows {
         return queue;
     }
     // The queued discs' values into vis (`lights` per point, the block's first point at 0).
-    void TraceDiscs(const DiscQueue& queue, LocalVis* vis, RenderCounters& counters) const;
+    void TraceDiscs(const DiscQueue& queue, LightValues* vis, RenderCounters& counters) const;
     // The penumbra mode's answers (light_mesh_penumbra.h).
     float NarrowPenumbra(const ShadingPoint& sp, size_t l, float rho, const std::vector<PenumbraNode>& nodes,
                          RenderCounters& counters) const;
