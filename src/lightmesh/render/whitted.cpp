@@ -104,11 +104,22 @@ void WhittedRenderer::PrepareShading(const Ray& ray, const Hit& hit, Lighting* l
         term(ib == b.size() || (ia < a.size() && a[ia] < b[ib]) ? a[ia++] : b[ib++]);
 }
 
+namespace {
+
+// sum + Σ omega[k]·vis[k], k < count, in that order, with Color's operations. Not inlined:
+// inlined into RenderTile (a large function) the sum was kept in memory, a store and a
+// load per light (18 % of a render at 1,024 lights without shadows, against 9 % apart).
+[[gnu::noinline]] Color AddLights(Color sum, const Color* omega, const float* vis, uint32_t count) {
+    for (uint32_t k = 0; k < count; ++k) sum += omega[k] * vis[k];
+    return sum;
+}
+
+}  // namespace
+
 Color WhittedRenderer::FinishShading(const Ray& ray, const Lighting& lit, const float* vis, int depth,
                                      RenderCounters& counters) const {
     const Material& mat = *lit.mat;
-    Color result = scene_.ambient * lit.kd;
-    for (uint32_t k = 0; k < lit.litCount; ++k) result += lit.omega[k] * vis[k];
+    Color result = AddLights(scene_.ambient * lit.kd, lit.omega, vis, lit.litCount);
 
     if (!mat.mirror.IsBlack() && depth + 1 < options_.maxDepth) {
         Vec3 r = Reflect(ray.d, lit.ns);
