@@ -889,9 +889,8 @@ float SoftShadows::LightVisibility(const ShadingPoint& sp, size_t light, RenderC
     return SampleLight(sp, light, each, counters);
 }
 
-void SoftShadows::Visibility(const ShadingPoint& sp, const bool* needed, float* vis, RenderCounters& counters) const {
-    for (size_t i = 0; i < scene_.lights.size(); ++i)
-        if (needed[i]) vis[i] = LightVisibility(sp, i, counters);
+void SoftShadows::Visibility(const ShadingPoint& sp, LightIndices lights, float* vis, RenderCounters& counters) const {
+    for (size_t k = 0; k < lights.size(); ++k) vis[k] = LightVisibility(sp, lights[k], counters);
 }
 
 ShadowFigures SoftShadows::Figures() const {
