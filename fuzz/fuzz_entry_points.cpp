@@ -20,6 +20,8 @@
 #include "lightmesh/scene/shapes.h"
 #include "lightmesh/shadow/shadow.h"
 #include "lightmesh/shadow/sphere_templates.h"
+#include "lightmesh/texture/texture.h"
+#include "lightmesh/texture/texture_cache.h"
 #include "lightmesh/util/error.h"
 
 namespace lm::fuzz {
@@ -294,6 +296,49 @@ int FuzzTemplateFile(const uint8_t* data, size_t size) {
             }
     }
     return sum == INT64_MIN;  // keeps the walk from being optimised away; always 0
+}
+
+int FuzzImageDecode(const uint8_t* data, size_t size, bool isolated) {
+    static const TemplateFolder folder;  // a private folder, removed at exit
+    if (size < 1) return 0;
+    const std::string bytes(reinterpret_cast<const char*>(data + 1), size - 1);
+    if (isolated) {
+        TextureSource source;
+        source.name = "fuzz";
+        if (data[0] % 2 == 0) {
+            source.bytes = bytes;
+        } else {
+            source.file = folder.path + "/image.exr";
+            FILE* f = std::fopen(source.file.c_str(), "wb");
+            if (!f) return 0;
+            std::fwrite(bytes.data(), 1, bytes.size(), f);
+            std::fclose(f);
+        }
+        std::vector<std::shared_ptr<const Texture>> textures;
+        int warnings = 0;
+        const int index = TextureCache().Get(source, "fuzz", &textures, [&](const std::string&) { ++warnings; });
+        FUZZ_CHECK((index == 0 && textures.size() == 1 && warnings == 0) || (index == -1 && warnings == 1));
+        return 0;
+    }
+    DecodedImage image;
+    try {
+        if (data[0] % 2 == 0) {
+            image = DecodeImageBytes(bytes);
+        } else {
+            const std::string path = folder.path + "/image.exr";
+            FILE* f = std::fopen(path.c_str(), "wb");
+            if (!f) return 0;
+            std::fwrite(bytes.data(), 1, bytes.size(), f);
+            std::fclose(f);
+            image = ReadImageFile(path);
+        }
+    } catch (const Error& e) {
+        if (Verbose()) std::fprintf(stderr, "fuzz_image_decode: %s\n", e.what());
+        return 0;
+    }
+    FUZZ_CHECK(image.Consistent());
+    std::move(image).MakeTexture();
+    return 0;
 }
 
 }  // namespace lm::fuzz

@@ -1,5 +1,5 @@
 // fuzz_entry_points.h -- what the fuzzers run on one input. Shared by the libFuzzer targets
-// (fuzz_scene_file.cpp, fuzz_template_file.cpp) and by fuzz_regression_test.cpp, which
+// (fuzz_scene_file.cpp, fuzz_template_file.cpp, fuzz_mesh_import.cpp, fuzz_image_decode.cpp) and by fuzz_regression_test.cpp, which
 // replays the kept corpus and every crash found through the same code in the normal tests.
 #pragma once
 
@@ -30,5 +30,14 @@ int FuzzTemplateFile(const uint8_t* data, size_t size);
 /// LoadMeshFile's child process instead (the FuzzRegression replay: inputs that crash
 /// Assimp itself must come back as one MeshFileError).
 int FuzzMeshImport(const uint8_t* data, size_t size, bool isolated = false);
+
+/// The first byte picks the decoder: even, stb_image on the rest (PNG, JPEG, TGA, BMP, as
+/// texture.h decodes a material's image); odd, the rest written to an .exr file and read by
+/// OpenEXR. A decode must end in lm::Error or give as many texels as its size says. (The
+/// renderer runs these decoders in a child process, texture_cache.h: a crash found here
+/// costs one image, not the render; the target looks for them anyway.) `isolated` decodes
+/// through TextureCache's child process instead (the FuzzRegression replay: inputs that
+/// crash a decoder must come back as one warning).
+int FuzzImageDecode(const uint8_t* data, size_t size, bool isolated = false);
 
 }  // namespace lm::fuzz

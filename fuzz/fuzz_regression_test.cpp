@@ -48,6 +48,18 @@ TEST(FuzzRegression, TemplateFileCorpusAndCrashes) {
     Replay("regressions", "fuzz_template_file", lm::fuzz::FuzzTemplateFile);
 }
 
+// The image decoders: the kept corpus in-process, the findings inside stb_image and OpenEXR
+// (an out-of-bounds index in stb_image's JPEG Huffman tables; an EXR attribute whose size
+// asks for gigabytes) through the decoding child, as the renderer reads images.
+TEST(FuzzRegression, ImageDecodeCorpusAndCrashes) {
+    EXPECT_GT(Replay("corpus", "fuzz_image_decode",
+                     [](const uint8_t* d, size_t n) { return lm::fuzz::FuzzImageDecode(d, n); }),
+              0u);
+    EXPECT_GT(Replay("regressions", "fuzz_image_decode",
+                     [](const uint8_t* d, size_t n) { return lm::fuzz::FuzzImageDecode(d, n, true); }),
+              0u);
+}
+
 // Assimp's importers: the kept corpus in-process (none of it crashes Assimp), the crashes
 // through the child process, as the renderer imports them.
 TEST(FuzzRegression, MeshImportCorpusAndCrashes) {

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets (clang, AddressSanitizer + UndefinedBehaviorSanitizer) and runs
 # each for the given number of seconds (default 60), one after the other.
-#   scripts/fuzz.sh [SECONDS] [TARGET...]      targets: fuzz_scene_file fuzz_template_file fuzz_mesh_import
+#   scripts/fuzz.sh [SECONDS] [TARGET...]      targets: fuzz_scene_file fuzz_template_file fuzz_mesh_import fuzz_image_decode
 # Environment: FUZZ_BUILD_DIR (default build-fuzz; CI passes build-asan, which has them
 # too), FUZZ_JOBS (parallel fuzzing processes per target, default 1), FUZZ_KEEP_CORPUS=1
 # (merge what the run found into fuzz/corpus/ instead of a scratch folder).
@@ -13,7 +13,7 @@ cd "$root"
 seconds="${1:-60}"
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(fuzz_scene_file fuzz_template_file fuzz_mesh_import)
+[ ${#targets[@]} -gt 0 ] || targets=(fuzz_scene_file fuzz_template_file fuzz_mesh_import fuzz_image_decode)
 build="${FUZZ_BUILD_DIR:-build-fuzz}"
 jobs="${FUZZ_JOBS:-1}"
 
@@ -42,10 +42,16 @@ for t in "${targets[@]}"; do
   # the import fails as it would on the budget) instead of libFuzzer calling it an OOM.
   asan="$ASAN_OPTIONS"
   prefix="$crashes/"
-  if [ "$t" = fuzz_mesh_import ]; then
+  # Assimp and the image decoders have crashes and endless loops of their own, which the
+  # renderer contains (child process, deadline): fork mode goes on past them, and each
+  # finding is triaged below by the library its first frame is in.
+  contained=""
+  case "$t" in
+    fuzz_mesh_import) contained="libassimp"; library="Assimp" ;;
+    fuzz_image_decode) contained="stbi__|libOpenEXR|libIex|libImath"; library="stb_image or OpenEXR" ;;
+  esac
+  if [ -n "$contained" ]; then
     asan="$asan:max_allocation_size_mb=1024"
-    # Assimp has crashes and endless loops of its own, which the renderer contains (child
-    # process, deadline): fork mode goes on past them, and each finding is triaged below.
     findings="$build/findings/$t"  # this run's findings only
     rm -rf "$findings"
     mkdir -p "$findings"
@@ -62,7 +68,7 @@ for t in "${targets[@]}"; do
   # ignored timeout or crash ("INFO: exiting: 70"): a run that reached its time limit is
   # judged by the triage of its findings below, not by that code. The jobs' output shares
   # the log with the parent's, so the parent's line may start mid-line (not anchored).
-  if [ "$code" -ne 0 ] && [ "$t" = fuzz_mesh_import ] &&
+  if [ "$code" -ne 0 ] && [ -n "$contained" ] &&
       grep -qE "INFO: fuzzed for [0-9]+ seconds, wrapping up soon" "$log"; then
     echo "fuzz: $t: fork mode ended with code $code after its time limit (the last job's); findings triaged below" >&2
     code=0
@@ -73,9 +79,9 @@ for t in "${targets[@]}"; do
     tail -n 40 "$log" >&2
   fi
   grep -hE "^(#[0-9]+[[:space:]]+DONE|Done [0-9]+ runs|stat::number_of_executed_units|stat::peak_rss_mb)" "$log" fuzz-*.log >&2 2>/dev/null || true
-  if [ "$t" = fuzz_mesh_import ]; then
+  if [ -n "$contained" ]; then
     grep -E "^#[0-9]+: .*oom/timeout/crash" "$log" | tail -n 1 >&2 || true
-    # Whose code is at fault: the first frame of the replayed report in libassimp or in lm::.
+    # Whose code is at fault: the first frame of the replayed report in the library or in lm::.
     # (At most 30 are replayed: a timeout costs 5 s to reproduce.)
     n=0; inside=0; memory=0; untriaged=0
     for f in "$findings"/*; do
@@ -83,8 +89,8 @@ for t in "${targets[@]}"; do
       if [ "$n" -ge 30 ]; then untriaged=$((untriaged + 1)); continue; fi
       n=$((n + 1))
       report="$(ASAN_OPTIONS="$asan" timeout 60 "$build/fuzz/$t" -timeout=5 -rss_limit_mb=2048 "$f" 2>&1 || true)"
-      first="$(printf '%s\n' "$report" | grep -E '^ +#[0-9]+ ' | grep -E 'libassimp|lm::' | head -n 1 || true)"
-      if printf '%s' "$first" | grep -q libassimp; then
+      first="$(printf '%s\n' "$report" | grep -E '^ +#[0-9]+ ' | grep -E "$contained|lm::" | head -n 1 || true)"
+      if printf '%s' "$first" | grep -qE "$contained"; then
         inside=$((inside + 1))
       elif [ -z "$first" ] && printf '%s' "$report" | grep -q "libFuzzer: out-of-memory"; then
         # Over the RSS limit with no allocation to blame: counted, not attributed.
@@ -95,7 +101,7 @@ for t in "${targets[@]}"; do
         echo "fuzz: $t: a finding outside Assimp, kept in $crashes/: $f${first:+: $first}" >&2
       fi
     done
-    echo "fuzz: $t: $n findings replayed, $inside of them inside Assimp's own code (contained by the child process; in $findings)" >&2
+    echo "fuzz: $t: $n findings replayed, $inside of them inside $library's own code (contained by the child process; in $findings)" >&2
     [ "$memory" -eq 0 ] || echo "fuzz: $t: $memory of them over the RSS limit without a stack (unattributed)" >&2
     [ "$untriaged" -eq 0 ] || echo "fuzz: $t: $untriaged more findings not replayed" >&2
   fi

@@ -15,9 +15,10 @@ int RunCompare(const CompareCommand& cmd) {
     if (!(cmd.diffScale >= 0) || !std::isfinite(cmd.diffScale))
         lm::ThrowError("--diff-scale: must be a finite number >= 0, got %g", double(cmd.diffScale));
     if (cmd.diffScaleGiven && cmd.diff.empty()) lm::LogWarning("--diff-scale is used only with --diff; ignored");
-    const lm::Image a = lm::ReadImage(cmd.a), b = lm::ReadImage(cmd.b);
+    // The user's images are read in a child process (a malformed EXR must not crash us).
+    const lm::Image a = lm::ReadImageIsolated(cmd.a), b = lm::ReadImageIsolated(cmd.b);
     std::optional<lm::Image> mask;
-    if (!cmd.mask.empty()) mask = lm::ReadImage(cmd.mask);
+    if (!cmd.mask.empty()) mask = lm::ReadImageIsolated(cmd.mask);
     const lm::Image* m = mask ? &*mask : nullptr;
     const lm::ImageMetrics q = lm::CompareImages(a, b, m);
     if (!cmd.diff.empty()) lm::WriteDiffImage(cmd.diff, a, b, cmd.diffScale, m);

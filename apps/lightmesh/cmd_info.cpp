@@ -128,9 +128,10 @@ int RunInfo(const CommonOptions& common, const std::string& accelName, int grid)
     if (!scene.textures.empty()) {
         size_t bytes = 0;
         for (const auto& t : scene.textures) bytes += t->Bytes();
-        std::printf("textures   %zu image%s, %s with mip-maps; %s cut-out triangles\n", scene.textures.size(),
+        std::printf("textures   %zu image%s, %s with mip-maps; %s cut-out triangles%s\n", scene.textures.size(),
                     scene.textures.size() == 1 ? "" : "s", lm::FormatBytes(bytes).c_str(),
-                    Count(scene.mesh.cutouts ? scene.mesh.cutouts->Count() : 0).c_str());
+                    Count(scene.mesh.cutouts ? scene.mesh.cutouts->Count() : 0).c_str(),
+                    scene.mesh.cutouts ? (" (their texel cells' table " + lm::FormatBytes(scene.mesh.cutouts->Bytes()) + ")").c_str() : "");
         for (size_t i = 0; i < scene.textures.size(); ++i)
             std::printf("  image %zu  %d x %d%s\n", i, scene.textures[i]->Width(), scene.textures[i]->Height(),
                         scene.textures[i]->HasAlpha() ? ", with alpha" : "");

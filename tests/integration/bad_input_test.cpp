@@ -748,6 +748,18 @@ std::vector<Case> Corpus() {
          .args = "compare $D/fifo.png $D/fifo.png --diff $OUT",
          .expected = "lightmesh: error: $D/fifo.png: is not a regular file\n",
          .files = {{"mkfifo fifo.png", ""}}},
+        {.name = "compare_exr_whose_attribute_asks_gigabytes",
+         // Found by fuzz_image_decode: OpenEXR allocates what the attribute's size says.
+         // compare reads in a child process: a crash or a bomb there is this one line.
+         .args = "compare $D/bomb.exr $D/bomb.exr --diff $OUT",
+         .expected = "lightmesh: error: $D/bomb.exr: cannot read EXR: ",
+         .files = {{"bomb.exr", std::string(
+                     "\x76\x2f\x31\x01\x02\x00\x00\x00\x63\x68\x61\x00\x00\x63\x68\x61\x6e\x6e\x65\x6c\x73\x00\x63\x68"
+                     "\x6c\x69\x73\x74\x00\x37\x00\x00\x00\x6e\x6e\x65\x6c\x73\x00\x63\x68\x6c\x69\x73\x74\x00\x37\x00"
+                     "\x00\x00\x42\x00\x02\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x01\x00\x00\x00"
+                     "\x01\x00\x00\x00\x05\x00\x00\x00\x42\x4d\xb6\x00\x00\x00\x00\x00\x00\x00\x01\x00\x00\xff\x6c\x00"
+                     "\x00\x00\x00\x00\x6e\x68\x63\x61\x6e\x65\x6c\x73\x00\x63\x68\x00\x6c\x00", 114)}},
+         .output = "$D/out/diff.png"},
         {.name = "bench_matrix_is_a_fifo",
          .args = "bench --matrix $D/fifo.json --csv $OUT",
          .expected = "lightmesh: error: $D/fifo.json: is not a regular file\n",

@@ -342,8 +342,8 @@ TEST(RealCutouts, FoliageCardsLetLightThroughTheirHoles) {
                 Hit hit;
                 if (!accel.Intersect(ray, &hit)) continue;
                 const ShadingPoint sp = WhittedRenderer::MakeShadingPoint(s.mesh, ray, hit);
-                bool needed[2] = {true, false};
-                float vis[2] = {0, 0};
+                const uint32_t needed[1] = {0};
+                float vis[1] = {0};
                 rt->Visibility(sp, needed, vis, counters);
                 sum += vis[0];
                 ++n;

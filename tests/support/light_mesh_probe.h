@@ -9,24 +9,25 @@
 #include "lightmesh/accel/accelerator.h"
 #include "lightmesh/render/whitted.h"
 #include "lightmesh/shadow/light_mesh.h"
+#include "support/light_indices.h"
 
 namespace lm::testing {
 
 struct LightMeshProbe {
     std::unique_ptr<Accelerator> accel;
     std::unique_ptr<LightMeshShadows> lmm;
-    LightMeshProbe(const Scene& s, const LightMeshOptions& options, const std::string& accelName = "grid") {
+    std::vector<uint32_t> all;  // every light of the scene
+    LightMeshProbe(const Scene& s, const LightMeshOptions& options, const std::string& accelName = "grid")
+        : all(AllLights(s.lights.size())) {
         accel = CreateAccelerator(accelName, s.mesh);
         lmm = CreateLightMeshShadows(s, *accel, options);
     }
     /// V of `light` at sp, every light needed; the work is added to *counters if given.
     float Vis(const ShadingPoint& sp, int light = 0, RenderCounters* counters = nullptr) const {
-        bool needed[64];
-        float vis[64] = {};
-        std::fill(needed, needed + 64, true);
+        std::vector<float> vis(all.size());
         RenderCounters c;
-        lmm->Visibility(sp, needed, vis, counters ? *counters : c);
-        return vis[light];
+        lmm->Visibility(sp, all, vis.data(), counters ? *counters : c);
+        return vis[static_cast<size_t>(light)];
     }
 };
 

@@ -41,8 +41,10 @@ void Check(int code, const char* what) {
     ThrowError("MPI: %s failed: %.*s", what, length, text);
 }
 
-// Test hooks (tests/mpi): LIGHTMESH_MPI_TEST_FAIL_RANK=k makes rank k fail after its first
-// batch as an out-of-memory would; LIGHTMESH_MPI_TEST_KILL_RANK=k kills rank k there.
+// Test hooks (tests/mpi): LIGHTMESH_MPI_TEST_FAIL_RANK=k makes rank k fail as an
+// out-of-memory would, once it has fetched its first batch of tiles (whether or not any were
+// left: under load the other ranks may have taken them all); LIGHTMESH_MPI_TEST_KILL_RANK=k
+// kills rank k there.
 bool RankIs(const char* variable, int rank) {
     const char* v = std::getenv(variable);
     return v && *v && std::atoi(v) == rank;
@@ -296,6 +298,8 @@ DistributedRender RenderDistributed(const MpiSession& session, const WhittedRend
                 progress->Update(last - reported);
                 reported = last;
             }
+            if (RankIs("LIGHTMESH_MPI_TEST_KILL_RANK", rank)) std::raise(SIGKILL);
+            if (RankIs("LIGHTMESH_MPI_TEST_FAIL_RANK", rank)) throw std::bad_alloc();
             if (first >= tiles) break;
             seen = last;
             tileCounters.assign(static_cast<size_t>(last - first), RenderCounters{});
@@ -306,8 +310,6 @@ DistributedRender RenderDistributed(const MpiSession& session, const WhittedRend
             for (const RenderCounters& c : tileCounters) report.counters += c;
             for (int64_t i = first; i < last; ++i) mine.push_back(order[static_cast<size_t>(i)]);
             ++report.batches;
-            if (RankIs("LIGHTMESH_MPI_TEST_KILL_RANK", rank)) std::raise(SIGKILL);
-            if (RankIs("LIGHTMESH_MPI_TEST_FAIL_RANK", rank)) throw std::bad_alloc();
         }
     } catch (...) {
         error = CurrentExceptionLine();

@@ -22,6 +22,17 @@ struct CutoutMaterial {
     float scale = 1.0f;
     TextureWrap wrapU = TextureWrap::Repeat, wrapV = TextureWrap::Repeat;
     bool fromRed = false;  ///< the opacity is the image's red channel (a grey map_d)
+
+    /// What every point of a texel cell is, one byte per cell of the full image (the cell
+    /// whose lower-left corner is texel (x, y) and the others (x + 1, y), (x, y + 1),
+    /// (x + 1, y + 1), taken modulo the size): kCellSolid when all four corners are solid
+    /// with a margin, kCellHole when all four are holes with a margin (a bilinear value lies
+    /// between its corners, and the margin covers its rounding), 0 when SolidAt must
+    /// compute it. Built by CutoutMask; empty: always computed.
+    std::vector<uint8_t> cells;
+    static constexpr uint8_t kCellSolid = 1, kCellHole = 2;
+    /// Fills `cells` from the image (w × h bytes).
+    void ClassifyCells();
 };
 
 /// The cut-out triangles of a mesh and their materials. Held by the mesh it was built for
@@ -48,6 +59,12 @@ class CutoutMask {
     bool Solid(const TriangleMesh& mesh, uint32_t prim, float b1, float b2) const;
     /// The number of cut-out triangles (instanced ones included).
     size_t Count() const { return count_; }
+    /// Bytes of the materials' cell tables (CutoutMaterial::cells).
+    size_t Bytes() const {
+        size_t n = 0;
+        for (const CutoutMaterial& m : materials_) n += m.cells.size();
+        return n;
+    }
 
     /// Solid's parts, for a caller that tests many points of one triangle (the soft
     /// shadows' directions): the triangle's material (null: opaque), its vertices' texture
@@ -61,7 +78,21 @@ class CutoutMask {
         const float b0 = 1.0f - b1 - b2;
         const float u = t0.u * b0 + t1.u * b1 + t2.u * b2;
         const float v = t0.v * b0 + t1.v * b1 + t2.v * b2;
-        return m.image->Opacity(u, v, m.wrapU, m.wrapV, m.fromRed ? 0 : 3) * m.scale >= m.cutoff;
+        return SolidUV(m, u, v);
+    }
+    /// SolidAt at the point's texture coordinates (u, v).
+    static bool SolidUV(const CutoutMaterial& m, float u, float v) {
+        const Texture::TexelCell c = m.image->CellAt(u, v, m.wrapU, m.wrapV);
+        if (!m.cells.empty()) {
+            // A cell whose corners all agree, with the four corners the lookup reads (not an
+            // edge of a clamped or mirrored image, where the neighbour is not the next texel):
+            // one byte instead of four texels. The answer is the computed one.
+            const int w = m.image->Width(), h = m.image->Height();
+            if (c.xb == (c.xa + 1 == w ? 0 : c.xa + 1) && c.yb == (c.ya + 1 == h ? 0 : c.ya + 1))
+                if (const uint8_t k = m.cells[static_cast<size_t>(c.ya) * static_cast<size_t>(w) + static_cast<size_t>(c.xa)])
+                    return k == CutoutMaterial::kCellSolid;
+        }
+        return m.image->OpacityOf(c, m.fromRed ? 0 : 3) * m.scale >= m.cutoff;
     }
 
   private:

@@ -233,5 +233,50 @@ TEST(Cutouts, GltfBlendIsAMaskAtOneHalfWithAWarning) {
     fs::remove_all(dir);
 }
 
+TEST(Cutouts, TheCellTableGivesTheComputedAnswer) {
+    // SolidAt answers from the cell table where a texel cell's corners agree; everywhere it
+    // must give what the bilinear lookup gives, for 8-bit and float images, every wrap
+    // mode, sides of 2^k texels and not, cut-offs on the texels' own levels, and scales.
+    std::mt19937 rng(7);
+    std::uniform_int_distribution<int> byte(0, 255);
+    std::uniform_real_distribution<float> uv(-2.5f, 3.5f), unit(0.0f, 1.0f);
+    size_t fast = 0, total = 0;
+    for (int trial = 0; trial < 12; ++trial) {
+        const int w = trial % 3 == 0 ? 8 : 5 + trial, h = trial % 2 ? 4 : 7;
+        std::shared_ptr<const Texture> image;
+        if (trial % 4 == 3) {
+            std::vector<float> texels(static_cast<size_t>(w) * h * 4);
+            for (float& t : texels) t = unit(rng) < 0.5f ? 0.0f : unit(rng);
+            image = std::make_shared<Texture>(w, h, std::move(texels));
+        } else {
+            std::vector<uint8_t> texels(static_cast<size_t>(w) * h * 4);
+            // Blocks of equal alpha, so that many cells agree, and levels at the cut-off.
+            for (size_t i = 0; i < texels.size(); ++i) texels[i] = static_cast<uint8_t>((i / 8) % 3 == 0 ? 0 : (i / 8) % 3 == 1 ? 255 : 128);
+            for (int k = 0; k < 6; ++k) texels[static_cast<size_t>(byte(rng) % (w * h)) * 4 + 3] = static_cast<uint8_t>(byte(rng));
+            image = std::make_shared<Texture>(w, h, std::move(texels));
+        }
+        CutoutMaterial m;
+        m.image = image;
+        m.cutoff = trial % 5 == 0 ? 128.0f / 255.0f : 0.25f + 0.5f * unit(rng);
+        m.scale = trial % 6 == 1 ? 0.8f : 1.0f;
+        m.wrapU = static_cast<TextureWrap>(trial % 3);
+        m.wrapV = static_cast<TextureWrap>((trial / 3) % 3);
+        m.fromRed = trial % 7 == 2;
+        CutoutMaterial plain = m;  // no table: always computed
+        m.ClassifyCells();
+        ASSERT_EQ(m.cells.size(), static_cast<size_t>(w) * h);
+        for (uint8_t k : m.cells) fast += k != 0;
+        const TexCoord t0{uv(rng), uv(rng)}, t1{uv(rng), uv(rng)}, t2{uv(rng), uv(rng)};
+        for (int s = 0; s < 20000; ++s) {
+            const float b1 = unit(rng), b2 = unit(rng) * (1 - b1);
+            ASSERT_EQ(CutoutMask::SolidAt(m, t0, t1, t2, b1, b2), CutoutMask::SolidAt(plain, t0, t1, t2, b1, b2))
+                << "trial " << trial << " b1 " << b1 << " b2 " << b2;
+            ++total;
+        }
+    }
+    EXPECT_GT(fast, 100u);  // the table answers for many cells
+    EXPECT_EQ(total, 240000u);
+}
+
 }  // namespace
 }  // namespace lm

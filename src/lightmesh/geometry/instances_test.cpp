@@ -201,11 +201,11 @@ TEST(Instances, SoftShadowsSeeTheFlattenedTrianglesBitForBit) {
         Hit hit;
         if (!accel->Intersect(r, &hit)) continue;
         const ShadingPoint sp = WhittedRenderer::MakeShadingPoint(s.mesh, r, hit);
-        const bool needed[2] = {true, true};
+        const uint32_t needed[2] = {0, 1};  // both lights
         float a[2], b[2];
         RenderCounters ca, cb;
-        two->Visibility(sp, needed, a, ca);
-        one->Visibility(sp, needed, b, cb);
+        two->Visibility(sp, LightIndices(needed), a, ca);
+        one->Visibility(sp, LightIndices(needed), b, cb);
         for (int l = 0; l < 2; ++l) {
             ASSERT_EQ(a[l], b[l]);
             partial += a[l] > 0 && a[l] < 1;

@@ -33,6 +33,10 @@ void WriteImage(const std::string& path, const Image& image);
 
 /// Reads a PNG (decoded from sRGB to linear) or an EXR. Throws Error naming the file.
 Image ReadImage(const std::string& path);
+/// ReadImage in a child process (util/isolated_child.h), for images a user hands over
+/// (`compare`): a decoder's crash, allocation bomb or endless loop is an Error naming the
+/// file, not the end of this process. LIGHTMESH_IMPORT_IN_PROCESS reads in this process.
+Image ReadImageIsolated(const std::string& path);
 
 /// The display value of a linear channel: clamped to [0, 1], exact sRGB curve (the one
 /// place it is written: the PNG bytes, their decoding and the comparison's metrics use it).

@@ -3,6 +3,8 @@
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfOutputFile.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
@@ -11,6 +13,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -24,6 +27,7 @@
 
 #include "lightmesh/io/image.h"
 #include "lightmesh/util/error.h"
+#include "lightmesh/util/isolated_child.h"
 #include "lightmesh/util/huge_pages.h"
 #include "lightmesh/util/parallel.h"
 #include "lightmesh/util/system.h"
@@ -498,6 +502,63 @@ Image ReadImage(const std::string& path) {
         throw;
     } catch (const std::exception& e) {
         ThrowErrorAt({path}, "cannot read EXR: %s", e.what());
+    }
+}
+
+Image ReadImageIsolated(const std::string& path) {
+    ImageFormatFor(path);
+    CheckRegularFile(path, "image");  // never blocks on a FIFO
+    if (const char* v = std::getenv("LIGHTMESH_IMPORT_IN_PROCESS"); v && *v && std::string(v) != "0")
+        return ReadImage(path);
+    enum : uint8_t { kImage = 1, kError = 2 };
+    struct stat st {};
+    const ChildLimits limits{PhysicalMemoryBytes() / 2,
+                             ChildDeadlineSeconds(stat(path.c_str(), &st) == 0 ? static_cast<uint64_t>(st.st_size) : 0)};
+    const ChildOutcome child = RunInChild("lightmesh-image", limits, [&](int fd) {
+        ChildWriter w;
+        Image image;
+        try {
+            image = ReadImage(path);
+            w.Pod<uint8_t>(kImage);
+            w.Pod<int32_t>(image.width);
+            w.Pod<int32_t>(image.height);
+            w.Raw(image.pixels.data(), image.pixels.size() * sizeof(Color));
+        } catch (const Error& e) {
+            w = ChildWriter();
+            w.Pod<uint8_t>(kError);
+            w.Str(e.what());
+        } catch (const std::bad_alloc&) {
+            w = ChildWriter();
+            w.Pod<uint8_t>(kError);
+            w.Str(path + ": reading it needs more memory than this process may use");
+        }
+        if (!w.WriteTo(fd)) _exit(3);
+    });
+    switch (child.end) {
+        case ChildOutcome::End::NotStarted: return ReadImage(path);
+        case ChildOutcome::End::TimedOut:
+            ThrowErrorAt({path}, "the image reader did not finish within %.0f s and was stopped", child.seconds);
+        case ChildOutcome::End::Signalled:
+            ThrowErrorAt({path}, "the image reader crashed on it (signal %d, %s)", child.code,
+                         SignalName(child.code).c_str());
+        case ChildOutcome::End::Exited: break;
+    }
+    try {
+        ChildReader r(child.Bytes());
+        const uint8_t kind = r.Pod<uint8_t>();
+        if (kind == kError) throw Error(r.Str());
+        if (kind != kImage) throw std::runtime_error("bad result");
+        const int32_t w = r.Pod<int32_t>(), h = r.Pod<int32_t>();
+        if (w <= 0 || h <= 0 || static_cast<int64_t>(w) * h > (int64_t(1) << 28))
+            throw std::runtime_error("bad size");
+        Image image(w, h);
+        const std::string_view texels = r.Raw(image.pixels.size() * sizeof(Color));
+        std::memcpy(image.pixels.data(), texels.data(), texels.size());
+        return image;
+    } catch (const Error&) {
+        throw;
+    } catch (const std::exception&) {
+        ThrowErrorAt({path}, "the image reader crashed on it (exit status %d)", child.code);
     }
 }
 

@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <cmath>
+#include <cstring>
 #include <memory>
+#include <vector>
 
 #include "support/floor_scenes.h"
 #include "lightmesh/render/whitted.h"
@@ -101,6 +104,84 @@ TEST(ManyLights, RtWithCullingEqualsRtWithoutWhereLightsAreInRange) {
     Scene all = ManyLights(130, 30.0f);
     all.render.maxDepth = 1;
     EXPECT_EQ(Render(all, "rt").pixels, b.pixels);
+}
+
+// With ranges a point needs few of the scene's lights, and every method is handed those
+// only (ShadowMethod::Visibility's list): it writes their values, in the list's order, and
+// nothing past them (every other entry of a buffer with room for all the scene's lights
+// keeps its sentinel); each value is the one the light gets asked alone, point by point
+// and in blocks (VisibilityMany, which the renderer calls); RT traces one ray per listed
+// light and no more.
+TEST(ManyLights, EveryMethodWritesOnlyTheLightsAPointNeeds) {
+    Scene s = ManyLights(130, 2.8f);
+    auto accel = CreateAccelerator("embree", s.mesh);
+    const CameraRays camera(s.camera, s.render.width, s.render.height);
+    std::vector<ShadingPoint> points;
+    std::vector<std::vector<uint32_t>> lists;
+    size_t listed = 0, most = 0;
+    for (int y = 0; y < s.render.height; y += 2)
+        for (int x = 0; x < s.render.width; x += 2) {
+            const Ray ray = camera.Generate(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f);
+            Hit hit;
+            if (!accel->Intersect(ray, &hit)) continue;
+            const ShadingPoint sp = WhittedRenderer::MakeShadingPoint(s.mesh, ray, hit);
+            std::vector<uint32_t> ids;
+            for (size_t l = 0; l < s.lights.size(); ++l) {
+                const Vec3 d = s.lights[l].position - sp.p;
+                if (LengthSquared(d) <= s.lights[l].range * s.lights[l].range && Dot(sp.n, d) > 0)
+                    ids.push_back(static_cast<uint32_t>(l));
+            }
+            if (ids.empty()) continue;
+            listed += ids.size(), most = std::max(most, ids.size());
+            points.push_back(sp), lists.push_back(std::move(ids));
+        }
+    ASSERT_GT(points.size(), 100u);
+    ASSERT_LT(most, 40u);  // few of the 130 lights at every point
+    ASSERT_LT(static_cast<double>(listed) / static_cast<double>(points.size()), 20.0);
+    const float kSentinel = -7.0f;
+    struct Case {
+        const char* method;
+        float lightRadius;  // > 0: the override (lmm's contact-hardening mode)
+    };
+    for (const Case c : {Case{"none", 0}, Case{"rt", 0}, Case{"soft", 0}, Case{"area", 0}, Case{"denoised", 0},
+                         Case{"lmm", 0}, Case{"lmm", 0.06f}}) {
+        RenderOptions options = s.render;
+        if (c.lightRadius > 0) options.areaLight.radius = c.lightRadius;
+        const auto method = CreateShadowMethod(c.method, s, *accel, options);
+        const std::string what = std::string(c.method) + (c.lightRadius > 0 ? " with a light radius" : "");
+        std::vector<std::vector<float>> block(points.size(), std::vector<float>(s.lights.size() + 1, kSentinel));
+        std::vector<LightIndices> spans(lists.begin(), lists.end());
+        std::vector<float*> out;
+        for (auto& b : block) out.push_back(b.data());
+        RenderCounters many;
+        method->VisibilityMany(points.data(), spans.data(), out.data(), points.size(), many);
+        uint64_t rays = 0;
+        for (size_t p = 0; p < points.size(); ++p) {
+            std::vector<float> vis(s.lights.size() + 1, kSentinel);
+            RenderCounters one;
+            method->Visibility(points[p], lists[p], vis.data(), one);
+            rays += one.shadowRays;
+            for (size_t k = 0; k < vis.size(); ++k) {
+                if (k >= lists[p].size()) {
+                    ASSERT_EQ(vis[k], kSentinel) << what << ": point " << p << " wrote entry " << k << " past its list";
+                    ASSERT_EQ(block[p][k], kSentinel) << what << " (block): point " << p << " wrote entry " << k;
+                    continue;
+                }
+                ASSERT_TRUE(vis[k] >= 0.0f && vis[k] <= 1.0f) << what << ": point " << p << ", entry " << k;
+                ASSERT_EQ(std::memcmp(&block[p][k], &vis[k], sizeof(float)), 0) << what << ": point " << p << ", entry " << k;
+                float alone = kSentinel;
+                RenderCounters c1;
+                method->Visibility(points[p], LightIndices(&lists[p][k], 1), &alone, c1);
+                ASSERT_EQ(std::memcmp(&alone, &vis[k], sizeof(float)), 0)
+                    << what << ": point " << p << ", light " << lists[p][k] << " alone";
+            }
+        }
+        if (std::string(c.method) == "rt") {
+            EXPECT_EQ(rays, listed);
+            EXPECT_EQ(many.shadowRays, listed);
+        }
+        if (std::string(c.method) == "none") EXPECT_EQ(rays, 0u);
+    }
 }
 
 // 4,096 lights in every method (a light mesh of 67 groups), with ranges: the images light

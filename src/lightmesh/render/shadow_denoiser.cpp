@@ -253,11 +253,15 @@ void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& co
         std::vector<Ray> shadow(static_cast<size_t>(samples));
         std::vector<Hit> blockers(static_cast<size_t>(samples));
         // Per light, as long as the task: the hit's terms and its pixel's sums.
-        std::unique_ptr<bool[]> neededBuf(new bool[lights]);
         std::vector<Color> omegaBuf(lights), omegaSum(lights);
         std::vector<uint32_t> litIds(lights);
         std::vector<float> num(lights), den(lights), penSum(lights);
         std::vector<int> penCount(lights);
+        // The lights some hit of the pixel needs (each once: inPixel marks them); the sums
+        // of the others stay 0, and their entries of omega and the layers keep their
+        // initial values, which are what the sums would give.
+        std::vector<uint32_t> pixelLights;
+        std::vector<uint8_t> inPixel(lights, 0);
         for (int t = range.begin(); t != range.end(); ++t) {
             RenderCounters& c = tileCounters[static_cast<size_t>(t)];
             const int tx0 = (t % tilesX) * T, ty0 = ry0 + (t / tilesX) * T;
@@ -280,21 +284,17 @@ void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& co
                         for (int x = bx; x < ex; ++x, first += static_cast<size_t>(aa * aa)) {
                             const size_t i = frame.Index(x, y - ry0);
                             Color restSum;
-                            // Per light: Σ V·w, Σ w, Σ penumbra and its count over the pixel's hits
-                            // (only the scene's lights' entries cleared: 1.8 KiB for all 64 was
-                            // a tenth of the noisy pass).
-                            std::fill(num.begin(), num.end(), 0.0f);
-                            std::fill(den.begin(), den.end(), 0.0f);
-                            std::fill(penSum.begin(), penSum.end(), 0.0f);
-                            std::fill(penCount.begin(), penCount.end(), 0);
-                            std::fill(omegaSum.begin(), omegaSum.end(), Color());
+                            // Per light the pixel's hits need: Σ V·w, Σ w, Σ penumbra and its
+                            // count, and Σ omega, cleared when the light first turns up.
+                            pixelLights.clear();
                             for (size_t s = first; s < first + static_cast<size_t>(aa * aa); ++s) {
                                 if (hits[s].prim == UINT32_MAX) {
                                     restSum += scene_.background;
                                     continue;
                                 }
                                 Color r;
-                                const ShadingPoint sp = renderer_.ShadeSplit(rays[s], hits[s], neededBuf.get(), omegaBuf.data(), litIds.data(), &r, c);
+                                uint32_t litCount = 0;
+                                const ShadingPoint sp = renderer_.ShadeSplit(rays[s], hits[s], omegaBuf.data(), litIds.data(), &litCount, &r, c);
                                 restSum += r;
                                 const float footprint = hits[s].t * pixelAngle_;
                                 if (s == first) {
@@ -302,22 +302,30 @@ void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& co
                                     frame.normal[i] = sp.n;
                                     frame.footprint[i] = footprint;
                                 }
-                                for (size_t l = 0; l < lights; ++l) {
-                                    if (!neededBuf[l]) continue;
+                                for (uint32_t k = 0; k < litCount; ++k) {
+                                    const uint32_t l = litIds[k];
+                                    if (!inPixel[l]) {
+                                        inPixel[l] = 1;
+                                        pixelLights.push_back(l);
+                                        num[l] = den[l] = penSum[l] = 0.0f;
+                                        penCount[l] = 0;
+                                        omegaSum[l] = Color();
+                                    }
                                     float penumbra = -1;
                                     const float v = NoisyVisibility(sp, l, footprint, shadow.data(), blockers.data(), &penumbra, c);
                                     if (penumbra >= 0) {
                                         penSum[l] += penumbra;
                                         ++penCount[l];
                                     }
-                                    const float wgt = Luminance(omegaBuf[l]);
+                                    const float wgt = Luminance(omegaBuf[k]);
                                     num[l] += v * wgt;
                                     den[l] += wgt;
-                                    omegaSum[l] += omegaBuf[l];
+                                    omegaSum[l] += omegaBuf[k];
                                 }
                             }
                             rest[i] = restSum * inv;
-                            for (size_t l = 0; l < lights; ++l) {
+                            for (const uint32_t l : pixelLights) {
+                                inPixel[l] = 0;
                                 omega[l * pixels + i] = omegaSum[l] * inv;
                                 if (den[l] > 0) {
                                     layers[l].visibility[i] = std::clamp(num[l] / den[l], 0.0f, 1.0f);

@@ -51,6 +51,16 @@ TEST(Texturing, TheColourUnderEachTexelOfAnObjMtlQuad) {
     ExpectNear(DiffuseAt(scene, *accel, 0.5f, -0.5f), Color(1, 1, 1));
 }
 
+// texture_transform.gltf: the same quad and image, KHR_texture_transform scaling the base
+// colour's coordinates to the image's top-right block: green everywhere.
+TEST(Texturing, AGltfTextureTransformMovesTheImage) {
+    const Scene scene = Load(DataDir + "/texture_transform.gltf");
+    ASSERT_EQ(scene.textures.size(), 1u);
+    const auto accel = CreateAccelerator("brute", scene.mesh);
+    for (float x : {-0.5f, 0.5f})
+        for (float y : {-0.5f, 0.5f}) ExpectNear(DiffuseAt(scene, *accel, x, y), Color(0, 1, 0));
+}
+
 TEST(Texturing, AWideFootprintReadsACoarserLevel) {
     const Scene scene = Load(DataDir + "/quad.obj");
     const auto accel = CreateAccelerator("brute", scene.mesh);

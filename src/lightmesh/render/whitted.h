@@ -71,12 +71,12 @@ class WhittedRenderer {
     /// The camera ray of sub-pixel (sx, sy) of pixel (x, y), as Pixel() and RenderTile make it.
     Ray CameraRay(int x, int y, int sx, int sy) const { return camera_.Generate(SubPixel(x, sx), SubPixel(y, sy)); }
     /// A hit's shading split around its lights' visibility, for a caller that computes and
-    /// filters the visibility itself (the shadow denoiser): needed[i] and omega[i] (black
-    /// where not needed) for each light, and *rest gets the other terms (A·kd and the
-    /// mirror's, whose shadows come from the renderer's method). Shade() gives rest plus
-    /// Σ omega[i]·V_i. needed, omega and litIds (scratch) hold one entry per light.
-    /// Returns the shading point.
-    ShadingPoint ShadeSplit(const Ray& ray, const Hit& hit, bool* needed, Color* omega, uint32_t* litIds,
+    /// filters the visibility itself (the shadow denoiser): the lights that light the hit,
+    /// litIds[0 .. *litCount-1] (ascending), with their unshadowed terms omega[k], and *rest
+    /// gets the other terms (A·kd and the mirror's, whose shadows come from the renderer's
+    /// method). Shade() gives rest plus Σ omega[k]·V(litIds[k]). omega and litIds have room
+    /// for one entry per light. Returns the shading point.
+    ShadingPoint ShadeSplit(const Ray& ray, const Hit& hit, Color* omega, uint32_t* litIds, uint32_t* litCount,
                             Color* rest, RenderCounters& counters) const;
 
     /// Builds the shading point for a hit of `ray` (also used by tests and the shadow
@@ -90,11 +90,13 @@ class WhittedRenderer {
         Vec3 ns;  ///< shading normal
         const Material* mat = nullptr;
         Color kd;  ///< the diffuse reflectance here (the material's, or its texture's)
-        bool any = false;  ///< some light's term is not black (visibility is needed)
-        bool* needed = nullptr;   ///< per light (storage of the caller: TileBuffers, Shade)
-        Color* omega = nullptr;   ///< light i's unshadowed term, where needed[i]
-        uint32_t* lit = nullptr;  ///< the lights with needed[i], ascending (as many as lights)
+        /// The lights whose term is not black (in range, facing P): their visibility is
+        /// needed. lit[k] (ascending) and its unshadowed term omega[k], k < litCount, in
+        /// storage of the caller (TileBuffers, Shade) with room for every light.
+        uint32_t* lit = nullptr;
+        Color* omega = nullptr;
         uint32_t litCount = 0;
+        LightIndices Lights() const { return {lit, litCount}; }
     };
     /// Hits shaded together in RenderTile: the points whose visibility one
     /// ShadowMethod::VisibilityMany call computes.
@@ -105,29 +107,34 @@ class WhittedRenderer {
         std::vector<Hit> hits;
         std::vector<Color> colors;
         std::vector<Lighting> batch;
+        // The points whose visibility is needed: the point, its lights and where their
+        // values go (VisibilityMany's arguments).
         std::vector<ShadingPoint> points;
-        std::unique_ptr<bool[]> needed;  // kShadingBatch × lights
-        size_t neededLights = 0;
-        // The batch's Lighting terms: kShadingBatch × lights each (Lighting points into them).
-        std::unique_ptr<bool[]> litNeeded;
+        std::vector<LightIndices> lists;
+        std::vector<float*> visOut;
+        size_t roomLights = 0;
+        // The batch's Lighting terms and values: room for kShadingBatch × lights each
+        // (Lighting points into them); only the entries of the lights lit are touched.
         std::unique_ptr<Color[]> litOmega;
         std::unique_ptr<uint32_t[]> litIds;
+        std::unique_ptr<float[]> litVis;
         bool inUse = false;  // a RenderTile on this thread holds them
         void Reserve(size_t lights) {
-            if (batch.size() < kShadingBatch) batch.resize(kShadingBatch), points.resize(kShadingBatch);
-            if (!needed || neededLights < lights) {
-                neededLights = std::max<size_t>(lights, 1);
-                needed.reset(new bool[kShadingBatch * neededLights]);
-                litNeeded.reset(new bool[kShadingBatch * neededLights]);
-                litOmega.reset(new Color[kShadingBatch * neededLights]);
-                litIds.reset(new uint32_t[kShadingBatch * neededLights]);
+            if (batch.size() < kShadingBatch)
+                batch.resize(kShadingBatch), points.resize(kShadingBatch), lists.resize(kShadingBatch),
+                    visOut.resize(kShadingBatch);
+            if (!litOmega || roomLights < lights) {
+                roomLights = std::max<size_t>(lights, 1);
+                litOmega.reset(new Color[kShadingBatch * roomLights]);
+                litIds.reset(new uint32_t[kShadingBatch * roomLights]);
+                litVis.reset(new float[kShadingBatch * roomLights]);
             }
             for (size_t i = 0; i < kShadingBatch; ++i) {
-                batch[i].needed = litNeeded.get() + i * neededLights;
-                batch[i].omega = litOmega.get() + i * neededLights;
-                batch[i].lit = litIds.get() + i * neededLights;
+                batch[i].omega = litOmega.get() + i * roomLights;
+                batch[i].lit = litIds.get() + i * roomLights;
             }
         }
+        float* Vis(size_t slot) const { return litVis.get() + slot * roomLights; }
     };
     /// Shade, before and after the visibility: PrepareShading fills *lit (and counts the
     /// shading point); FinishShading adds the lights' terms times vis and the mirror's.

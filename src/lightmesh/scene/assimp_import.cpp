@@ -505,7 +505,9 @@ LoadedMesh ImportMeshInProcess(const std::string& path, const MeshLoadOptions& o
         // meshes of their own, which the walk skips. No normals are generated: shading
         // uses face normals where the file has none. Instances are expanded by the walk
         // (not aiProcess_PreTransformVertices) so node names stay available to excludes.
-        const unsigned flags = aiProcess_Triangulate | aiProcess_SortByPType |
+        // A material's texture-coordinate transform (glTF's KHR_texture_transform, 3DS and
+        // ASE tiling and offsets) is applied to the coordinates themselves.
+        const unsigned flags = aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_TransformUVCoords |
                                aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure;
         const aiScene* scene = importer.ReadFile(path, flags);
         if (!scene) {

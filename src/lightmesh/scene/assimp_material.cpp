@@ -113,7 +113,8 @@ int FindTexture(const aiMaterial& am, aiTextureType type, const aiScene& scene, 
 //    default material) becomes our default grey (kd 0.8, no specular) rather than
 //    Assimp's 0.6 grey, white, or glTF's black-diffuse "white metal".
 //  - The base-colour texture (aiTextureType_BASE_COLOR, else DIFFUSE: glTF's
-//    baseColorTexture, MTL's map_Kd, ...; the first UV channel) makes the diffuse
+//    baseColorTexture, MTL's map_Kd, ...; the first UV channel, with the material's UV
+//    transform applied by aiProcess_TransformUVCoords at import) makes the diffuse
 //    reflectance textureScale × texel: glTF's factor × (1 − metallic), 1 for the others
 //    (exporters write a default Kd beside map_Kd). kd stays the flat colour used where the
 //    image cannot be read.

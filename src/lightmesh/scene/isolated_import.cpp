@@ -5,31 +5,18 @@
 #include "lightmesh/scene/mesh_import_internal.h"
 
 #include <malloc.h>
-#include <poll.h>
-#include <signal.h>
-#include <sys/syscall.h>
 #include <sys/mman.h>
-#include <sys/prctl.h>
-#include <sys/resource.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <array>
-#include <cerrno>
-#include <chrono>
 #include <csignal>
-#include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <deque>
-#include <mutex>
 #include <stdexcept>
-#include <string_view>
 #include <vector>
 
 #include "lightmesh/util/error.h"
+#include "lightmesh/util/isolated_child.h"
 
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 #define LIGHTMESH_SANITIZED 1
@@ -47,122 +34,12 @@ namespace {
 // ---------------------------------------------------------------------------------------
 // The child process: its result, serialised into a memfd
 
-/// The child's result: small fields are copied, large arrays are written in place
-/// (writev), so the triangles are copied once on the way to the parent.
-class ResultWriter {
-  public:
-    template <typename T>
-    void Pod(const T& v) {
-        Bytes(&v, sizeof(T), true);
-    }
-    void Str(const std::string& s) {
-        Pod<uint64_t>(s.size());
-        Bytes(s.data(), s.size(), true);
-    }
-    /// `v` must outlive WriteTo.
-    template <typename T>
-    void Vec(const std::vector<T>& v) {
-        Pod<uint64_t>(v.size());
-        Bytes(v.data(), v.size() * sizeof(T), false);
-    }
-    void Bools(const std::vector<bool>& v) {
-        Pod<uint64_t>(v.size());
-        std::string b;
-        for (bool x : v) b.push_back(x ? 1 : 0);
-        Bytes(b.data(), b.size(), true);
-    }
-    /// Writes everything at offset 0 of `fd`; false on failure.
-    bool WriteTo(int fd) const {
-        if (ftruncate(fd, 0) != 0 || lseek(fd, 0, SEEK_SET) != 0) return false;
-        for (const Piece& p : pieces_) {
-            const char* data = p.copied ? copies_[p.index].data() : p.data;
-            size_t done = 0;
-            while (done < p.size) {
-                const ssize_t n = write(fd, data + done, p.size - done);
-                if (n < 0 && errno == EINTR) continue;
-                if (n <= 0) return false;
-                done += static_cast<size_t>(n);
-            }
-        }
-        return true;
-    }
-
-  private:
-    struct Piece {
-        const char* data;
-        size_t size;
-        bool copied;
-        size_t index;
-    };
-    void Bytes(const void* data, size_t size, bool copy) {
-        if (size == 0) return;
-        if (copy) {
-            // Small fields go into one buffer, extended while no large array comes between.
-            if (!pieces_.empty() && pieces_.back().copied) {
-                copies_.back().append(static_cast<const char*>(data), size);
-                pieces_.back().size += size;
-                return;
-            }
-            copies_.emplace_back(static_cast<const char*>(data), size);
-            pieces_.push_back({nullptr, size, true, copies_.size() - 1});
-        } else {
-            pieces_.push_back({static_cast<const char*>(data), size, false, 0});
-        }
-    }
-    std::vector<Piece> pieces_;
-    std::deque<std::string> copies_;
-};
-
-class ResultReader {
-  public:
-    explicit ResultReader(std::string_view bytes) : bytes_(bytes) {}
-    template <typename T>
-    T Pod() {
-        T v{};
-        Need(sizeof(T));
-        std::memcpy(&v, bytes_.data() + at_, sizeof(T));
-        at_ += sizeof(T);
-        return v;
-    }
-    std::string Str() {
-        const uint64_t n = Pod<uint64_t>();
-        Need(n);
-        std::string s(bytes_.substr(at_, n));
-        at_ += n;
-        return s;
-    }
-    template <typename T>
-    std::vector<T> Vec() {
-        const uint64_t n = Pod<uint64_t>();
-        if (n > (bytes_.size() - at_) / sizeof(T)) Need(SIZE_MAX);
-        std::vector<T> v(n);
-        if (n) std::memcpy(v.data(), bytes_.data() + at_, n * sizeof(T));
-        at_ += n * sizeof(T);
-        return v;
-    }
-    std::vector<bool> Bools() {
-        const uint64_t n = Pod<uint64_t>();
-        Need(n);
-        std::vector<bool> v(n);
-        for (uint64_t i = 0; i < n; ++i) v[i] = bytes_[at_ + i] != 0;
-        at_ += n;
-        return v;
-    }
-
-  private:
-    void Need(uint64_t n) const {
-        if (n > bytes_.size() - at_) throw std::runtime_error("truncated result");
-    }
-    std::string_view bytes_;
-    size_t at_ = 0;
-};
-
 enum : uint8_t { kResultMesh = 1, kResultMeshError = 2 };
 
 }  // namespace
 
 void WriteErrorResult(int fd, const std::string& reason, bool unreadable) {
-    ResultWriter w;
+    ChildWriter w;
     w.Pod<uint8_t>(kResultMeshError);
     w.Str(reason);
     w.Pod<uint8_t>(unreadable ? 1 : 0);
@@ -172,7 +49,7 @@ void WriteErrorResult(int fd, const std::string& reason, bool unreadable) {
 namespace {
 
 void WriteMeshResult(int fd, const LoadedMesh& m) {
-    ResultWriter w;
+    ChildWriter w;
     w.Pod<uint8_t>(kResultMesh);
     w.Vec(m.mesh.positions);
     w.Vec(m.mesh.normals);
@@ -213,7 +90,7 @@ void WriteMeshResult(int fd, const LoadedMesh& m) {
 }
 
 LoadedMesh ReadResult(const std::string& path, std::string_view bytes) {
-    ResultReader r(bytes);
+    ChildReader r(bytes);
     const uint8_t kind = r.Pod<uint8_t>();
     if (kind == kResultMeshError) {
         std::string reason = r.Str();
@@ -268,26 +145,14 @@ LoadedMesh ReadResult(const std::string& path, std::string_view bytes) {
     return m;
 }
 
-/// The address space this process maps now, in bytes (0 if unknown).
-uint64_t MappedBytes() {
-    FILE* f = std::fopen("/proc/self/statm", "r");
-    if (!f) return 0;
-    unsigned long long pages = 0;
-    const int got = std::fscanf(f, "%llu", &pages);
-    std::fclose(f);
-    return got == 1 ? pages * static_cast<uint64_t>(sysconf(_SC_PAGE_SIZE)) : 0;
-}
-
-const char* SignalName(int sig) {
-    switch (sig) {
-        case SIGSEGV: return "SIGSEGV: a stack overflow on a deep or cyclic node hierarchy, or a bad memory access";
-        case SIGABRT: return "SIGABRT: an internal check failed";
-        case SIGBUS: return "SIGBUS";
-        case SIGFPE: return "SIGFPE";
-        case SIGILL: return "SIGILL";
-        case SIGKILL: return "SIGKILL: killed, perhaps by the out-of-memory killer";
-        default: return "";
-    }
+/// A crash's signal as the import's message names it.
+std::string ImporterSignal(int sig) {
+    std::string name = SignalName(sig);
+    if (name.rfind("SIG", 0) != 0) return "";
+    if (sig == SIGSEGV) name += ": a stack overflow on a deep or cyclic node hierarchy, or a bad memory access";
+    if (sig == SIGABRT) name += ": an internal check failed";
+    if (sig == SIGKILL) name += ": killed, perhaps by the out-of-memory killer";
+    return name;
 }
 
 }  // namespace
@@ -296,14 +161,8 @@ const char* SignalName(int sig) {
 /// parses tens of MB per second), at most kMaxDefaultImportSeconds (a 20 GB file of zeros
 /// had 11 hours).
 double ImportTimeoutSeconds(const std::string& path) {
-    if (const char* env = std::getenv("LIGHTMESH_IMPORT_TIMEOUT"); env && *env) {
-        char* end = nullptr;
-        const double v = std::strtod(env, &end);
-        if (end != env && *end == 0 && v > 0 && v < 1e7) return v;
-    }
     struct stat st {};
-    const double mb = stat(path.c_str(), &st) == 0 ? static_cast<double>(st.st_size) / 1e6 : 0;
-    return std::min(60.0 + 2.0 * mb, kMaxDefaultImportSeconds);
+    return ChildDeadlineSeconds(stat(path.c_str(), &st) == 0 ? static_cast<uint64_t>(st.st_size) : 0);
 }
 
 namespace {
@@ -333,35 +192,10 @@ void HugePagesForTheImporter() {
 
 LoadedMesh ImportIsolated(const std::string& path, const MeshLoadOptions& options,
                           const ImportBudget& budget) {
-    const int fd = memfd_create("lightmesh-import", MFD_CLOEXEC);
-    if (fd < 0) return ImportMeshInProcess(path, options, budget);
-    // One import at a time forks (another thread must not be inside Assimp's singleton
-    // logger when the child copies the process).
-    static std::mutex forkMutex;
-    std::unique_lock<std::mutex> lock(forkMutex);
-    std::fflush(nullptr);
-    const uint64_t mappedNow = MappedBytes();
-    const pid_t pid = fork();
-    if (pid < 0) {
-        lock.unlock();
-        close(fd);
-        return ImportMeshInProcess(path, options, budget);
-    }
-    if (pid == 0) {
-        // The child: import, write the result, _exit (no atexit handlers, no destructors
-        // of the parent's objects).
-        prctl(PR_SET_PDEATHSIG, SIGKILL);
-        for (int sig : {SIGINT, SIGTERM, SIGHUP}) std::signal(sig, SIG_DFL);
-#ifndef LIGHTMESH_SANITIZED
-        // The sanitizers reserve terabytes of shadow address space: no limit under them.
-        if (budget.memory && mappedNow) {
-            // At least 64 MiB, for the importer's own working set under a tiny budget.
-            const rlim_t limit = static_cast<rlim_t>(
-                mappedNow + std::max<uint64_t>(budget.memory, uint64_t(64) << 20));
-            struct rlimit rl {limit, limit};
-            setrlimit(RLIMIT_AS, &rl);
-        }
-#endif
+    // Some malformed files make Assimp loop forever (a PLY header without end_header, found
+    // by fuzz_mesh_import): the child gets a deadline, generous next to any real parse.
+    const ChildLimits limits{budget.memory, ImportTimeoutSeconds(path)};
+    const ChildOutcome child = RunInChild("lightmesh-import", limits, [&](int fd) {
         gResultFd = fd;
         HugePagesForTheImporter();
         try {
@@ -373,87 +207,33 @@ LoadedMesh ImportIsolated(const std::string& path, const MeshLoadOptions& option
         } catch (const std::exception& e) {
             WriteErrorResult(fd, StringPrintf("import failed: %s", e.what()), true);
         }
-        _exit(0);
-    }
-    // Some malformed files make Assimp loop forever (a PLY header without end_header, found
-    // by fuzz_mesh_import): the child gets a deadline, generous next to any real parse.
-    const double timeout = ImportTimeoutSeconds(path);
-    int status = 0;
-    bool timedOut = false;
-    {
-        const auto deadline = std::chrono::steady_clock::now() +
-                              std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                  std::chrono::duration<double>(timeout));
-        const int pidfd = static_cast<int>(syscall(SYS_pidfd_open, pid, 0));
-        for (;;) {
-            const pid_t done = waitpid(pid, &status, WNOHANG);
-            if (done == pid || (done < 0 && errno != EINTR)) break;
-            const auto now = std::chrono::steady_clock::now();
-            if (now >= deadline) {
-                kill(pid, SIGKILL);
-                while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-                }
-                timedOut = true;
-                break;
-            }
-            const double left = std::chrono::duration<double>(deadline - now).count();
-            if (pidfd >= 0) {
-                // Readable when the child exits: no polling latency.
-                struct pollfd p {pidfd, POLLIN, 0};
-                poll(&p, 1, static_cast<int>(std::min(left * 1000.0 + 1, 1e9)));
-            } else {
-                usleep(static_cast<useconds_t>(std::min(left, 0.002) * 1e6));
-            }
+    });
+    switch (child.end) {
+        case ChildOutcome::End::NotStarted: return ImportMeshInProcess(path, options, budget);
+        case ChildOutcome::End::TimedOut: {
+            const bool capped =
+                limits.seconds >= kMaxDefaultImportSeconds && !std::getenv("LIGHTMESH_IMPORT_TIMEOUT");
+            throw MeshFileError(path,
+                                StringPrintf("the importer did not finish within %.0f s and was "
+                                             "stopped (%s; "
+                                             "LIGHTMESH_IMPORT_TIMEOUT sets the limit in seconds)",
+                                             limits.seconds,
+                                             capped ? "the default limit's most, however large the file"
+                                                    : "Assimp loops forever on some malformed files"),
+                                true);
         }
-        if (pidfd >= 0) close(pidfd);
+        case ChildOutcome::End::Signalled:
+            throw MeshFileError(path,
+                                StringPrintf("the importer crashed (signal %d%s%s)", child.code,
+                                             ImporterSignal(child.code).empty() ? "" : ", ",
+                                             ImporterSignal(child.code).c_str()),
+                                true);
+        case ChildOutcome::End::Exited: break;
     }
-    lock.unlock();
-    if (timedOut) {
-        close(fd);
-        const bool capped = timeout >= kMaxDefaultImportSeconds && !std::getenv("LIGHTMESH_IMPORT_TIMEOUT");
-        throw MeshFileError(path,
-                            StringPrintf("the importer did not finish within %.0f s and was "
-                                         "stopped (%s; "
-                                         "LIGHTMESH_IMPORT_TIMEOUT sets the limit in seconds)",
-                                         timeout,
-                                         capped ? "the default limit's most, however large the file"
-                                                : "Assimp loops forever on some malformed files"),
-                            true);
-    }
-    // The result, mapped rather than read: one copy, into the vectors.
-    void* mapped = MAP_FAILED;
-    size_t mappedSize = 0;
-    struct stat st {};
-    if (fstat(fd, &st) == 0 && st.st_size > 0) {
-        mappedSize = static_cast<size_t>(st.st_size);
-        mapped = mmap(nullptr, mappedSize, PROT_READ, MAP_PRIVATE, fd, 0);
-    }
-    close(fd);
-    struct Unmap {
-        void* p;
-        size_t n;
-        ~Unmap() {
-            if (p != MAP_FAILED) munmap(p, n);
-        }
-    } unmap{mapped, mappedSize};
-    const std::string_view bytes =
-        mapped == MAP_FAILED ? std::string_view()
-                             : std::string_view(static_cast<const char*>(mapped), mappedSize);
-    if (WIFSIGNALED(status)) {
-        const int sig = WTERMSIG(status);
-        const char* name = SignalName(sig);
-        throw MeshFileError(path,
-                            StringPrintf("the importer crashed (signal %d%s%s)", sig,
-                                         *name ? ", " : "", name),
-                            true);
-    }
-    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || bytes.empty())
-        throw MeshFileError(path,
-                            StringPrintf("the importer crashed (exit status %d)",
-                                         WIFEXITED(status) ? WEXITSTATUS(status) : -1),
-                            true);
+    if (child.code != 0 || child.Bytes().empty())
+        throw MeshFileError(path, StringPrintf("the importer crashed (exit status %d)", child.code), true);
     try {
-        return ReadResult(path, bytes);
+        return ReadResult(path, child.Bytes());
     } catch (const MeshFileError&) {
         throw;
     } catch (const std::exception&) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "lightmesh/scene/mesh_loader.h"
+#include "lightmesh/util/isolated_child.h"
 
 struct aiMaterial;
 struct aiScene;
@@ -58,7 +59,7 @@ void CheckGltfHierarchy(const std::string& path, const ImportBudget& budget);
 // isolated_import.cpp
 
 /// The import deadline without LIGHTMESH_IMPORT_TIMEOUT: 60 s + 2 s per MB, at most this.
-inline constexpr double kMaxDefaultImportSeconds = 600;
+inline constexpr double kMaxDefaultImportSeconds = kMaxDefaultChildSeconds;
 /// The import's deadline for `path`: LIGHTMESH_IMPORT_TIMEOUT (seconds, any value up to
 /// 1e7) when set, else 60 s + 2 s per MB of the file, at most kMaxDefaultImportSeconds.
 double ImportTimeoutSeconds(const std::string& path);

@@ -11,18 +11,28 @@ namespace lm::scene_load {
 
 void AttachTextures(const json::Reader& r, const std::string& model, bool enabled, TextureCache* cache,
                     LoadedMesh* loaded, Scene* scene) {
-    bool any = false;
+    // The images the materials use, decoded together (one child process for the model).
+    std::vector<int> used;
+    if (enabled)
+        for (const Material& m : loaded->materials)
+            for (int index : {m.texture, m.alphaTexture})
+                if (index >= 0 && std::find(used.begin(), used.end(), index) == used.end()) used.push_back(index);
+    std::vector<TextureSource> sources;
+    for (int index : used) sources.push_back(std::move(loaded->textures[static_cast<size_t>(index)]));
+    const std::vector<int> got =
+        cache->GetAll(sources, model, &scene->textures, [&](const std::string& w) { r.Warn(w); });
     auto get = [&](int index) {
-        if (index < 0 || !enabled) return -1;
-        return cache->Get(loaded->textures[static_cast<size_t>(index)], model, &scene->textures,
-                          [&](const std::string& w) { r.Warn(w); });
+        const auto at = std::find(used.begin(), used.end(), index);
+        return at == used.end() ? -1 : got[static_cast<size_t>(at - used.begin())];
     };
+    bool any = false;
     for (Material& m : loaded->materials) {
         m.texture = get(m.texture);
         m.alphaTexture = get(m.alphaTexture);
         if (m.alphaTexture < 0) m.alphaSource = Material::AlphaSource::None;
         any = any || m.texture >= 0 || m.alphaTexture >= 0;
     }
+    loaded->textures.clear();  // read into the scene (their bytes moved out above)
     if (!any) loaded->mesh.uvs.clear();
 }
 

@@ -244,20 +244,19 @@ class AreaLightShadows final : public ShadowMethod {
         : scene_(scene), accel_(accel), options_(options), radii_(std::move(radii)), name_(name) {}
     std::string_view Name() const override { return name_; }
 
-    void Visibility(const ShadingPoint& sp, const bool* needed, float* vis,
-                    RenderCounters& counters) const override {
-        for (size_t i = 0; i < scene_.lights.size(); ++i) {
-            if (!needed[i]) continue;
+    void Visibility(const ShadingPoint& sp, LightIndices lights, float* vis, RenderCounters& counters) const override {
+        for (size_t k = 0; k < lights.size(); ++k) {
+            const uint32_t i = lights[k];
             const Vec3& center = scene_.lights[i].position;
             if (radii_[i] == 0) {
                 // A point light: exactly the shadow ray of "rt", so R = 0 equals RT bit for bit.
                 ++counters.shadowRays;
-                vis[i] = LightVisible(accel_, sp.origin, center) ? 1.0f : 0.0f;
+                vis[k] = LightVisible(accel_, sp.origin, center) ? 1.0f : 0.0f;
                 continue;
             }
             int rays = 0;
-            vis[i] = SphereLightVisibility(accel_, sp.origin, center, radii_[i], options_.samples,
-                                           AreaLightSeed(sp, static_cast<uint32_t>(i)), &rays);
+            vis[k] = SphereLightVisibility(accel_, sp.origin, center, radii_[i], options_.samples,
+                                           AreaLightSeed(sp, i), &rays);
             counters.shadowRays += static_cast<uint64_t>(rays);
         }
     }

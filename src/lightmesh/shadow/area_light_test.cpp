@@ -19,12 +19,11 @@ using testing::FloorScene;
 
 
 float Vis(const ShadowMethod& method, const ShadingPoint& sp, int light = 0) {
-    bool needed[64];
-    float vis[64] = {};
-    std::fill(needed, needed + 64, true);
+    const uint32_t needed[1] = {static_cast<uint32_t>(light)};
+    float vis = -1;
     RenderCounters c;
-    method.Visibility(sp, needed, vis, c);
-    return vis[light];
+    method.Visibility(sp, needed, &vis, c);
+    return vis;
 }
 
 RenderOptions AreaOptions(const Scene& s, float radius, int samples) {
@@ -172,7 +171,7 @@ TEST(AreaLight, EachLightIsSampledWithItsOwnRadius) {
     for (int k = 0; k <= 20; ++k) {
         const float x = -1.5f + 0.15f * k;
         const ShadingPoint sp = FloorPoint(x, 0.3f);
-        bool needed[2] = {true, true};
+        const uint32_t needed[2] = {0, 1};
         float vis[2] = {-1, -1}, hard[2] = {-1, -1};
         RenderCounters c, cr;
         soft->Visibility(sp, needed, vis, c);
@@ -230,7 +229,7 @@ TEST(AreaLight, PointInsideTheSphereSeesAllOfIt) {
     const Scene s = HalfPlaneScene();
     auto accel = CreateAccelerator("brute", s.mesh);
     auto soft = CreateShadowMethod("area", s, *accel, AreaOptions(s, 20.0f, 16));
-    bool needed[1] = {true};
+    const uint32_t needed[1] = {0};
     float vis[1] = {0};
     RenderCounters c;
     soft->Visibility(FloorPoint(-3, 0), needed, vis, c);  // under the occluder, inside the light

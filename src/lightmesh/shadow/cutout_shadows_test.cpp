@@ -33,7 +33,7 @@ double LitFraction(const Scene& s, const Accelerator& accel, const std::string& 
             Hit hit;
             if (!accel.Intersect(ray, &hit)) continue;
             const ShadingPoint sp = WhittedRenderer::MakeShadingPoint(s.mesh, ray, hit);
-            bool needed[1] = {true};
+            const uint32_t needed[1] = {0};
             float vis[1] = {0};
             shadows->Visibility(sp, needed, vis, counters);
             sum += vis[0];

@@ -114,6 +114,23 @@ std::vector<std::string> LightMeshVariantNames() {
     return names;
 }
 
+void LightMeshShadows::VisibilityOfMasks(const ShadingPoint* sps, const uint64_t* needed, LightValues* vis,
+                                         size_t count, RenderCounters& counters) const {
+    std::vector<std::vector<uint32_t>> ids(count);
+    std::vector<LightIndices> lists(count);
+    std::vector<std::vector<float>> values(count);
+    std::vector<float*> out(count);
+    for (size_t i = 0; i < count; ++i) {
+        for (uint64_t m = needed[i]; m; m &= m - 1) ids[i].push_back(static_cast<uint32_t>(__builtin_ctzll(m)));
+        lists[i] = ids[i];
+        values[i].resize(ids[i].size());
+        out[i] = values[i].data();
+    }
+    VisibilityMany(sps, lists.data(), out.data(), count, counters);
+    for (size_t i = 0; i < count; ++i)
+        for (size_t k = 0; k < ids[i].size(); ++k) vis[i][ids[i][k]] = values[i][k];
+}
+
 StatsLines LightMeshShadows::CounterLines(const RenderCounters& counters) const {
     const auto n = [&counters](LightMeshCount k) { return Count(counters, k); };
     const uint64_t interpolations = n(LightMeshCount::kInterpolations), fallbacks = n(LightMeshCount::kFallbacks);
@@ -283,14 +300,17 @@ LightMesh<Word>::LightMesh(const Scene& scene, const Accelerator& accel, const L
 }
 
 template <typename Word>
-inline void LightMesh<Word>::Visibility(const ShadingPoint& sp, const bool* needed, float* vis,
+inline void LightMesh<Word>::Visibility(const ShadingPoint& sp, LightIndices lights, float* vis,
                                         RenderCounters& counters) const {
-    const uint64_t ownRays = Interpolate(sp, needed, vis, counters);
-    if (thinCheck_ != ThinCheck::kOff) CheckThin(sp, needed, ownRays, vis, counters);
+    const Word needed = NeededMask(lights);
+    LightValues local;
+    const uint64_t ownRays = Interpolate(sp, needed, local, counters);
+    if (thinCheck_ != ThinCheck::kOff) CheckThin(sp, needed, ownRays, local, counters);
+    for (size_t k = 0; k < lights.size(); ++k) vis[k] = local[lights[k]];
 }
 
 template <typename Word>
-inline void LightMesh<Word>::CheckThin(const ShadingPoint& sp, const bool* needed, uint64_t ownRays, float* vis,
+inline void LightMesh<Word>::CheckThin(const ShadingPoint& sp, Word needed, uint64_t ownRays, float* vis,
                                        RenderCounters& counters) const {
     // P's own rays to the lights the nodes decided alone, traced together.
     const uint64_t checked = ThinChecked(needed, ownRays, vis);
@@ -299,10 +319,10 @@ inline void LightMesh<Word>::CheckThin(const ShadingPoint& sp, const bool* neede
 }
 
 template <typename Word>
-inline uint64_t LightMesh<Word>::ThinChecked(const bool* needed, uint64_t ownRays, const float* vis) const {
+inline uint64_t LightMesh<Word>::ThinChecked(Word needed, uint64_t ownRays, const float* vis) const {
     uint64_t checked = 0;
-    for (size_t l = 0; l < lights_.size(); ++l) {
-        if (!needed[l] || ((ownRays >> l) & 1)) continue;
+    for (uint64_t m = static_cast<uint64_t>(needed) & ~ownRays; m; m &= m - 1) {
+        const int l = __builtin_ctzll(m);
         if (vis[l] == 1.0f || (thinCheck_ == ThinCheck::kAll && vis[l] == 0.0f)) checked |= uint64_t(1) << l;
     }
     return checked;
@@ -311,10 +331,10 @@ inline uint64_t LightMesh<Word>::ThinChecked(const bool* needed, uint64_t ownRay
 template <typename Word>
 inline void LightMesh<Word>::ApplyThinCheck(const ShadingPoint& sp, uint64_t checked, uint64_t visible, float* vis,
                                             RenderCounters& counters) const {
-    for (size_t l = 0; l < lights_.size(); ++l) {
-        if (!((checked >> l) & 1)) continue;
+    for (; checked; checked &= checked - 1) {
+        const int l = __builtin_ctzll(checked);
         const bool lit = vis[l] == 1.0f;
-        const Vec3& light = lights_[l].position;
+        const Vec3& light = lights_[static_cast<size_t>(l)].position;
         ++Count(counters, LightMeshCount::kThinChecks);
         ++counters.shadowRays;
         if ((((visible >> l) & 1) != 0) == lit) continue;
@@ -327,12 +347,31 @@ inline void LightMesh<Word>::ApplyThinCheck(const ShadingPoint& sp, uint64_t che
 }
 
 template <typename Word>
-inline void LightMesh<Word>::VisibilityMany(const ShadingPoint* sps, size_t count, size_t lights, const bool* needed,
-                                            float* vis, RenderCounters& counters) const {
-    // Without a light radius there is nothing to batch; the check's rays only reach 64
-    // lights (LightsVisible's mask): beyond, point by point.
-    if (lightRadius_ == 0 || lights > 64) {
-        ShadowMethod::VisibilityMany(sps, count, lights, needed, vis, counters);
+inline void LightMesh<Word>::VisibilityMany(const ShadingPoint* sps, const LightIndices* lights, float* const* vis,
+                                            size_t count, RenderCounters& counters) const {
+    constexpr size_t kChunk = 64;
+    thread_local std::unique_ptr<LightValues[]> local(new LightValues[kChunk]);  // 16 KiB, by point and light
+    uint64_t needed[kChunk];
+    for (size_t first = 0; first < count; first += kChunk) {
+        const size_t n = std::min(kChunk, count - first);
+        for (size_t i = 0; i < n; ++i) needed[i] = NeededMask(lights[first + i]);
+        VisibilityOfMasks(sps + first, needed, local.get(), n, counters);
+        for (size_t i = 0; i < n; ++i) {
+            const LightIndices ids = lights[first + i];
+            for (size_t k = 0; k < ids.size(); ++k) vis[first + i][k] = local[i][ids[k]];
+        }
+    }
+}
+
+template <typename Word>
+inline void LightMesh<Word>::VisibilityOfMasks(const ShadingPoint* sps, const uint64_t* needed, LightValues* vis,
+                                               size_t count, RenderCounters& counters) const {
+    // Without a light radius there is nothing to batch: point by point.
+    if (lightRadius_ == 0) {
+        for (size_t i = 0; i < count; ++i) {
+            const uint64_t ownRays = Interpolate(sps[i], static_cast<Word>(needed[i]), vis[i], counters);
+            if (thinCheck_ != ThinCheck::kOff) CheckThin(sps[i], static_cast<Word>(needed[i]), ownRays, vis[i], counters);
+        }
         return;
     }
     // Every point's walk first, its narrow penumbrae's discs queued; then the discs, the
@@ -352,22 +391,22 @@ inline void LightMesh<Word>::VisibilityMany(const ShadingPoint* sps, size_t coun
         for (size_t i = 0; i < n; ++i) {
             const size_t p = first + i;
             queue.point = i;
-            const uint64_t ownRays = Interpolate(sps[p], needed + p * lights, vis + p * lights, counters);
-            checked[i] = thinCheck_ == ThinCheck::kOff ? 0 : ThinChecked(needed + p * lights, ownRays, vis + p * lights);
+            const Word mask = static_cast<Word>(needed[p]);
+            const uint64_t ownRays = Interpolate(sps[p], mask, vis[p], counters);
+            checked[i] = thinCheck_ == ThinCheck::kOff ? 0 : ThinChecked(mask, ownRays, vis[p]);
         }
         ThreadDiscQueue() = restore.previous;
-        TraceDiscs(queue, lights, vis + first * lights, counters);
+        TraceDiscs(queue, vis + first, counters);
         if (thinCheck_ == ThinCheck::kOff) continue;
         // (ApplyThinCheck counts the rays, one per checked light, as CheckThin does.)
         LightsVisibleMany(accel_, sps + first, n, lights_, checked, visible);
         for (size_t i = 0; i < n; ++i)
-            if (checked[i]) ApplyThinCheck(sps[first + i], checked[i], visible[i], vis + (first + i) * lights, counters);
+            if (checked[i]) ApplyThinCheck(sps[first + i], checked[i], visible[i], vis[first + i], counters);
     }
 }
 
 template <typename Word>
-inline void LightMesh<Word>::TraceDiscs(const DiscQueue& queue, size_t lights, float* vis,
-                                        RenderCounters& counters) const {
+inline void LightMesh<Word>::TraceDiscs(const DiscQueue& queue, LightValues* vis, RenderCounters& counters) const {
     // Per light, the outer rings of kGroup queued points in one packet, then the inner
     // rings of those the outer ring left undecided, likewise. Each ray's answer is the one
     // it gets alone, so every value is DiscLightVisibility's.
@@ -396,12 +435,15 @@ inline void LightMesh<Word>::TraceDiscs(const DiscQueue& queue, size_t lights, f
             }
         }
     };
-    for (size_t l = 0; l < lights; ++l) {
+    uint64_t queued = 0;  // the lights of the entries
+    for (const auto& entry : queue.entries) queued |= uint64_t(1) << entry.light;
+    for (; queued; queued &= queued - 1) {
+        const size_t l = static_cast<size_t>(__builtin_ctzll(queued));
         pending.clear();
         for (size_t e = 0; e < queue.entries.size(); ++e) {
             const auto& entry = queue.entries[e];
             if (entry.light != l) continue;
-            if (entry.rings.Inside()) vis[entry.point * lights + l] = 1.0f;
+            if (entry.rings.Inside()) vis[entry.point][l] = 1.0f;
             else pending.push_back(e);
         }
         if (pending.empty()) continue;
@@ -409,24 +451,24 @@ inline void LightMesh<Word>::TraceDiscs(const DiscQueue& queue, size_t lights, f
         trace(pending, false, [&](size_t e, int visible) {
             const auto& entry = queue.entries[e];
             outer[e] = visible;
-            if (entry.rings.OuterDecides(visible)) vis[entry.point * lights + l] = entry.rings.Value(visible, 0);
+            if (entry.rings.OuterDecides(visible)) vis[entry.point][l] = entry.rings.Value(visible, 0);
             else undecided.push_back(e);
         });
         trace(undecided, true, [&](size_t e, int visible) {
             const auto& entry = queue.entries[e];
-            vis[entry.point * lights + l] = entry.rings.Value(outer[e], visible);
+            vis[entry.point][l] = entry.rings.Value(outer[e], visible);
         });
     }
 }
 
 template <typename Word>
-inline uint64_t LightMesh<Word>::Interpolate(const ShadingPoint& sp, const bool* needed, float* vis,
+inline uint64_t LightMesh<Word>::Interpolate(const ShadingPoint& sp, Word neededMask, float* vis,
                                              RenderCounters& counters) const {
-    const size_t nLights = lights_.size();
-    Accumulator acc(nLights);
-    Word neededMask = 0;
-    for (size_t l = 0; l < nLights; ++l)
-        if (needed[l]) neededMask |= Word(1) << l;
+    Accumulator acc(lights_.size());
+    // The lights needed, one bit each (at most 62 in a word).
+    auto each = [needed = static_cast<uint64_t>(neededMask)](auto&& f) {
+        for (uint64_t m = needed; m; m &= m - 1) f(static_cast<size_t>(__builtin_ctzll(m)));
+    };
     if (variant_.enumeration == SphereEnumeration::Templates) {
         Word uniform = 0;
         if (!TemplateWalk(sp, neededMask, acc, counters, &uniform)) {
@@ -436,7 +478,7 @@ inline uint64_t LightMesh<Word>::Interpolate(const ShadingPoint& sp, const bool*
             // the set is not empty.
             ++Count(counters, LightMeshCount::kInterpolations);
             ++Count(counters, LightMeshCount::kUniformCellPoints);
-            for (size_t l = 0; l < nLights; ++l) vis[l] = static_cast<float>((uniform >> l) & 1);
+            each([&](size_t l) { vis[l] = static_cast<float>((uniform >> l) & 1); });
             return 0;
         }
     } else {
@@ -445,27 +487,24 @@ inline uint64_t LightMesh<Word>::Interpolate(const ShadingPoint& sp, const bool*
     if (acc.weighted) {
         ++Count(counters, LightMeshCount::kInterpolations);
         Count(counters, LightMeshCount::kNodesUsed) += acc.m;
-        for (size_t l = 0; l < nLights; ++l)
-            if (needed[l]) vis[l] = acc.vis[l];
+        each([&](size_t l) { vis[l] = acc.vis[l]; });
         return acc.ownRays;
     }
     if (acc.m == 0) {
         // No node left (a crevice, or a sphere cut off by occluders): one shadow ray
         // per light, as RT would (the paper is silent on this case).
         ++Count(counters, LightMeshCount::kFallbacks);
-        for (size_t l = 0; l < nLights; ++l) {
-            if (!needed[l]) continue;
+        each([&](size_t l) {
             ++counters.shadowRays;
             vis[l] = LightVisible(accel_, sp.origin, lights_[l].position) ? 1.0f : 0.0f;
-        }
+        });
         return ~uint64_t(0);  // every light from P's own ray
     }
     acc.Flush();
     ++Count(counters, LightMeshCount::kInterpolations);
     Count(counters, LightMeshCount::kNodesUsed) += acc.m;
     // A true division, so that m visible nodes out of m give exactly 1 (as RT does).
-    for (size_t l = 0; l < nLights; ++l)
-        vis[l] = static_cast<float>(acc.visible[l]) / static_cast<float>(acc.m);
+    each([&](size_t l) { vis[l] = static_cast<float>(acc.visible[l]) / static_cast<float>(acc.m); });
     return 0;
 }
 

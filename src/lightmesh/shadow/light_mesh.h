@@ -99,6 +99,15 @@ class LightMeshShadows : public ShadowMethod {
     /// The "lmm", "cells", "penumbra" and "thin" lines of --stats, from the LightMeshCount slots.
     StatsLines CounterLines(const RenderCounters& counters) const override;
 
+    /// A point's values by light of the mesh (at most 64 lights: one node word's).
+    using LightValues = float[64];
+    /// Visibility for the lights of a mask (the groups' path, light_mesh_groups.h): point i
+    /// needs the lights of needed[i] (bit l: light l, of the first 64) and gets light l's
+    /// value in vis[i][l]; the other entries are left as they are. Each value is the one
+    /// Visibility gives. The default goes through VisibilityMany with lists.
+    virtual void VisibilityOfMasks(const ShadingPoint* sps, const uint64_t* needed, LightValues* vis, size_t count,
+                                   RenderCounters& counters) const;
+
     virtual const LightMeshLattice& Lattice() const = 0;
     virtual const LightMeshVariant& Variant() const = 0;
     /// Bytes of node storage per node (1 for up to 6 lights; LightMeshStorageBytesPerNode).

@@ -29,64 +29,80 @@ class LightMeshGroups final : public LightMeshShadows {
     LightMeshGroups(const Scene& scene, std::vector<std::vector<uint32_t>> groups,
                     std::vector<std::unique_ptr<LightMeshShadows>> meshes)
         : scene_(scene), groups_(std::move(groups)), meshes_(std::move(meshes)), group_(scene.lights.size()),
-          local_(scene.lights.size()) {
+          local_(scene.lights.size()), place_(scene.lights.size()) {
         for (size_t g = 0; g < groups_.size(); ++g)
             for (size_t k = 0; k < groups_[g].size(); ++k) {
                 group_[groups_[g][k]] = static_cast<uint32_t>(g);
                 local_[groups_[g][k]] = static_cast<uint32_t>(k);
+                place_[groups_[g][k]] = static_cast<uint32_t>(g << 6 | k);
             }
     }
 
     // Each group that holds a light the point needs answers its lights; the others are not
-    // asked.
-    void Visibility(const ShadingPoint& sp, const bool* needed, float* vis, RenderCounters& counters) const override {
-        bool need[kMaxLightsPerWord];
-        float v[kMaxLightsPerWord];
-        for (size_t g = 0; g < groups_.size(); ++g) {
-            const std::vector<uint32_t>& ids = groups_[g];
-            bool any = false;
-            for (size_t k = 0; k < ids.size(); ++k) any |= (need[k] = needed[ids[k]]);
-            if (!any) continue;
-            std::fill(v, v + ids.size(), 0.0f);
-            meshes_[g]->Visibility(sp, need, v, counters);
-            for (size_t k = 0; k < ids.size(); ++k)
-                if (need[k]) vis[ids[k]] = v[k];
-        }
+    // asked. As a block of one point.
+    void Visibility(const ShadingPoint& sp, LightIndices lights, float* vis, RenderCounters& counters) const override {
+        float* out[1] = {vis};
+        VisibilityMany(&sp, &lights, out, 1, counters);
     }
 
-    // Group by group, the points that need one of its lights, as one block.
-    void VisibilityMany(const ShadingPoint* sps, size_t count, size_t lights, const bool* needed, float* vis,
+    // Group by group, the points that need one of its lights, as one block. One pass over
+    // the points' lists makes each point's mask per group (bit: the light's place in the
+    // group) and notes where each listed light's value goes; each group answers its points'
+    // masks by light (VisibilityOfMasks), and the values go to their places.
+    void VisibilityMany(const ShadingPoint* sps, const LightIndices* lights, float* const* vis, size_t count,
                         RenderCounters& counters) const override {
-        thread_local std::vector<ShadingPoint> points;
-        thread_local std::vector<size_t> which;
-        thread_local std::vector<uint8_t> need;  // bools (vector<bool> has no data())
-        thread_local std::vector<float> v;
-        for (size_t g = 0; g < groups_.size(); ++g) {
-            const std::vector<uint32_t>& ids = groups_[g];
-            const size_t n = ids.size();
-            points.clear(), which.clear(), need.clear();
-            for (size_t i = 0; i < count; ++i) {
-                const bool* pn = needed + i * lights;
-                const size_t at = need.size();
-                bool any = false;
-                for (size_t k = 0; k < n; ++k) {
-                    need.push_back(pn[ids[k]]);
-                    any |= pn[ids[k]];
+        constexpr size_t kChunk = 64;
+        const size_t groups = groups_.size();
+        const SplitHold hold(kChunk * groups, (groups + 63) / 64);
+        Split& s = *hold;
+        uint64_t* touched = s.touched.data();  // the groups some point of the chunk needs
+        for (size_t first = 0; first < count; first += kChunk) {
+            const size_t n = std::min(kChunk, count - first);
+            std::fill(s.masks.begin(), s.masks.begin() + static_cast<std::ptrdiff_t>(n * groups), uint64_t(0));
+            for (size_t i = 0; i < n; ++i) {
+                const LightIndices ids = lights[first + i];
+                uint64_t* masks = s.masks.data() + i * groups;
+                uint32_t* slots = s.slots.data() + i * groups * 64;
+                // A run of lights of one group (nearby lights: often several in a row) adds
+                // to a mask in a register, not through memory.
+                uint32_t group = 0;
+                uint64_t mask = 0;
+                for (size_t k = 0; k < ids.size(); ++k) {
+                    const uint32_t where = place_[ids[k]], g = where >> 6, l = where & 63;
+                    if (g != group) {
+                        masks[group] |= mask;
+                        group = g, mask = 0;
+                    }
+                    mask |= uint64_t(1) << l;
+                    slots[where] = static_cast<uint32_t>(k);
                 }
-                if (!any) {
-                    need.resize(at);
-                    continue;
-                }
-                points.push_back(sps[i]);
-                which.push_back(i);
+                masks[group] |= mask;
             }
-            if (points.empty()) continue;
-            v.assign(points.size() * n, 0.0f);
-            meshes_[g]->VisibilityMany(points.data(), points.size(), n, reinterpret_cast<const bool*>(need.data()),
-                                       v.data(), counters);
-            for (size_t j = 0; j < points.size(); ++j)
-                for (size_t k = 0; k < n; ++k)
-                    if (need[j * n + k]) vis[which[j] * lights + ids[k]] = v[j * n + k];
+            std::fill(s.touched.begin(), s.touched.end(), uint64_t(0));
+            for (size_t i = 0; i < n; ++i)
+                for (size_t g = 0; g < groups; ++g)
+                    if (s.masks[i * groups + g]) touched[g >> 6] |= uint64_t(1) << (g & 63);
+            for (size_t word = 0; word < s.touched.size(); ++word)
+                for (uint64_t t = touched[word]; t; t &= t - 1) {
+                    const size_t g = word * 64 + static_cast<size_t>(__builtin_ctzll(t));
+                    size_t m = 0;
+                    for (size_t i = 0; i < n; ++i) {
+                        const uint64_t mask = s.masks[i * groups + g];
+                        if (!mask) continue;
+                        s.points[m] = sps[first + i], s.needed[m] = mask, s.which[m] = static_cast<uint32_t>(i);
+                        ++m;
+                    }
+                    meshes_[g]->VisibilityOfMasks(s.points.data(), s.needed.data(), s.values.get(), m, counters);
+                    for (size_t j = 0; j < m; ++j) {
+                        const size_t i = s.which[j];
+                        const uint32_t* slots = s.slots.data() + (i * groups + g) * 64;
+                        float* out = vis[first + i];
+                        for (uint64_t b = s.needed[j]; b; b &= b - 1) {
+                            const int l = __builtin_ctzll(b);
+                            out[slots[l]] = s.values[j][l];
+                        }
+                    }
+                }
         }
     }
 
@@ -155,6 +171,52 @@ class LightMeshGroups final : public LightMeshShadows {
     }
 
   private:
+    // VisibilityMany's scratch, per thread, kept between calls (only the entries of the
+    // lights listed are touched): per point and group the mask of lights needed and, per
+    // light of the group, its place in the point's list (slots); one group's block.
+    struct Split {
+        std::vector<uint64_t> masks;
+        std::vector<uint32_t> slots;
+        std::vector<ShadingPoint> points;
+        std::vector<uint64_t> needed;
+        std::vector<uint32_t> which;
+        std::vector<uint64_t> touched;  // a bit per group
+        std::unique_ptr<LightMeshShadows::LightValues[]> values;
+        size_t room = 0;  // point × group entries
+        bool inUse = false;
+        void Reserve(size_t entries, size_t groupWords) {
+            touched.resize(groupWords);
+            if (room >= entries) return;
+            room = entries;
+            masks.resize(entries), slots.resize(entries * 64);
+            constexpr size_t kBlock = 64;
+            points.resize(kBlock), needed.resize(kBlock), which.resize(kBlock);
+            values.reset(new LightMeshShadows::LightValues[kBlock]);
+        }
+    };
+
+    // The thread's Split while a call holds it (a nested call, should a wait in one steal
+    // work, gets one of its own).
+    class SplitHold {
+      public:
+        SplitHold(size_t entries, size_t groupWords) : s_(mine().inUse ? fresh_ : mine()) {
+            s_.inUse = true;
+            s_.Reserve(entries, groupWords);
+        }
+        ~SplitHold() { s_.inUse = false; }
+        SplitHold(const SplitHold&) = delete;
+        SplitHold& operator=(const SplitHold&) = delete;
+        Split& operator*() const { return s_; }
+
+      private:
+        static Split& mine() {
+            thread_local Split s;
+            return s;
+        }
+        Split fresh_;
+        Split& s_;
+    };
+
     // A node word is written where a group evaluated it: its pages are touched then.
     uint64_t TouchedBytes() const {
         uint64_t bytes = 0;
@@ -166,6 +228,7 @@ class LightMeshGroups final : public LightMeshShadows {
     const std::vector<std::vector<uint32_t>> groups_;
     const std::vector<std::unique_ptr<LightMeshShadows>> meshes_;
     std::vector<uint32_t> group_, local_;  // per scene light: its group, its place there
+    std::vector<uint32_t> place_;          // the two in one: group · 64 + place
 };
 
 }  // namespace

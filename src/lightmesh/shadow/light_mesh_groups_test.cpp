@@ -63,6 +63,49 @@ Scene ManyLightScene(int n) {
     return s;
 }
 
+// VisibilityOfMasks (the groups hand each group's mesh its points' lights as masks) gives
+// each needed light its Visibility value and leaves the other entries alone: a mesh of one
+// word (its own override, with and without a light radius: the batched penumbra mode) and
+// the groups' mesh of 130 lights (the default, through the lists; its first 64 lights).
+TEST(LightMeshGroups, MasksGiveWhatTheListsGive) {
+    for (const int lights : {40, 130})
+        for (const float radius : {0.0f, 0.08f}) {
+            const Scene s = ManyLightScene(lights);
+            const testing::LightMeshProbe probe(s, testing::LightMeshSettings(40, 2.0f, "consensus", radius));
+            std::vector<ShadingPoint> points;
+            for (float x = -2.2f; x <= 2.6f; x += 0.31f)
+                for (float z = -2.1f; z <= 2.2f; z += 0.37f) points.push_back(RenderedFloorPoint(x, z));
+            const size_t n = std::min<size_t>(64, s.lights.size());
+            std::vector<uint64_t> masks(points.size());
+            for (size_t p = 0; p < points.size(); ++p)
+                for (size_t l = 0; l < n; ++l)
+                    if ((p * 7 + l * 3) % 5 != 0) masks[p] |= uint64_t(1) << l;  // some lights not needed
+            const float kSentinel = -3.0f;
+            std::vector<LightMeshShadows::LightValues> byMask(points.size());
+            for (auto& v : byMask) std::fill(v, v + 64, kSentinel);
+            RenderCounters c;
+            probe.lmm->VisibilityOfMasks(points.data(), masks.data(), byMask.data(), points.size(), c);
+            int partial = 0;
+            for (size_t p = 0; p < points.size(); ++p) {
+                std::vector<uint32_t> ids;
+                for (size_t l = 0; l < n; ++l)
+                    if ((masks[p] >> l) & 1) ids.push_back(static_cast<uint32_t>(l));
+                std::vector<float> vis(ids.size(), -1.0f);
+                probe.lmm->Visibility(points[p], ids, vis.data(), c);
+                for (size_t l = 0, k = 0; l < 64; ++l) {
+                    if (!((masks[p] >> l) & 1)) {
+                        ASSERT_EQ(byMask[p][l], kSentinel) << lights << " lights, point " << p << ", light " << l;
+                        continue;
+                    }
+                    ASSERT_EQ(byMask[p][l], vis[k]) << lights << " lights, radius " << radius << ", point " << p << ", light " << l;
+                    partial += vis[k] > 0 && vis[k] < 1;
+                    ++k;
+                }
+            }
+            EXPECT_GT(partial, 20) << lights << " lights, radius " << radius;
+        }
+}
+
 // Formula (2) averages each light's bits over a node set that does not depend on the
 // lights, so with 130 lights in three groups every light's value is its value alone (the
 // light mesh run one light, one bit, at a time), to the bit; point by point and in blocks
@@ -87,8 +130,8 @@ TEST(LightMeshGroups, ManyLightsEqualTheLightMeshRunLightByLight) {
         std::vector<float> one(points.size() * n, -1.0f), block(points.size() * n, -1.0f);
         RenderCounters c;
         for (size_t p = 0; p < points.size(); ++p)
-            many.lmm->Visibility(points[p], reinterpret_cast<const bool*>(&needed[p * n]), &one[p * n], c);
-        many.lmm->VisibilityMany(points.data(), points.size(), n, reinterpret_cast<const bool*>(needed.data()), block.data(), c);
+            testing::FlaggedVisibility(*many.lmm, points[p], &needed[p * n], n, &one[p * n], c);
+        testing::FlaggedVisibilityMany(*many.lmm, points.data(), points.size(), needed.data(), n, block.data(), c);
         int partial = 0, checked = 0;
         for (size_t l = 0; l < n; l += 3) {  // every third light alone (a mesh each)
             Scene alone = s;

@@ -147,14 +147,18 @@ class LightMesh final : public LightMeshShadows {
 
     // Formula (2) at P for every light needed (light_mesh.cpp), then, with a light radius,
     // the thin-occluder check (CheckThin).
-    void Visibility(const ShadingPoint& sp, const bool* needed, float* vis,
-                    RenderCounters& counters) const override;
+    // Inside, the lights needed are a mask of this mesh's lights (at most 62) and the values
+    // go to an array indexed by light (LightValues) before they are handed out in the list's order.
+    void Visibility(const ShadingPoint& sp, LightIndices lights, float* vis, RenderCounters& counters) const override;
     // With a light radius, a block of points in stages: every point's walk, its narrow
     // penumbrae's discs queued (DiscQueue); the discs, light by light (TraceDiscs); the
     // thin check's rays light by light, as hard shadows trace theirs (LightsVisibleMany);
     // each point gets what Visibility gives it. Without one, point by point.
-    void VisibilityMany(const ShadingPoint* sps, size_t count, size_t lights, const bool* needed, float* vis,
+    void VisibilityMany(const ShadingPoint* sps, const LightIndices* lights, float* const* vis, size_t count,
                         RenderCounters& counters) const override;
+    // The work of both, by mask and light (VisibilityMany gathers the lists' values from it).
+    void VisibilityOfMasks(const ShadingPoint* sps, const uint64_t* needed, LightValues* vis, size_t count,
+                           RenderCounters& counters) const override;
 
     ShadowFigures Figures() const override;
 
@@ -578,15 +582,20 @@ class LightMesh final : public LightMeshShadows {
     // answer is P's own rays' either way, so this is leak-free too; only the kernel's
     // nodes (weights) still need their segments.
     bool OwnRayChecksAgreement() const { return thinCheck_ == ThinCheck::kAll; }
-    void CheckThin(const ShadingPoint& sp, const bool* needed, uint64_t ownRays, float* vis,
-                   RenderCounters& counters) const;
+    static Word NeededMask(LightIndices lights) {
+        Word mask = 0;
+        for (const uint32_t l : lights) mask |= Word(1) << l;
+        return mask;
+    }
+    void CheckThin(const ShadingPoint& sp, Word needed, uint64_t ownRays, float* vis, RenderCounters& counters) const;
     // The lights whose nodes' answer P's own ray checks (CheckThin), and what to do with
     // the rays' answers (bit l of `visible`: light l seen from P).
-    uint64_t ThinChecked(const bool* needed, uint64_t ownRays, const float* vis) const;
+    uint64_t ThinChecked(Word needed, uint64_t ownRays, const float* vis) const;
     void ApplyThinCheck(const ShadingPoint& sp, uint64_t checked, uint64_t visible, float* vis,
                         RenderCounters& counters) const;
     // Formula (2) itself (or the penumbra mode's answer); returns Accumulator::ownRays.
-    uint64_t Interpolate(const ShadingPoint& sp, const bool* needed, float* vis, RenderCounters& counters) const;
+    // vis is indexed by light; only the lights of `needed` are written.
+    uint64_t Interpolate(const ShadingPoint& sp, Word needed, float* vis, RenderCounters& counters) const;
     // Whether light sampling (not the nodes' kernel) answers a penumbra of support ρ.
     bool Sampled(float rho2) const { return !(rho2 >= kNarrow * kNarrow * lattice_.h * lattice_.h); }
     // The batched penumbra mode (VisibilityMany): the (point, light) pairs whose light's
@@ -607,7 +616,7 @@ class LightMesh final : public LightMeshShadows {
         return queue;
     }
     // The queued discs' values into vis (`lights` per point, the block's first point at 0).
-    void TraceDiscs(const DiscQueue& queue, size_t lights, float* vis, RenderCounters& counters) const;
+    void TraceDiscs(const DiscQueue& queue, LightValues* vis, RenderCounters& counters) const;
     // The penumbra mode's answers (light_mesh_penumbra.h).
     float NarrowPenumbra(const ShadingPoint& sp, size_t l, float rho, const std::vector<PenumbraNode>& nodes,
                          RenderCounters& counters) const;

@@ -11,6 +11,7 @@
 #include <unordered_map>
 
 #include "support/floor_scenes.h"
+#include "support/light_indices.h"
 #include "support/light_mesh_probe.h"
 #include "lightmesh/render/whitted.h"
 #include "lightmesh/scene/demo_scene.h"
@@ -90,9 +91,8 @@ TEST(LightMesh, EveryWordSizeGivesEachLightItsOwnAverage) {
                 for (float x = -2.2f; x <= 2.6f; x += 0.0731f)
                     for (float z = -2.1f; z <= 2.2f; z += 0.0917f) {
                         const ShadingPoint sp = testing::RenderedFloorPoint(x, z);
-                        bool needed[64];
+                        const std::vector<uint32_t> needed = testing::AllLights(s.lights.size());
                         float vis[64] = {};
-                        std::fill(needed, needed + 64, true);
                         RenderCounters c;
                         many.lmm->Visibility(sp, needed, vis, c);
                         for (int l = 0; l < lights; ++l) {
@@ -692,7 +692,7 @@ TEST(LightMesh, CellSummaryAnswersOpenFloorWithoutSegments) {
     LightMeshOptions o;
     o.variant = "consensus";
     auto lmm = CreateLightMeshShadows(s, *accel, o);
-    bool needed[64] = {true};
+    const uint32_t needed[1] = {0};
     for (const auto& [x, expected] : {std::pair{6.0f, 1.0f}, std::pair{8.5f, 1.0f}}) {
         float vis[64] = {};
         RenderCounters c;
@@ -735,7 +735,7 @@ TEST(LightMesh, CellSummariesLookOnlyAsFarAsTheirPlanesPointsReach) {
     ASSERT_GT(L.Node(0, cj + 3, 0).y, reach);  // the cube's top layer is beyond every floor sphere
     ASSERT_LT(0.46f, L.Node(0, cj + 3, 0).y);  // and the plate within the cube's reach
 
-    bool needed[64] = {true};
+    const uint32_t needed[1] = {0};
     float vis[64] = {};
     RenderCounters c;
     lmm->Visibility(FloorPoint(6.0f, 0.3f), needed, vis, c);

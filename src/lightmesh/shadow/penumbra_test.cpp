@@ -155,7 +155,7 @@ TEST(Penumbra, ContactShadowsStayHardWhereTodaysMethodBlurs) {
     o.cc = 100;
     o.ki = 2.0f;
     auto fixed = CreateLightMeshShadows(s, *p.accel, o);
-    bool needed[64] = {true};
+    const uint32_t needed[1] = {0};
     int hardFixed = 0, hardPenumbra = 0, points = 0;
     for (float x = -0.5f; x <= 0.5f; x += 0.01f, ++points) {
         const ShadingPoint sp = FloorPoint(x, 0.3f);
@@ -379,8 +379,8 @@ TEST(Penumbra, BatchedPointsGetWhatEachGetsAlone) {
         std::vector<float> one(slots, -1.0f), many(slots, -1.0f);
         RenderCounters cOne, cMany;
         for (size_t i = 0; i < points.size(); ++i)
-            probe.lmm->Visibility(points[i], needed.get() + i * lights, one.data() + i * lights, cOne);
-        probe.lmm->VisibilityMany(points.data(), points.size(), lights, needed.get(), many.data(), cMany);
+            testing::FlaggedVisibility(*probe.lmm, points[i], needed.get() + i * lights, lights, one.data() + i * lights, cOne);
+        testing::FlaggedVisibilityMany(*probe.lmm, points.data(), points.size(), needed.get(), lights, many.data(), cMany);
         EXPECT_EQ(many, one) << c.check << ", " << lights << " lights";
         EXPECT_EQ(cMany.shadowRays, cOne.shadowRays) << c.check;
         for (size_t k = 0; k < kMethodCounterSlots; ++k) EXPECT_EQ(cMany.method[k], cOne.method[k]) << c.check << " " << k;

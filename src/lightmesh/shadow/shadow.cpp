@@ -43,6 +43,19 @@ uint64_t LightsVisible(const Accelerator& accel, const Vec3& origin, std::span<c
     return visible;
 }
 
+void LightsVisible(const Accelerator& accel, const Vec3& origin, std::span<const PointLight> lights, LightIndices ids,
+                   float* vis) {
+    constexpr size_t kChunk = 16;  // as above
+    Ray rays[kChunk];
+    bool blocked[kChunk];
+    for (size_t first = 0; first < ids.size(); first += kChunk) {
+        const size_t n = std::min(kChunk, ids.size() - first);
+        for (size_t k = 0; k < n; ++k) rays[k] = LightSegment(origin, lights[ids[first + k]].position);
+        accel.OccludedMany(rays, n, blocked);
+        for (size_t k = 0; k < n; ++k) vis[first + k] = blocked[k] ? 0.0f : 1.0f;
+    }
+}
+
 uint64_t LightsVisibleMany(const Accelerator& accel, const ShadingPoint* sps, size_t count,
                            std::span<const PointLight> lights, const uint64_t* masks, uint64_t* visible) {
     constexpr size_t kChunk = 64;
@@ -51,7 +64,11 @@ uint64_t LightsVisibleMany(const Accelerator& accel, const ShadingPoint* sps, si
     bool blocked[kChunk];
     uint64_t traced = 0;
     std::fill(visible, visible + count, uint64_t(0));
-    for (size_t l = 0; l < std::min<size_t>(lights.size(), 64); ++l) {
+    uint64_t any = 0;  // the lights some point needs
+    for (size_t i = 0; i < count; ++i) any |= masks[i];
+    if (lights.size() < 64) any &= (uint64_t(1) << lights.size()) - 1;
+    for (; any; any &= any - 1) {
+        const size_t l = static_cast<size_t>(__builtin_ctzll(any));
         size_t n = 0;
         auto trace = [&] {
             accel.OccludedMany(rays, n, blocked);
@@ -71,9 +88,9 @@ uint64_t LightsVisibleMany(const Accelerator& accel, const ShadingPoint* sps, si
     return traced;
 }
 
-void ShadowMethod::VisibilityMany(const ShadingPoint* sps, size_t count, size_t lights, const bool* needed,
-                                  float* vis, RenderCounters& counters) const {
-    for (size_t i = 0; i < count; ++i) Visibility(sps[i], needed + i * lights, vis + i * lights, counters);
+void ShadowMethod::VisibilityMany(const ShadingPoint* sps, const LightIndices* lights, float* const* vis, size_t count,
+                                  RenderCounters& counters) const {
+    for (size_t i = 0; i < count; ++i) Visibility(sps[i], lights[i], vis[i], counters);
 }
 
 namespace {
@@ -81,67 +98,54 @@ namespace {
 /// "none": every light is visible everywhere (the floor that shadow work sits on).
 class NoShadows final : public ShadowMethod {
   public:
-    explicit NoShadows(size_t lights) : lights_(lights) {}
     std::string_view Name() const override { return "none"; }
-    void Visibility(const ShadingPoint&, const bool*, float* vis, RenderCounters&) const override {
-        for (size_t i = 0; i < lights_; ++i) vis[i] = 1.0f;
+    void Visibility(const ShadingPoint&, LightIndices lights, float* vis, RenderCounters&) const override {
+        std::fill(vis, vis + lights.size(), 1.0f);
     }
-
-  private:
-    size_t lights_;
 };
 
-/// "rt": Whitted's hard shadows, one shadow ray per light (formula (1)). Any number of
-/// lights: their rays go out 64 lights at a time (a mask each), in light order.
+/// "rt": Whitted's hard shadows, one shadow ray per light (formula (1)), to the lights the
+/// point needs only.
 class HardShadows final : public ShadowMethod {
   public:
     HardShadows(const Scene& scene, const Accelerator& accel) : scene_(scene), accel_(accel) {}
     std::string_view Name() const override { return "rt"; }
-    void Visibility(const ShadingPoint& sp, const bool* needed, float* vis,
-                    RenderCounters& counters) const override {
-        const size_t lights = scene_.lights.size();
-        const std::span<const PointLight> all(scene_.lights);
-        for (size_t first = 0; first < lights; first += 64) {
-            const size_t n = std::min<size_t>(64, lights - first);
-            uint64_t mask = 0;
-            for (size_t i = 0; i < n; ++i)
-                if (needed[first + i]) mask |= uint64_t(1) << i;
-            if (!mask) continue;
-            counters.shadowRays += static_cast<uint64_t>(__builtin_popcountll(mask));
-            const uint64_t visible = LightsVisible(accel_, sp.origin, all.subspan(first, n), mask);
-            for (size_t i = 0; i < n; ++i)
-                if (needed[first + i]) vis[first + i] = (visible >> i) & 1 ? 1.0f : 0.0f;
-        }
+    void Visibility(const ShadingPoint& sp, LightIndices lights, float* vis, RenderCounters& counters) const override {
+        counters.shadowRays += lights.size();
+        LightsVisible(accel_, sp.origin, scene_.lights, lights, vis);
     }
     // Light by light, the points' shadow rays to it together (LightsVisibleMany): rays
     // from neighbouring points to one light are coherent, which a back-end traces as a
-    // packet (Embree's rtcOccluded8, the grid's coherent traversal). 64 lights at a time.
-    void VisibilityMany(const ShadingPoint* sps, size_t count, size_t lights, const bool* needed, float* vis,
+    // packet (Embree's rtcOccluded8, the grid's coherent traversal). The lights go 64 at a
+    // time (a mask per point), only the runs of 64 that some point's list reaches: each
+    // point's list is walked once, whatever the scene's count.
+    void VisibilityMany(const ShadingPoint* sps, const LightIndices* lights, float* const* vis, size_t count,
                         RenderCounters& counters) const override {
         constexpr size_t kChunk = 64;  // points at a time, for the masks on the stack
         const std::span<const PointLight> all(scene_.lights);
         uint64_t masks[kChunk], visible[kChunk];
+        size_t at[kChunk], start[kChunk];  // each point's place in its list: now, at the run's start
         for (size_t first = 0; first < count; first += kChunk) {
             const size_t n = std::min(kChunk, count - first);
-            for (size_t l0 = 0; l0 < lights; l0 += 64) {
-                const size_t nl = std::min<size_t>(64, lights - l0);
-                uint64_t any = 0;
+            const LightIndices* ids = lights + first;
+            std::fill(at, at + n, size_t(0));
+            for (;;) {
+                uint32_t run = UINT32_MAX;  // the lowest run of 64 lights a point still needs
+                for (size_t i = 0; i < n; ++i)
+                    if (at[i] < ids[i].size()) run = std::min(run, ids[i][at[i]] >> 6);
+                if (run == UINT32_MAX) break;
                 for (size_t i = 0; i < n; ++i) {
+                    start[i] = at[i];
                     masks[i] = 0;
-                    const bool* need = needed + (first + i) * lights + l0;
-                    for (size_t l = 0; l < nl; ++l)
-                        if (need[l]) masks[i] |= uint64_t(1) << l;
-                    any |= masks[i];
+                    for (; at[i] < ids[i].size() && ids[i][at[i]] >> 6 == run; ++at[i])
+                        masks[i] |= uint64_t(1) << (ids[i][at[i]] & 63);
                 }
-                if (!any) continue;
-                counters.shadowRays += LightsVisibleMany(accel_, sps + first, n, all.subspan(l0, nl), masks, visible);
-                for (size_t i = 0; i < n; ++i) {
-                    float* v = vis + (first + i) * lights + l0;
-                    for (uint64_t m = masks[i]; m; m &= m - 1) {
-                        const int l = __builtin_ctzll(m);
-                        v[l] = (visible[i] >> l) & 1 ? 1.0f : 0.0f;
-                    }
-                }
+                const size_t l0 = size_t(run) << 6;
+                counters.shadowRays += LightsVisibleMany(accel_, sps + first, n, all.subspan(l0, std::min<size_t>(64, all.size() - l0)),
+                                                         masks, visible);
+                for (size_t i = 0; i < n; ++i)
+                    for (size_t k = start[i]; k < at[i]; ++k)
+                        vis[first + i][k] = (visible[i] >> (ids[i][k] & 63)) & 1 ? 1.0f : 0.0f;
             }
         }
     }
@@ -172,7 +176,7 @@ std::vector<float> LightRadii(const Scene& scene, const RenderOptions& options) 
 std::unique_ptr<ShadowMethod> CreateShadowMethod(std::string_view name, const Scene& scene,
                                                  const Accelerator& accel,
                                                  const RenderOptions& options) {
-    if (name == "none") return std::make_unique<NoShadows>(scene.lights.size());
+    if (name == "none") return std::make_unique<NoShadows>();
     if (name == "rt") return std::make_unique<HardShadows>(scene, accel);
     if (name == "soft") {
         SoftShadowOptions soft = options.soft;

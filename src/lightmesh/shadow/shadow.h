@@ -23,6 +23,9 @@ struct ShadingPoint {
     uint32_t prim = 0;  ///< the triangle p lies on (the light mesh's cell patches rely on it)
 };
 
+/// The lights a shading point needs: indices into the scene's lights, strictly ascending.
+using LightIndices = std::span<const uint32_t>;
+
 /// Named figures for --stats.
 using ShadowFigures = std::vector<std::pair<std::string, std::string>>;
 /// Lines for --stats, one per pair: the line's label ("lmm") and its text.
@@ -34,19 +37,22 @@ class ShadowMethod {
     virtual ~ShadowMethod() = default;
     virtual std::string_view Name() const = 0;
 
-    /// Writes the visibility of each light in [0, 1] to vis[0 .. lights-1]. Only lights
-    /// with needed[i] true must be filled (the others light P from behind); the rest may
-    /// be left as they are. Must be thread-safe and deterministic: the result may depend
-    /// only on the point, never on the thread or on which points were shaded before.
-    /// Counts its shadow rays in counters.shadowRays and its own work in counters.method.
-    virtual void Visibility(const ShadingPoint& sp, const bool* needed, float* vis,
+    /// Writes the visibility in [0, 1] of the lights `lights` names (indices into the
+    /// scene's lights, strictly ascending: the lights that light P, facing it and in range)
+    /// to vis[k] for lights[k], k < lights.size(), and nothing else: a method's work per
+    /// point follows the lights a point needs, not the scene's count. A light's value must
+    /// not depend on which other lights the list holds. Must be thread-safe and
+    /// deterministic: the result may depend only on the point, never on the thread or on
+    /// which points were shaded before. Counts its shadow rays in counters.shadowRays and
+    /// its own work in counters.method.
+    virtual void Visibility(const ShadingPoint& sp, LightIndices lights, float* vis,
                             RenderCounters& counters) const = 0;
 
-    /// Visibility for `count` points at once (the camera hits of a block of pixels):
-    /// needed and vis hold `lights` entries per point, point after point. Each point must
-    /// get what Visibility gives it alone. The default calls Visibility point by point;
+    /// Visibility for `count` points at once (the camera hits of a block of pixels): point i
+    /// needs lights[i] and gets their values in vis[i][0 .. lights[i].size()-1]. Each point
+    /// must get what Visibility gives it alone. The default calls Visibility point by point;
     /// hard shadows trace the points' rays to one light together (a packet).
-    virtual void VisibilityMany(const ShadingPoint* sps, size_t count, size_t lights, const bool* needed, float* vis,
+    virtual void VisibilityMany(const ShadingPoint* sps, const LightIndices* lights, float* const* vis, size_t count,
                                 RenderCounters& counters) const;
 
     /// Figures gathered during rendering and set-up, for --stats.
@@ -89,6 +95,11 @@ bool LightVisible(const Accelerator& accel, const Vec3& origin, const Vec3& ligh
 /// mask is visible.
 uint64_t LightsVisible(const Accelerator& accel, const Vec3& origin, std::span<const PointLight> lights,
                        uint64_t mask);
+
+/// LightsVisible for the lights `ids` (indices into `lights`, any number) from one origin,
+/// 16 rays at a time: vis[k] gets 1 where lights[ids[k]] is visible, else 0.
+void LightsVisible(const Accelerator& accel, const Vec3& origin, std::span<const PointLight> lights, LightIndices ids,
+                   float* vis);
 
 /// LightsVisible for many points at once, light by light: for each light, the shadow rays
 /// of the points whose mask has it go to the back-end together, 64 at a time (rays from

@@ -716,19 +716,39 @@ bool MarkBlockedCutout(const Candidate& c, const TriangleMesh& mesh, const Cutou
     } else {
         InstancedUvs(mesh, prim, &t0, &t1, &t2);
     }
-    for (int word = s0 >> 6; word <= (s1 - 1) >> 6; ++word)
-        for (uint64_t m = hit[word]; m; m &= m - 1) {
-            const int s = word * 64 + __builtin_ctzll(m);
-            const Vec3 w(wx[s], wy[s], wz[s]);
-            const float d0 = Dot(Vec3(c.m0[0], c.m0[1], c.m0[2]), w), d1 = Dot(Vec3(c.m1[0], c.m1[1], c.m1[2]), w),
-                        d2 = Dot(Vec3(c.m2[0], c.m2[1], c.m2[2]), w);
-            const float sum = d0 + d1 + d2;
-            const float b1 = sum > 0 ? d2 / sum : 0.0f, b2 = sum > 0 ? d0 / sum : 0.0f;
-            if (CutoutMask::SolidAt(*material, t0, t1, t2, b1, b2))
-                blocked[word] |= uint64_t(1) << (s & 63);
+    // The texture coordinates of four directions at a time, the scalar arithmetic of
+    // CutoutMask::SolidAt lane by lane (the same operations in the same order: the same
+    // bits), then the alpha test of each direction that meets the triangle.
+    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
+    const __m128 ax = _mm_set1_ps(c.m0[0]), ay = _mm_set1_ps(c.m0[1]), az = _mm_set1_ps(c.m0[2]);
+    const __m128 bx = _mm_set1_ps(c.m1[0]), by = _mm_set1_ps(c.m1[1]), bz = _mm_set1_ps(c.m1[2]);
+    const __m128 cx = _mm_set1_ps(c.m2[0]), cy = _mm_set1_ps(c.m2[1]), cz = _mm_set1_ps(c.m2[2]);
+    const __m128 u0 = _mm_set1_ps(t0.u), u1 = _mm_set1_ps(t1.u), u2 = _mm_set1_ps(t2.u);
+    const __m128 v0 = _mm_set1_ps(t0.v), v1 = _mm_set1_ps(t1.v), v2 = _mm_set1_ps(t2.v);
+    for (int s = s0; s < s1; s += 4) {
+        const unsigned lanes = static_cast<unsigned>(hit[s >> 6] >> (s & 63)) & 15u;
+        if (!lanes) continue;
+        const __m128 x = _mm_load_ps(wx + s), y = _mm_load_ps(wy + s), z = _mm_load_ps(wz + s);
+        const __m128 d0 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(ax, x), _mm_mul_ps(ay, y)), _mm_mul_ps(az, z));
+        const __m128 d1 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(bx, x), _mm_mul_ps(by, y)), _mm_mul_ps(bz, z));
+        const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(cx, x), _mm_mul_ps(cy, y)), _mm_mul_ps(cz, z));
+        const __m128 sum = _mm_add_ps(_mm_add_ps(d0, d1), d2);
+        const __m128 positive = _mm_cmpgt_ps(sum, zero);
+        // Lanes with sum ≤ 0 divide by 1 and are masked to 0, as the scalar test's 0.
+        const __m128 safe = _mm_or_ps(_mm_and_ps(positive, sum), _mm_andnot_ps(positive, one));
+        const __m128 b1 = _mm_and_ps(positive, _mm_div_ps(d2, safe)), b2 = _mm_and_ps(positive, _mm_div_ps(d0, safe));
+        const __m128 b0 = _mm_sub_ps(_mm_sub_ps(one, b1), b2);
+        alignas(16) float u[4], v[4];
+        _mm_store_ps(u, _mm_add_ps(_mm_add_ps(_mm_mul_ps(u0, b0), _mm_mul_ps(u1, b1)), _mm_mul_ps(u2, b2)));
+        _mm_store_ps(v, _mm_add_ps(_mm_add_ps(_mm_mul_ps(v0, b0), _mm_mul_ps(v1, b1)), _mm_mul_ps(v2, b2)));
+        for (unsigned m = lanes; m; m &= m - 1) {
+            const int lane = __builtin_ctz(m), k = s + lane;
+            if (CutoutMask::SolidUV(*material, u[lane], v[lane]))
+                blocked[k >> 6] |= uint64_t(1) << (k & 63);
             else
                 hole = true;
         }
+    }
     return hole;
 }
 
@@ -908,9 +928,8 @@ float SoftShadows::LightVisibility(const ShadingPoint& sp, size_t light, RenderC
     return SampleLight(sp, light, each, counters);
 }
 
-void SoftShadows::Visibility(const ShadingPoint& sp, const bool* needed, float* vis, RenderCounters& counters) const {
-    for (size_t i = 0; i < scene_.lights.size(); ++i)
-        if (needed[i]) vis[i] = LightVisibility(sp, i, counters);
+void SoftShadows::Visibility(const ShadingPoint& sp, LightIndices lights, float* vis, RenderCounters& counters) const {
+    for (size_t k = 0; k < lights.size(); ++k) vis[k] = LightVisibility(sp, lights[k], counters);
 }
 
 ShadowFigures SoftShadows::Figures() const {

@@ -53,7 +53,7 @@ class SoftShadows final : public ShadowMethod {
     SoftShadows(const Scene& scene, const Accelerator& accel, SoftShadowOptions options);
     ~SoftShadows() override;
     std::string_view Name() const override { return "soft"; }
-    void Visibility(const ShadingPoint& sp, const bool* needed, float* vis, RenderCounters& counters) const override;
+    void Visibility(const ShadingPoint& sp, LightIndices lights, float* vis, RenderCounters& counters) const override;
     ShadowFigures Figures() const override;
     StatsLines CounterLines(const RenderCounters& counters) const override;
 

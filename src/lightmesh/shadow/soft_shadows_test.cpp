@@ -8,6 +8,7 @@
 #include <random>
 
 #include "support/floor_scenes.h"
+#include "support/light_indices.h"
 #include "lightmesh/render/whitted.h"
 #include "lightmesh/scene/shapes.h"
 #include "lightmesh/util/error.h"
@@ -99,8 +100,8 @@ Comparison Compare(const Scene& s, const Accelerator& accel, const ShadowMethod&
     RenderCounters counters;
     for (const Probe& p : Probes(s, accel, count, seed)) {
         float vs[2] = {-1, -1}, vr[2] = {-1, -1};
-        soft.Visibility(p.sp, p.needed, vs, counters);
-        ref.Visibility(p.sp, p.needed, vr, counters);
+        testing::FlaggedVisibility(soft, p.sp, p.needed, 2, vs, counters);
+        testing::FlaggedVisibility(ref, p.sp, p.needed, 2, vr, counters);
         for (int l = 0; l < 2; ++l) {
             if (!p.needed[l]) continue;
             const double e = std::abs(vs[l] - vr[l]);
@@ -171,8 +172,8 @@ TEST(SoftShadows, ThinOccludersAndGapsKeepTheirShadows) {
             const Ray ray{target + dir * 0.5f, dir, 0.0f, Infinity};
             if (!accel->Intersect(ray, &hit)) continue;
             const ShadingPoint sp = WhittedRenderer::MakeShadingPoint(s.mesh, ray, hit);
-            const bool needed[2] = {true, false};
-            float vs[2], vr[2];
+            const uint32_t needed[1] = {0};
+            float vs[1], vr[1];
             soft->Visibility(sp, needed, vs, counters);
             ref->Visibility(sp, needed, vr, counters);
             EXPECT_NEAR(vs[0], vr[0], 0.15f) << "at " << sp.p.x << " " << sp.p.y << " " << sp.p.z;
@@ -192,8 +193,8 @@ TEST(SoftShadows, PointLightsGetRtsHardShadow) {
     int shadowed = 0;
     for (const Probe& p : Probes(s, *accel, 3000, 3)) {
         float vs[2] = {-1, -1}, vr[2] = {-1, -1};
-        soft->Visibility(p.sp, p.needed, vs, counters);
-        rt->Visibility(p.sp, p.needed, vr, counters);
+        testing::FlaggedVisibility(*soft, p.sp, p.needed, 2, vs, counters);
+        testing::FlaggedVisibility(*rt, p.sp, p.needed, 2, vr, counters);
         for (int l = 0; l < 2; ++l)
             if (p.needed[l]) {
                 EXPECT_EQ(vs[l], vr[l]);
@@ -238,7 +239,7 @@ TEST(SoftShadows, CertifiesTheUmbraUnderAWideSlab) {
     RenderCounters counters;
     for (float x = -2; x <= 2; x += 0.25f) {
         const ShadingPoint sp = testing::RenderedFloorPoint(x, 0.3f * x);
-        const bool needed[1] = {true};
+        const uint32_t needed[1] = {0};
         float v = -1;
         soft->Visibility(sp, needed, &v, counters);
         EXPECT_EQ(v, 0.0f);

@@ -42,7 +42,9 @@ const std::array<float, 256>& SrgbTable() {
     return table;
 }
 
-int WrapIndex(int i, int n, TextureWrap wrap) {
+}  // namespace
+
+int texel::WrapIndex(int i, int n, TextureWrap wrap) {
     switch (wrap) {
         case TextureWrap::Clamp: return std::clamp(i, 0, n - 1);
         case TextureWrap::Mirror: {
@@ -57,16 +59,6 @@ int WrapIndex(int i, int n, TextureWrap wrap) {
         }
     }
 }
-
-/// A texture coordinate as a finite value whose texel index stays in int range (a huge or
-/// NaN coordinate would overflow the index arithmetic).
-float Tame(float u) {
-    if (!std::isfinite(u)) return 0.0f;
-    if (!(std::abs(u) < 1e5f)) return std::fmod(u, 1.0f);  // texel indices stay within int
-    return u;
-}
-
-}  // namespace
 
 Texture::Texture(int width, int height, std::vector<uint8_t> rgba8) {
     Level l;
@@ -145,30 +137,18 @@ Texel Texture::Fetch(const Level& level, int x, int y) const {
     return {level.hdr[i], level.hdr[i + 1], level.hdr[i + 2], level.hdr[i + 3]};
 }
 
-/// Where (u, v) falls among a w × h level's texel centres: the texel (x0, y0) below and left
-/// of it (v runs up the image) and the fractions (fx, fy) towards the next ones.
-static inline void TexelPosition(int w, int h, float u, float v, int* x0, int* y0, float* fx, float* fy) {
-    const float x = Tame(u) * static_cast<float>(w) - 0.5f;
-    const float y = (1.0f - Tame(v)) * static_cast<float>(h) - 0.5f;
-    // floor without a libm call (x is within ±2^24 after Tame)
-    *x0 = static_cast<int>(x), *y0 = static_cast<int>(y);
-    *x0 -= static_cast<float>(*x0) > x;
-    *y0 -= static_cast<float>(*y0) > y;
-    *fx = x - static_cast<float>(*x0), *fy = y - static_cast<float>(*y0);
-}
-
 Texel Texture::Bilinear(const Level& level, float u, float v, TextureWrap wrapU, TextureWrap wrapV) const {
     int x0, y0;
     float fx, fy;
-    TexelPosition(level.w, level.h, u, v, &x0, &y0, &fx, &fy);
+    texel::Position(level.w, level.h, u, v, &x0, &y0, &fx, &fy);
     // One wrap per axis; the neighbour is the next texel unless that leaves the image.
-    const int xa = WrapIndex(x0, level.w, wrapU), ya = WrapIndex(y0, level.h, wrapV);
+    const int xa = texel::WrapIndex(x0, level.w, wrapU), ya = texel::WrapIndex(y0, level.h, wrapV);
     // (Repeat: x0 + 1 wraps to xa + 1 below the edge; Clamp and Mirror: where x0 is in
     // the image itself.)
     const int xb = (wrapU == TextureWrap::Repeat || x0 == xa) && xa + 1 < level.w ? xa + 1
-                                                                                   : WrapIndex(x0 + 1, level.w, wrapU);
+                                                                                   : texel::WrapIndex(x0 + 1, level.w, wrapU);
     const int yb = (wrapV == TextureWrap::Repeat || y0 == ya) && ya + 1 < level.h ? ya + 1
-                                                                                   : WrapIndex(y0 + 1, level.h, wrapV);
+                                                                                   : texel::WrapIndex(y0 + 1, level.h, wrapV);
     const float w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
     const size_t row0 = static_cast<size_t>(ya) * static_cast<size_t>(level.w),
                  row1 = static_cast<size_t>(yb) * static_cast<size_t>(level.w);
@@ -221,35 +201,19 @@ Texel Texture::SampleTrilinear(float u, float v, float lod, TextureWrap wrapU, T
 
 float Texture::TexelOpacity(int x, int y, TextureWrap wrapU, TextureWrap wrapV, int channel) const {
     const Level& level = levels_[0];
-    const size_t i = (static_cast<size_t>(WrapIndex(y, level.h, wrapV)) * static_cast<size_t>(level.w) +
-                      static_cast<size_t>(WrapIndex(x, level.w, wrapU))) * 4 + static_cast<size_t>(channel);
+    const size_t i = (static_cast<size_t>(texel::WrapIndex(y, level.h, wrapV)) * static_cast<size_t>(level.w) +
+                      static_cast<size_t>(texel::WrapIndex(x, level.w, wrapU))) * 4 + static_cast<size_t>(channel);
     return !level.ldr.empty() ? static_cast<float>(level.ldr[i]) * (1.0f / 255.0f) : level.hdr[i];
 }
 
-float Texture::Opacity(float u, float v, TextureWrap wrapU, TextureWrap wrapV, int channel) const {
+float Texture::OpacityOf(const TexelCell& cell, int channel) const {
     const Level& level = levels_[0];
-    int x0, y0;
-    float fx, fy;
-    TexelPosition(level.w, level.h, u, v, &x0, &y0, &fx, &fy);
-    int xa, xb, ya, yb;
-    // Repeat on a side of 2^k texels (most images): a mask instead of a division.
-    if (wrapU == TextureWrap::Repeat && (level.w & (level.w - 1)) == 0) {
-        xa = x0 & (level.w - 1), xb = (x0 + 1) & (level.w - 1);
-    } else {
-        xa = WrapIndex(x0, level.w, wrapU);
-        xb = (wrapU == TextureWrap::Repeat || x0 == xa) && xa + 1 < level.w ? xa + 1 : WrapIndex(x0 + 1, level.w, wrapU);
-    }
-    if (wrapV == TextureWrap::Repeat && (level.h & (level.h - 1)) == 0) {
-        ya = y0 & (level.h - 1), yb = (y0 + 1) & (level.h - 1);
-    } else {
-        ya = WrapIndex(y0, level.h, wrapV);
-        yb = (wrapV == TextureWrap::Repeat || y0 == ya) && ya + 1 < level.h ? ya + 1 : WrapIndex(y0 + 1, level.h, wrapV);
-    }
+    const float fx = cell.fx, fy = cell.fy;
     const size_t w = static_cast<size_t>(level.w), c = static_cast<size_t>(channel);
-    const size_t i00 = (static_cast<size_t>(ya) * w + static_cast<size_t>(xa)) * 4 + c,
-                 i10 = (static_cast<size_t>(ya) * w + static_cast<size_t>(xb)) * 4 + c,
-                 i01 = (static_cast<size_t>(yb) * w + static_cast<size_t>(xa)) * 4 + c,
-                 i11 = (static_cast<size_t>(yb) * w + static_cast<size_t>(xb)) * 4 + c;
+    const size_t i00 = (static_cast<size_t>(cell.ya) * w + static_cast<size_t>(cell.xa)) * 4 + c,
+                 i10 = (static_cast<size_t>(cell.ya) * w + static_cast<size_t>(cell.xb)) * 4 + c,
+                 i01 = (static_cast<size_t>(cell.yb) * w + static_cast<size_t>(cell.xa)) * 4 + c,
+                 i11 = (static_cast<size_t>(cell.yb) * w + static_cast<size_t>(cell.xb)) * 4 + c;
     float a00, a10, a01, a11;
     if (!level.ldr.empty()) {
         const uint8_t* p = level.ldr.data();
@@ -262,7 +226,22 @@ float Texture::Opacity(float u, float v, TextureWrap wrapU, TextureWrap wrapV, i
     return (a00 * (1 - fx) + a10 * fx) * (1 - fy) + (a01 * (1 - fx) + a11 * fx) * fy;
 }
 
-std::shared_ptr<const Texture> DecodeTexture(const std::string& bytes) {
+float Texture::Opacity(float u, float v, TextureWrap wrapU, TextureWrap wrapV, int channel) const {
+    return OpacityOf(CellAt(u, v, wrapU, wrapV), channel);
+}
+
+bool DecodedImage::Consistent() const {
+    if (width < 1 || height < 1 || width > kMaxTextureSize || height > kMaxTextureSize) return false;
+    const size_t n = static_cast<size_t>(width) * static_cast<size_t>(height) * 4;
+    return (ldr.size() == n && hdr.empty()) || (hdr.size() == n && ldr.empty());
+}
+
+std::shared_ptr<const Texture> DecodedImage::MakeTexture() && {
+    if (!ldr.empty()) return std::make_shared<Texture>(width, height, std::move(ldr));
+    return std::make_shared<Texture>(width, height, std::move(hdr));
+}
+
+DecodedImage DecodeImageBytes(const std::string& bytes) {
     const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
     if (bytes.empty()) ThrowError("the image is empty");
     if (bytes.size() > static_cast<size_t>(INT32_MAX)) ThrowError("the image is larger than 2 GiB");
@@ -274,46 +253,56 @@ std::shared_ptr<const Texture> DecodeTexture(const std::string& bytes) {
         ThrowError("the image is %d x %d, beyond the %d x %d textures may have", w, h, kMaxTextureSize,
                    kMaxTextureSize);
     const size_t texels = static_cast<size_t>(w) * static_cast<size_t>(h);
+    DecodedImage image;
     if (stbi_is_16_bit_from_memory(data, size)) {
         stbi_us* p = stbi_load_16_from_memory(data, size, &w, &h, &n, 4);
         if (!p) ThrowError("cannot decode the image (%s)", stbi_failure_reason());
-        std::vector<float> rgba(texels * 4);
+        image.hdr.resize(texels * 4);
         for (size_t i = 0; i < texels * 4; ++i) {
             const float x = static_cast<float>(p[i]) / 65535.0f;
-            rgba[i] = i % 4 == 3 ? x : SrgbDecode(x);
+            image.hdr[i] = i % 4 == 3 ? x : SrgbDecode(x);
         }
         stbi_image_free(p);
-        return std::make_shared<Texture>(w, h, std::move(rgba));
+    } else {
+        stbi_uc* p = stbi_load_from_memory(data, size, &w, &h, &n, 4);
+        if (!p) ThrowError("cannot decode the image (%s)", stbi_failure_reason());
+        image.ldr.assign(p, p + texels * 4);
+        stbi_image_free(p);
     }
-    stbi_uc* p = stbi_load_from_memory(data, size, &w, &h, &n, 4);
-    if (!p) ThrowError("cannot decode the image (%s)", stbi_failure_reason());
-    std::vector<uint8_t> rgba(p, p + texels * 4);
-    stbi_image_free(p);
-    return std::make_shared<Texture>(w, h, std::move(rgba));
+    image.width = w, image.height = h;
+    return image;
 }
 
-std::shared_ptr<const Texture> ReadTextureFile(const std::string& path) {
+DecodedImage ReadImageFile(const std::string& path) {
     std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : "";
     for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     if (ext == ".exr") {
-        const Image image = ReadImage(path);
-        if (image.width > kMaxTextureSize || image.height > kMaxTextureSize)
-            ThrowError("the image is %d x %d, beyond the %d x %d textures may have", image.width, image.height,
+        const Image exr = ReadImage(path);
+        if (exr.width > kMaxTextureSize || exr.height > kMaxTextureSize)
+            ThrowError("the image is %d x %d, beyond the %d x %d textures may have", exr.width, exr.height,
                        kMaxTextureSize, kMaxTextureSize);
-        std::vector<float> rgba(image.pixels.size() * 4);
-        for (size_t i = 0; i < image.pixels.size(); ++i) {
-            rgba[4 * i] = image.pixels[i].r;
-            rgba[4 * i + 1] = image.pixels[i].g;
-            rgba[4 * i + 2] = image.pixels[i].b;
-            rgba[4 * i + 3] = 1;
+        DecodedImage image;
+        image.width = exr.width, image.height = exr.height;
+        image.hdr.resize(exr.pixels.size() * 4);
+        for (size_t i = 0; i < exr.pixels.size(); ++i) {
+            image.hdr[4 * i] = exr.pixels[i].r;
+            image.hdr[4 * i + 1] = exr.pixels[i].g;
+            image.hdr[4 * i + 2] = exr.pixels[i].b;
+            image.hdr[4 * i + 3] = 1;
         }
-        return std::make_shared<Texture>(image.width, image.height, std::move(rgba));
+        return image;
     }
     std::ifstream in(path, std::ios::binary);
     if (!in) ThrowError("cannot open it");
     const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     if (in.bad()) ThrowError("cannot read it");
-    return DecodeTexture(bytes);
+    return DecodeImageBytes(bytes);
 }
+
+std::shared_ptr<const Texture> DecodeTexture(const std::string& bytes) {
+    return DecodeImageBytes(bytes).MakeTexture();
+}
+
+std::shared_ptr<const Texture> ReadTextureFile(const std::string& path) { return ReadImageFile(path).MakeTexture(); }
 
 }  // namespace lm

@@ -3,6 +3,7 @@
 // TGA and BMP through stb_image, OpenEXR). Loading each image once is texture_cache.h's.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -14,6 +15,29 @@ namespace lm {
 
 /// What a lookup outside [0, 1] reads (glTF's samplers, Assimp's aiTextureMapMode).
 enum class TextureWrap : uint8_t { Repeat, Clamp, Mirror };
+
+namespace texel {
+/// Index i of a side of n texels, wrapped.
+int WrapIndex(int i, int n, TextureWrap wrap);
+/// A texture coordinate as a finite value whose texel index stays in int range (a huge or
+/// NaN coordinate would overflow the index arithmetic).
+inline float Tame(float u) {
+    if (!std::isfinite(u)) return 0.0f;
+    if (!(std::abs(u) < 1e5f)) return std::fmod(u, 1.0f);  // texel indices stay within int
+    return u;
+}
+/// Where (u, v) falls among a w × h level's texel centres: the texel (x0, y0) below and left
+/// of it (v runs up the image) and the fractions (fx, fy) towards the next ones.
+inline void Position(int w, int h, float u, float v, int* x0, int* y0, float* fx, float* fy) {
+    const float x = Tame(u) * static_cast<float>(w) - 0.5f;
+    const float y = (1.0f - Tame(v)) * static_cast<float>(h) - 0.5f;
+    // floor without a libm call (x is within ±2^24 after Tame)
+    *x0 = static_cast<int>(x), *y0 = static_cast<int>(y);
+    *x0 -= static_cast<float>(*x0) > x;
+    *y0 -= static_cast<float>(*y0) > y;
+    *fx = x - static_cast<float>(*x0), *fy = y - static_cast<float>(*y0);
+}
+}  // namespace texel
 
 /// A colour and its coverage, linear.
 struct Texel {
@@ -53,6 +77,38 @@ class Texture {
     /// Channel `channel` (0 red … 3 alpha) at (u, v), bilinear on the full image, as stored:
     /// an 8-bit byte / 255 with no sRGB decoding (an opacity map is data, not colour).
     float Opacity(float u, float v, TextureWrap wrapU, TextureWrap wrapV, int channel) const;
+    /// The four texels Opacity at (u, v) reads on the full image, (xa, ya), (xb, ya), (xa, yb)
+    /// and (xb, yb) (wrapped), and the fractions towards (xb, yb).
+    struct TexelCell {
+        int xa, xb, ya, yb;
+        float fx, fy;
+    };
+    TexelCell CellAt(float u, float v, TextureWrap wrapU, TextureWrap wrapV) const {
+        const Level& level = levels_[0];
+        int x0, y0;
+        TexelCell c;
+        texel::Position(level.w, level.h, u, v, &x0, &y0, &c.fx, &c.fy);
+        // Repeat on a side of 2^k texels (most images): a mask instead of a division.
+        if (wrapU == TextureWrap::Repeat && (level.w & (level.w - 1)) == 0) {
+            c.xa = x0 & (level.w - 1), c.xb = (x0 + 1) & (level.w - 1);
+        } else {
+            c.xa = texel::WrapIndex(x0, level.w, wrapU);
+            c.xb = (wrapU == TextureWrap::Repeat || x0 == c.xa) && c.xa + 1 < level.w
+                       ? c.xa + 1
+                       : texel::WrapIndex(x0 + 1, level.w, wrapU);
+        }
+        if (wrapV == TextureWrap::Repeat && (level.h & (level.h - 1)) == 0) {
+            c.ya = y0 & (level.h - 1), c.yb = (y0 + 1) & (level.h - 1);
+        } else {
+            c.ya = texel::WrapIndex(y0, level.h, wrapV);
+            c.yb = (wrapV == TextureWrap::Repeat || y0 == c.ya) && c.ya + 1 < level.h
+                       ? c.ya + 1
+                       : texel::WrapIndex(y0 + 1, level.h, wrapV);
+        }
+        return c;
+    }
+    /// Opacity's bilinear value in `cell`: Opacity(u, v, …) is OpacityOf(CellAt(u, v, …), …).
+    float OpacityOf(const TexelCell& cell, int channel) const;
     /// Channel `channel` of texel (x, y) of the full image (indices wrapped as lookups wrap
     /// them), as Opacity reads it.
     float TexelOpacity(int x, int y, TextureWrap wrapU, TextureWrap wrapV, int channel) const;
@@ -71,11 +127,28 @@ class Texture {
     bool hasAlpha_ = false;
 };
 
+/// An image's full-resolution texels as a decoder gives them, before the mip-maps: 8-bit
+/// RGBA (colour sRGB-encoded) or linear float RGBA, row 0 at the top. What crosses from the
+/// decoding child process (texture_cache.h) to the renderer.
+struct DecodedImage {
+    int width = 0, height = 0;
+    std::vector<uint8_t> ldr;  ///< 4 bytes a texel, or empty
+    std::vector<float> hdr;    ///< 4 floats a texel, or empty
+    /// Whether the texels are as many as width × height says, in one of the two forms.
+    bool Consistent() const;
+    /// The texture with its mip-maps.
+    std::shared_ptr<const Texture> MakeTexture() &&;
+};
+
 /// Decodes an image file's bytes (PNG, JPEG, TGA, BMP; 8 or 16 bits per channel; grey,
 /// grey+alpha, RGB or RGBA). Throws Error with the decoder's reason.
-std::shared_ptr<const Texture> DecodeTexture(const std::string& bytes);
-/// Reads an image file: OpenEXR by its extension (.exr), else DecodeTexture. Throws Error
+DecodedImage DecodeImageBytes(const std::string& bytes);
+/// Reads an image file: OpenEXR by its extension (.exr), else DecodeImageBytes. Throws Error
 /// naming the problem (not the file: the caller names it).
+DecodedImage ReadImageFile(const std::string& path);
+/// DecodeImageBytes and ReadImageFile as textures, decoded in this process (tests; the
+/// renderer decodes in a child process, texture_cache.h).
+std::shared_ptr<const Texture> DecodeTexture(const std::string& bytes);
 std::shared_ptr<const Texture> ReadTextureFile(const std::string& path);
 
 /// The largest width or height accepted (8192² RGBA8 texels are 341 MiB with the mips).

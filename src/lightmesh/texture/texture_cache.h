@@ -27,18 +27,37 @@ struct TextureSource {
 };
 
 /// Reads each image once for a scene: sources naming the same file (by its canonical path)
-/// or embedding the same bytes share one Texture.
+/// or embedding the same bytes share one Texture. The decoders (stb_image, OpenEXR) run in a
+/// child process (util/isolated_child.h) with the memory limit and a deadline, as the
+/// importers do: a malformed image that crashes a decoder, or makes it allocate or loop
+/// without end, costs that image (one warning, the flat colour), not the render.
 class TextureCache {
   public:
     using Warn = std::function<void(const std::string&)>;
-    /// The index into *textures of the image of `source`, read the first time it is asked
-    /// for; -1 when it cannot be read, with one warning through `warn` ("<model>: texture
+    /// What turns a source into texels (throws Error with the reason); run in the child.
+    using Decoder = std::function<DecodedImage(const TextureSource&)>;
+    /// The decoders of texture.h.
+    TextureCache();
+    /// Another decoder (tests).
+    explicit TextureCache(Decoder decoder);
+
+    /// The indices into *textures of the images of `sources`, those not read before decoded
+    /// in one child process (another one for the rest when a decoder crashes); -1 for an
+    /// image that cannot be read, with one warning through `warn` ("<model>: texture
     /// <name>: <reason>; the material's flat colour is used").
-    int Get(const TextureSource& source, const std::string& model,
-            std::vector<std::shared_ptr<const Texture>>* textures, const Warn& warn);
+    std::vector<int> GetAll(const std::vector<TextureSource>& sources, const std::string& model,
+                            std::vector<std::shared_ptr<const Texture>>* textures, const Warn& warn);
+    /// GetAll of one source.
+    int Get(const TextureSource& source, const std::string& model, std::vector<std::shared_ptr<const Texture>>* textures,
+            const Warn& warn);
 
   private:
+    Decoder decoder_;
     std::unordered_map<std::string, int> index_;
 };
+
+/// The texels of a source as texture.h's decoders read them (a file, encoded bytes or raw
+/// BGRA texels), in this process. Throws Error with the reason.
+DecodedImage DecodeSource(const TextureSource& source);
 
 }  // namespace lm

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <limits>
@@ -136,6 +137,53 @@ TEST(TextureCache, ReadsEachImageOnceAndWarnsOnceForAMissingOne) {
     const int r = cache.Get(raw, "m.fbx", &textures, warn);
     ASSERT_EQ(r, 2);
     EXPECT_EQ(textures[2]->Sample(0.5f, 0.5f, 0, TextureWrap::Repeat, TextureWrap::Repeat).Rgb(), Color(1, 0, 0));
+}
+
+TEST(TextureCache, ADecoderCrashCostsItsImageOnly) {
+    // The decoders run in a child process: one that crashes on an image (here on purpose)
+    // leaves that image with the flat colour and a warning; the next child decodes the rest.
+    TextureCache cache([](const TextureSource& s) {
+        if (s.name == "crash.png") std::abort();
+        return DecodeSource(s);
+    });
+    std::vector<std::shared_ptr<const Texture>> textures;
+    std::vector<std::string> warnings;
+    TextureSource good, crash, other;
+    good.file = DataDir + "/texels.png";
+    good.name = "texels.png";
+    crash.bytes = "crash";
+    crash.name = "crash.png";
+    other.rawWidth = other.rawHeight = 1;
+    other.bytes = std::string("\x00\xff\x00\xff", 4);  // green
+    other.name = "raw";
+    const std::vector<int> got = cache.GetAll({good, crash, other, good}, "m.gltf", &textures,
+                                              [&](const std::string& w) { warnings.push_back(w); });
+    EXPECT_EQ(got, (std::vector<int>{0, -1, 1, 0}));
+    ASSERT_EQ(textures.size(), 2u);
+    EXPECT_EQ(textures[0]->Width(), 2);
+    EXPECT_EQ(textures[1]->Sample(0.5f, 0.5f, 0, TextureWrap::Repeat, TextureWrap::Repeat).Rgb(), Color(0, 1, 0));
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("m.gltf: texture \"crash.png\": the image decoder crashed on it (signal 6, SIGABRT); "
+                               "the material's flat colour is used"),
+              std::string::npos)
+        << warnings[0];
+}
+
+TEST(TextureCache, AnImageTooLargeToDecodeIsAWarning) {
+    // A PNG header claiming 8192 x 8192 texels with nothing behind it: refused or failed in
+    // the child, never decoded into gigabytes here.
+    std::string png = ReadBytes(DataDir + "/texels.png");
+    TextureCache cache;
+    std::vector<std::shared_ptr<const Texture>> textures;
+    std::vector<std::string> warnings;
+    TextureSource s;
+    s.bytes = png.substr(0, 33);  // signature and IHDR only
+    s.name = "cut.png";
+    EXPECT_EQ(cache.Get(s, "m.glb", &textures, [&](const std::string& w) { warnings.push_back(w); }), -1);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("m.glb: texture \"cut.png\": cannot decode the image"), std::string::npos)
+        << warnings[0];
+    EXPECT_TRUE(textures.empty());
 }
 
 }  // namespace

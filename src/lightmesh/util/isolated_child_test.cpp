@@ -1,0 +1,94 @@
+// isolated_child_test.cpp -- RunInChild: the result comes back; a crash, an endless loop and
+// an allocation past the limit end the child, not this process, and say how.
+#include "lightmesh/util/isolated_child.h"
+
+#include <gtest/gtest.h>
+
+#include <csignal>
+#include <cstdlib>
+#include <new>
+#include <unistd.h>
+#include <vector>
+
+namespace lm {
+namespace {
+
+TEST(IsolatedChild, ItsResultComesBackThroughTheMemfd) {
+    const std::vector<float> big(100000, 2.5f);
+    const ChildOutcome child = RunInChild("test", ChildLimits{}, [&](int fd) {
+        ChildWriter w;
+        w.Pod<int32_t>(7);
+        w.Str("seven");
+        w.Vec(big);
+        w.Bools({true, false, true});
+        if (!w.WriteTo(fd)) _exit(4);
+        ChildWriter more;
+        more.Pod<int32_t>(8);
+        if (!more.AppendTo(fd)) _exit(4);
+    });
+    ASSERT_TRUE(child.Clean());
+    ChildReader r(child.Bytes());
+    EXPECT_EQ(r.Pod<int32_t>(), 7);
+    EXPECT_EQ(r.Str(), "seven");
+    EXPECT_EQ(r.Vec<float>(), big);
+    EXPECT_EQ(r.Bools(), (std::vector<bool>{true, false, true}));
+    EXPECT_EQ(r.Pod<int32_t>(), 8);
+    EXPECT_TRUE(r.AtEnd());
+    EXPECT_THROW(r.Pod<int32_t>(), std::runtime_error);  // past the end: "truncated result"
+}
+
+TEST(IsolatedChild, ACrashIsASignalNotTheEndOfThisProcess) {
+    const ChildOutcome child = RunInChild("test", ChildLimits{}, [](int) { std::abort(); });
+    ASSERT_EQ(child.end, ChildOutcome::End::Signalled);
+    EXPECT_EQ(child.code, SIGABRT);
+    EXPECT_EQ(SignalName(child.code), "SIGABRT");
+    EXPECT_TRUE(child.Bytes().empty());
+}
+
+TEST(IsolatedChild, AnEndlessLoopIsStoppedAtTheDeadline) {
+    ChildLimits limits;
+    limits.seconds = 0.3;
+    const ChildOutcome child = RunInChild("test", limits, [](int) {
+        volatile int spin = 0;
+        for (;;) spin = spin + 1;
+    });
+    EXPECT_EQ(child.end, ChildOutcome::End::TimedOut);
+    EXPECT_FALSE(child.Clean());
+}
+
+TEST(IsolatedChild, AnExceptionOutOfTheWorkIsExitStatusThree) {
+    const ChildOutcome child = RunInChild("test", ChildLimits{}, [](int) { throw std::runtime_error("no"); });
+    EXPECT_EQ(child.end, ChildOutcome::End::Exited);
+    EXPECT_EQ(child.code, 3);
+}
+
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define LIGHTMESH_SANITIZED 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+#define LIGHTMESH_SANITIZED 1
+#endif
+#endif
+
+#ifndef LIGHTMESH_SANITIZED  // the sanitizers' shadow memory takes no address-space limit
+TEST(IsolatedChild, AnAllocationPastTheLimitFailsInTheChild) {
+    ChildLimits limits;
+    limits.memory = uint64_t(64) << 20;
+    const ChildOutcome child = RunInChild("test", limits, [](int fd) {
+        ChildWriter w;
+        try {
+            std::vector<char> bomb(size_t(4) << 30, 1);
+            w.Pod<uint8_t>(bomb[12345]);
+        } catch (const std::bad_alloc&) {
+            w.Pod<uint8_t>(42);
+        }
+        w.WriteTo(fd);
+    });
+    ASSERT_TRUE(child.Clean());
+    ChildReader r(child.Bytes());
+    EXPECT_EQ(r.Pod<uint8_t>(), 42);
+}
+#endif
+
+}  // namespace
+}  // namespace lm
