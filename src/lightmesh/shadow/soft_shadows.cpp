@@ -270,6 +270,12 @@ SoftShadows::~SoftShadows() {
 
 std::unique_ptr<SoftShadows::Receiver> SoftShadows::BuildReceiver(const CellList& list, uint32_t id, const Vec3& L,
                                                                   float R) const {
+    return scene_.mesh.instances ? BuildReceiverOf<true>(list, id, L, R) : BuildReceiverOf<false>(list, id, L, R);
+}
+
+template <bool kInstanced>
+std::unique_ptr<SoftShadows::Receiver> SoftShadows::BuildReceiverOf(const CellList& list, uint32_t id, const Vec3& L,
+                                                                    float R) const {
     // The box grown a little: a point on a face of the cell belongs to the triangles that
     // touch it, and shading origins sit a hair off their surfaces.
     const Bounds3& box = list.box;
@@ -278,7 +284,7 @@ std::unique_ptr<SoftShadows::Receiver> SoftShadows::BuildReceiver(const CellList
     auto rec = std::make_unique<Receiver>();
     Vec3 poly[9];
     Triangle rtScratch;
-    const Triangle& rt = Tri(id, &rtScratch);
+    const Triangle& rt = TriOf<kInstanced>(id, &rtScratch);
     const Vec3 r0 = V3(rt.v0), r1 = V3(rt.v1), r2 = V3(rt.v2);
     const Vec3 rlo = Min(Min(r0, r1), r2), rhi = Max(Max(r0, r1), r2);
     const int nv = ClipToBox(r0, r1, r2, grown, poly);
@@ -306,7 +312,7 @@ std::unique_ptr<SoftShadows::Receiver> SoftShadows::BuildReceiver(const CellList
     for (size_t e = 0; e < list.count; ++e) {
         const uint32_t prim = list.prims[e];
         Triangle tScratch;
-        const Triangle& t = Tri(prim, &tScratch);
+        const Triangle& t = TriOf<kInstanced>(prim, &tScratch);
         const Vec3 v0 = V3(t.v0), v1 = V3(t.v1), v2 = V3(t.v2);
         if (side != 0) {
             const float tol = 1e-5f * lenR * (MaxComponent(Abs(r0)) + MaxComponent(Max(Abs(v0), Max(Abs(v1), Abs(v2)))));
@@ -343,7 +349,7 @@ std::unique_ptr<SoftShadows::Receiver> SoftShadows::BuildReceiver(const CellList
         if (!code) continue;
         if (cut && cut->IsCutout(rec->entries[e] & kPrimMask)) continue;  // holes let light through
         Triangle tScratch;
-        const Triangle& t = Tri(rec->entries[e] & kPrimMask, &tScratch);
+        const Triangle& t = TriOf<kInstanced>(rec->entries[e] & kPrimMask, &tScratch);
         const Vec3 n = V3(t.n) * (code == kInFront ? 1.0f : -1.0f), v0 = V3(t.v0), v1 = V3(t.v1), v2 = V3(t.v2);
         const float lenT = Length(n);
         bool covers = true;
@@ -375,7 +381,7 @@ std::unique_ptr<SoftShadows::Receiver> SoftShadows::BuildReceiver(const CellList
         }
         const uint32_t code = rec->entries[e] >> kSideShift;
         Triangle tScratch;
-        const Triangle& t = Tri(rec->entries[e] & kPrimMask, &tScratch);
+        const Triangle& t = TriOf<kInstanced>(rec->entries[e] & kPrimMask, &tScratch);
         const float sign = code == kInFront ? 1.0f : -1.0f;
         const Vec3 n = V3(t.n) * sign;
         if (code)
@@ -388,6 +394,12 @@ std::unique_ptr<SoftShadows::Receiver> SoftShadows::BuildReceiver(const CellList
 }
 
 std::unique_ptr<SoftShadows::CellList> SoftShadows::BuildList(const BallHull& hull, const Bounds3& box,
+                                                              size_t light) const {
+    return scene_.mesh.instances ? BuildListOf<true>(hull, box, light) : BuildListOf<false>(hull, box, light);
+}
+
+template <bool kInstanced>
+std::unique_ptr<SoftShadows::CellList> SoftShadows::BuildListOf(const BallHull& hull, const Bounds3& box,
                                                               size_t light) const {
     thread_local std::vector<uint32_t> ids;
     ids.clear();
@@ -411,7 +423,7 @@ std::unique_ptr<SoftShadows::CellList> SoftShadows::BuildList(const BallHull& hu
     keys.clear();
     for (uint32_t id : ids) {
         Triangle tScratch;
-        const Triangle& t = Tri(id, &tScratch);
+        const Triangle& t = TriOf<kInstanced>(id, &tScratch);
         const Vec3 n = V3(t.n), v0 = V3(t.v0);
         const float len = Length(n);
         if (!(len > 0)) continue;
@@ -427,7 +439,7 @@ std::unique_ptr<SoftShadows::CellList> SoftShadows::BuildList(const BallHull& hu
             if (sC > extent * 1.0001f + 1e-5f * len * Length(boxCenter - v0)) continue;
         }
         const uint32_t code = side > 0 ? kInFront : side < 0 ? kBehind : 0;
-        const float area = id < flatCount_ ? area_[id] : LengthSquared(n);  // the same value
+        const float area = !kInstanced || id < flatCount_ ? area_[id] : LengthSquared(n);  // the same value
         keys.push_back(static_cast<uint64_t>(~std::bit_cast<uint32_t>(area)) << 32 | uint64_t{id} << 2 | code);
     }
     list->count = static_cast<uint32_t>(keys.size());
@@ -453,7 +465,7 @@ std::unique_ptr<SoftShadows::CellList> SoftShadows::BuildList(const BallHull& hu
         list->codes[e] = code;
         if (code) {
             Triangle tScratch;
-            const Triangle& t = Tri(id, &tScratch);
+            const Triangle& t = TriOf<kInstanced>(id, &tScratch);
             const Vec3 m = V3(t.n) * (code == kInFront ? 1.0f : -1.0f);
             g[0] = m.x, g[4] = m.y, g[8] = m.z, g[12] = -Dot(m, V3(t.v0));
         } else {
@@ -467,7 +479,7 @@ std::unique_ptr<SoftShadows::CellList> SoftShadows::BuildList(const BallHull& hu
     const float grow = 1e-4f * h_ + 1e-5f * MaxComponent(Max(Abs(box.lo), Abs(box.hi)));
     for (uint32_t id : ids) {
         Triangle tScratch;
-        const Triangle& t = Tri(id, &tScratch);
+        const Triangle& t = TriOf<kInstanced>(id, &tScratch);
         const Vec3 lo = Min(Min(V3(t.v0), V3(t.v1)), V3(t.v2)), hi = Max(Max(V3(t.v0), V3(t.v1)), V3(t.v2));
         if (lo.x <= box.hi.x + grow && lo.y <= box.hi.y + grow && lo.z <= box.hi.z + grow && hi.x >= box.lo.x - grow &&
             hi.y >= box.lo.y - grow && hi.z >= box.lo.z - grow)

@@ -76,6 +76,12 @@ class SoftShadows final : public ShadowMethod {
   private:
     const CellList* List(const Vec3& o, size_t light, std::unique_ptr<CellList>* own, RenderCounters& counters) const;
     std::unique_ptr<CellList> BuildList(const BallHull& hull, const Bounds3& box, size_t light) const;
+    /// BuildList and BuildReceiver for a scene with instances or without (kInstanced false:
+    /// every triangle read from tris_, no test per entry).
+    template <bool kInstanced>
+    std::unique_ptr<CellList> BuildListOf(const BallHull& hull, const Bounds3& box, size_t light) const;
+    template <bool kInstanced>
+    std::unique_ptr<Receiver> BuildReceiverOf(const CellList& list, uint32_t prim, const Vec3& L, float R) const;
     /// The list of cell `box` for `light`: the hull of the cell's bounding ball and the
     /// light's sphere holds every segment from a point of the cell to a point of the light.
     std::unique_ptr<CellList> BuildCell(const Bounds3& box, size_t light) const;
@@ -107,6 +113,11 @@ class SoftShadows final : public ShadowMethod {
         return InstancedTri(id, scratch);
     }
     [[gnu::noinline]] const Triangle& InstancedTri(uint32_t id, Triangle* scratch) const;
+    template <bool kInstanced>
+    const Triangle& TriOf(uint32_t id, Triangle* scratch) const {
+        if constexpr (kInstanced) return Tri(id, scratch);
+        else return tris_[id];
+    }
     // The lattice of cells: cell (i, j, k) is origin_ + [i, i+1)·h × ... Cells are grouped
     // in blocks of 4³, allocated on first use; a block holds an atomic pointer per cell and
     // light, published once (compare-and-swap; the loser frees its own copy, which is
