@@ -69,29 +69,28 @@ float Affine::Determinant() const {
     return static_cast<float>(d);
 }
 
+Vec3 Affine::ApplyNormal(const Vec3& n) const {
+    // Normals transform by the inverse transpose of the linear part; the cofactor matrix is
+    // that times det, and the scale disappears when renormalising. Its sign is kept
+    // (multiplying by sign(det)) so a normal stays on the same side.
+    const float(*a)[4] = m;
+    const float cof[3][3] = {
+        {a[1][1] * a[2][2] - a[1][2] * a[2][1], a[1][2] * a[2][0] - a[1][0] * a[2][2],
+         a[1][0] * a[2][1] - a[1][1] * a[2][0]},
+        {a[0][2] * a[2][1] - a[0][1] * a[2][2], a[0][0] * a[2][2] - a[0][2] * a[2][0],
+         a[0][1] * a[2][0] - a[0][0] * a[2][1]},
+        {a[0][1] * a[1][2] - a[0][2] * a[1][1], a[0][2] * a[1][0] - a[0][0] * a[1][2],
+         a[0][0] * a[1][1] - a[0][1] * a[1][0]}};
+    const float sign = Determinant() < 0 ? -1.0f : 1.0f;
+    const Vec3 r(cof[0][0] * n.x + cof[0][1] * n.y + cof[0][2] * n.z, cof[1][0] * n.x + cof[1][1] * n.y + cof[1][2] * n.z,
+                 cof[2][0] * n.x + cof[2][1] * n.y + cof[2][2] * n.z);
+    const float len = Length(r);
+    return len > 0 ? r * (sign / len) : r;
+}
+
 void TransformMesh(TriangleMesh* mesh, const Affine& t) {
     for (Vec3& p : mesh->positions) p = t.ApplyPoint(p);
-    if (!mesh->normals.empty()) {
-        // Normals transform by the inverse transpose of the linear part; the cofactor
-        // matrix is that times det, and the scale disappears when renormalising. Its sign
-        // is kept (multiplying by sign(det)) so a normal stays on the same side.
-        const float(*a)[4] = t.m;
-        const float cof[3][3] = {
-            {a[1][1] * a[2][2] - a[1][2] * a[2][1], a[1][2] * a[2][0] - a[1][0] * a[2][2],
-             a[1][0] * a[2][1] - a[1][1] * a[2][0]},
-            {a[0][2] * a[2][1] - a[0][1] * a[2][2], a[0][0] * a[2][2] - a[0][2] * a[2][0],
-             a[0][1] * a[2][0] - a[0][0] * a[2][1]},
-            {a[0][1] * a[1][2] - a[0][2] * a[1][1], a[0][2] * a[1][0] - a[0][0] * a[1][2],
-             a[0][0] * a[1][1] - a[0][1] * a[1][0]}};
-        const float sign = t.Determinant() < 0 ? -1.0f : 1.0f;
-        for (Vec3& n : mesh->normals) {
-            const Vec3 r(cof[0][0] * n.x + cof[0][1] * n.y + cof[0][2] * n.z,
-                         cof[1][0] * n.x + cof[1][1] * n.y + cof[1][2] * n.z,
-                         cof[2][0] * n.x + cof[2][1] * n.y + cof[2][2] * n.z);
-            const float len = Length(r);
-            n = len > 0 ? r * (sign / len) : r;
-        }
-    }
+    for (Vec3& n : mesh->normals) n = t.ApplyNormal(n);
     if (t.Determinant() < 0)
         for (auto& tri : mesh->triangles) std::swap(tri[1], tri[2]);
 }

@@ -22,6 +22,9 @@ struct Affine {
     Affine operator*(const Affine& b) const;
     Vec3 ApplyPoint(const Vec3& p) const;
     Vec3 ApplyVector(const Vec3& v) const;
+    /// A shading normal through the inverse transpose of the linear part, renormalised,
+    /// on the same side of its surface under a mirroring transform (zero stays zero).
+    Vec3 ApplyNormal(const Vec3& n) const;
     /// Determinant of the linear 3×3 part (negative: the transform mirrors).
     float Determinant() const;
 };

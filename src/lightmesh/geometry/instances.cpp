@@ -9,24 +9,6 @@ namespace lm {
 
 namespace {
 
-// The linear part's cofactor matrix with det's sign: how TransformMesh maps a normal
-// (before renormalising).
-Vec3 NormalThrough(const Affine& t, const Vec3& n) {
-    const float(*a)[4] = t.m;
-    const float cof[3][3] = {
-        {a[1][1] * a[2][2] - a[1][2] * a[2][1], a[1][2] * a[2][0] - a[1][0] * a[2][2],
-         a[1][0] * a[2][1] - a[1][1] * a[2][0]},
-        {a[0][2] * a[2][1] - a[0][1] * a[2][2], a[0][0] * a[2][2] - a[0][2] * a[2][0],
-         a[0][1] * a[2][0] - a[0][0] * a[2][1]},
-        {a[0][1] * a[1][2] - a[0][2] * a[1][1], a[0][2] * a[1][0] - a[0][0] * a[1][2],
-         a[0][0] * a[1][1] - a[0][1] * a[1][0]}};
-    const float sign = t.Determinant() < 0 ? -1.0f : 1.0f;
-    const Vec3 r(cof[0][0] * n.x + cof[0][1] * n.y + cof[0][2] * n.z, cof[1][0] * n.x + cof[1][1] * n.y + cof[1][2] * n.z,
-                 cof[2][0] * n.x + cof[2][1] * n.y + cof[2][2] * n.z);
-    const float len = Length(r);
-    return len > 0 ? r * (sign / len) : r;
-}
-
 // Corner k of a world triangle is corner Order(k) of its prototype's (TransformMesh swaps
 // corners 1 and 2 of a mirrored triangle).
 int Order(const MeshInstance& in, int k) { return in.toWorld.Determinant() < 0 && k ? 3 - k : k; }
@@ -78,7 +60,7 @@ bool InstancedMeshes::Normals(uint32_t id, Vec3 n[3]) const {
     const TriangleMesh& proto = prototypes_[in.prototype];
     if (proto.normals.empty()) return false;
     const auto& t = proto.triangles[id - in.first];
-    for (int k = 0; k < 3; ++k) n[k] = NormalThrough(in.toWorld, proto.normals[t[Order(in, k)]]);
+    for (int k = 0; k < 3; ++k) n[k] = in.toWorld.ApplyNormal(proto.normals[t[Order(in, k)]]);
     return true;
 }
 
