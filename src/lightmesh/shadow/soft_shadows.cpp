@@ -737,6 +737,16 @@ bool MarkBlockedCutout(const Candidate& c, const TriangleMesh& mesh, const Cutou
     const __m128 cx = _mm_set1_ps(c.m2[0]), cy = _mm_set1_ps(c.m2[1]), cz = _mm_set1_ps(c.m2[2]);
     const __m128 u0 = _mm_set1_ps(t0.u), u1 = _mm_set1_ps(t1.u), u2 = _mm_set1_ps(t2.u);
     const __m128 v0 = _mm_set1_ps(t0.v), v1 = _mm_set1_ps(t1.v), v2 = _mm_set1_ps(t2.v);
+    // The cell table's lookup four lanes at a time where the image repeats on sides of 2^k
+    // texels (Texture::CellAt's mask path: the same texel position, the same cell); a lane
+    // whose cell is mixed, or whose coordinates Tame would change, takes SolidUV.
+    const int W = material->image->Width(), H = material->image->Height();
+    const bool table = !material->cells.empty() && material->wrapU == TextureWrap::Repeat &&
+                       material->wrapV == TextureWrap::Repeat && (W & (W - 1)) == 0 && (H & (H - 1)) == 0;
+    const __m128 fw = _mm_set1_ps(static_cast<float>(W)), fh = _mm_set1_ps(static_cast<float>(H)),
+                 half = _mm_set1_ps(0.5f), tame = _mm_set1_ps(1e5f),
+                 absMask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    const __m128i maskW = _mm_set1_epi32(W - 1), maskH = _mm_set1_epi32(H - 1);
     for (int s = s0; s < s1; s += 4) {
         const unsigned lanes = static_cast<unsigned>(hit[s >> 6] >> (s & 63)) & 15u;
         if (!lanes) continue;
@@ -751,11 +761,29 @@ bool MarkBlockedCutout(const Candidate& c, const TriangleMesh& mesh, const Cutou
         const __m128 b1 = _mm_and_ps(positive, _mm_div_ps(d2, safe)), b2 = _mm_and_ps(positive, _mm_div_ps(d0, safe));
         const __m128 b0 = _mm_sub_ps(_mm_sub_ps(one, b1), b2);
         alignas(16) float u[4], v[4];
-        _mm_store_ps(u, _mm_add_ps(_mm_add_ps(_mm_mul_ps(u0, b0), _mm_mul_ps(u1, b1)), _mm_mul_ps(u2, b2)));
-        _mm_store_ps(v, _mm_add_ps(_mm_add_ps(_mm_mul_ps(v0, b0), _mm_mul_ps(v1, b1)), _mm_mul_ps(v2, b2)));
+        const __m128 U = _mm_add_ps(_mm_add_ps(_mm_mul_ps(u0, b0), _mm_mul_ps(u1, b1)), _mm_mul_ps(u2, b2));
+        const __m128 V = _mm_add_ps(_mm_add_ps(_mm_mul_ps(v0, b0), _mm_mul_ps(v1, b1)), _mm_mul_ps(v2, b2));
+        _mm_store_ps(u, U);
+        _mm_store_ps(v, V);
+        alignas(16) int32_t cell[4] = {-1, -1, -1, -1};
+        if (table) {
+            const __m128 X = _mm_sub_ps(_mm_mul_ps(U, fw), half);
+            const __m128 Y = _mm_sub_ps(_mm_mul_ps(_mm_sub_ps(one, V), fh), half);
+            __m128i x0 = _mm_cvttps_epi32(X), y0 = _mm_cvttps_epi32(Y);
+            x0 = _mm_add_epi32(x0, _mm_castps_si128(_mm_cmpgt_ps(_mm_cvtepi32_ps(x0), X)));  // floor
+            y0 = _mm_add_epi32(y0, _mm_castps_si128(_mm_cmpgt_ps(_mm_cvtepi32_ps(y0), Y)));
+            alignas(16) int32_t xa[4], ya[4];
+            _mm_store_si128(reinterpret_cast<__m128i*>(xa), _mm_and_si128(x0, maskW));
+            _mm_store_si128(reinterpret_cast<__m128i*>(ya), _mm_and_si128(y0, maskH));
+            const int tamed = _mm_movemask_ps(_mm_and_ps(_mm_cmplt_ps(_mm_and_ps(U, absMask), tame),
+                                                         _mm_cmplt_ps(_mm_and_ps(V, absMask), tame)));
+            for (int lane = 0; lane < 4; ++lane)
+                if (tamed >> lane & 1) cell[lane] = ya[lane] * W + xa[lane];
+        }
         for (unsigned m = lanes; m; m &= m - 1) {
             const int lane = __builtin_ctz(m), k = s + lane;
-            if (CutoutMask::SolidUV(*material, u[lane], v[lane]))
+            const uint8_t known = cell[lane] >= 0 ? material->cells[static_cast<size_t>(cell[lane])] : 0;
+            if (known ? known == CutoutMaterial::kCellSolid : CutoutMask::SolidUV(*material, u[lane], v[lane]))
                 blocked[k >> 6] |= uint64_t(1) << (k & 63);
             else
                 hole = true;
