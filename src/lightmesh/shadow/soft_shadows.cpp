@@ -702,14 +702,6 @@ inline void MarkBlocked(const Candidate& c, const float* wx, const float* wy, co
     }
 }
 
-/// An instanced triangle's texture coordinates, in its world corners' order (out of line:
-/// MarkBlockedCutout stays small enough for its alpha lookups to be inlined).
-[[gnu::noinline]] void InstancedUvs(const TriangleMesh& mesh, uint32_t prim, TexCoord* t0, TexCoord* t1, TexCoord* t2) {
-    TexCoord uv[3];
-    mesh.UvsOf(prim, uv);
-    *t0 = uv[0], *t1 = uv[1], *t2 = uv[2];
-}
-
 /// MarkBlocked for a cut-out triangle `prim`: a direction that meets it is blocked only
 /// where the point it meets is solid (CutoutMask::Solid at that point's barycentrics: the
 /// edge planes' values along w are proportional to them, d1 : d2 : d0 for vertices 0, 1, 2).
@@ -721,13 +713,9 @@ bool MarkBlockedCutout(const Candidate& c, const TriangleMesh& mesh, const Cutou
     uint64_t hit[kMaxSamples / 64] = {};
     MarkBlocked(c, wx, wy, wz, tk, s0, s1, hit);
     const CutoutMaterial* material = cut.MaterialOf(prim);
-    TexCoord t0, t1, t2;
-    if (prim < mesh.TriangleCount()) {
-        const auto& tri = mesh.triangles[prim];
-        t0 = mesh.uvs[tri[0]], t1 = mesh.uvs[tri[1]], t2 = mesh.uvs[tri[2]];
-    } else {
-        InstancedUvs(mesh, prim, &t0, &t1, &t2);
-    }
+    TexCoord uv[3];  // flat ones in place, instanced ones out of line
+    mesh.UvsOf(prim, uv);
+    const TexCoord &t0 = uv[0], &t1 = uv[1], &t2 = uv[2];
     // The texture coordinates of four directions at a time, the scalar arithmetic of
     // CutoutMask::SolidAt lane by lane (the same operations in the same order: the same
     // bits), then the alpha test of each direction that meets the triangle.
