@@ -48,14 +48,7 @@ int RunInfo(const CommonOptions& common, const std::string& accelName, int grid)
         const auto& inst = *scene.mesh.instances;
         size_t protoTriangles = 0;
         for (const lm::TriangleMesh& p : inst.Prototypes()) protoTriangles += p.TriangleCount();
-        // What the instanced triangles would take flattened: 3 positions' worth of vertices
-        // shared as in their prototypes, the indices and material ids.
-        size_t flatBytes = 0;
-        for (const lm::MeshInstance& in : inst.Instances()) {
-            const lm::TriangleMesh& p = inst.Prototypes()[in.prototype];
-            flatBytes += p.positions.size() * sizeof(lm::Vec3) + p.normals.size() * sizeof(lm::Vec3) +
-                         p.uvs.size() * sizeof(lm::TexCoord) + p.triangles.size() * 16;
-        }
+        const size_t flatBytes = inst.FlattenedBytes();  // what the instanced triangles take flattened
         std::printf("instances  %s of %zu prototype%s (%s triangles), standing for %s triangles; %s (flattened: %s); "
                     "%s flat triangles\n",
                     Count(inst.Instances().size()).c_str(), inst.Prototypes().size(),

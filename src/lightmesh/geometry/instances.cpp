@@ -4,6 +4,7 @@
 #include <utility>
 
 #include "lightmesh/util/error.h"
+#include "lightmesh/util/system.h"
 
 namespace lm {
 
@@ -101,8 +102,30 @@ void InstancedMeshes::HarmoniseAttributes(TriangleMesh* flat) {
     for (TriangleMesh& p : prototypes_) fix(p);
 }
 
+uint64_t InstancedMeshes::FlattenedBytes() const {
+    uint64_t bytes = 0;
+    for (const MeshInstance& in : instances_) {
+        const TriangleMesh& p = prototypes_[in.prototype];
+        bytes += p.positions.size() * sizeof(Vec3) + p.normals.size() * sizeof(Vec3) + p.uvs.size() * sizeof(TexCoord) +
+                 p.triangles.size() * 16;
+    }
+    return bytes;
+}
+
 void FlattenInstances(TriangleMesh* mesh) {
     if (!mesh->instances) return;
+    // The flattened triangles at the pipeline's cost per triangle (the import's rule), or
+    // their own bytes if more, against half the budget (the import's share).
+    const uint64_t triangles = mesh->TriangleCount() + mesh->instances->TriangleCount();
+    const uint64_t need = std::max<uint64_t>(mesh->instances->FlattenedBytes(), triangles * kPipelineBytesPerTriangle);
+    const uint64_t budget = PhysicalMemoryBytes();
+    if (budget && need > budget / 2)
+        ThrowError("flattening %s instances into %s triangles would take about %s (%s a triangle through the "
+                   "pipeline), more than half of the %s this process may use (LIGHTMESH_MEMORY_LIMIT); the default "
+                   "soft shadows and rt, area and denoised on embree trace instances as they are",
+                   FormatCount(mesh->instances->Instances().size()).c_str(),
+                   FormatCount(triangles).c_str(), FormatBytes(need).c_str(),
+                   FormatBytes(kPipelineBytesPerTriangle).c_str(), FormatBytes(budget).c_str());
     const std::shared_ptr<const InstancedMeshes> inst = std::move(mesh->instances);
     mesh->instances.reset();
     for (const MeshInstance& in : inst->Instances()) {

@@ -54,6 +54,10 @@ class InstancedMeshes {
 
     /// Bytes of the prototypes and the instance table.
     size_t Bytes() const;
+    /// Bytes the instanced triangles take flattened (FlattenInstances): each instance's
+    /// vertices, shading normals and texture coordinates as its prototype has them, and 16
+    /// bytes a triangle (indices, material id).
+    uint64_t FlattenedBytes() const;
 
     /// Makes the shared vertex attributes agree as TriangleMesh::Append would leave them:
     /// shading normals kept only if `flat` and every prototype have them (otherwise dropped
@@ -71,7 +75,8 @@ class InstancedMeshes {
 
 /// Replaces mesh->instances by their triangles in world space, appended in id order (so
 /// every id keeps its triangle): what the back-ends and shadow methods that read triangles
-/// as one array get.
+/// as one array get. Throws Error, before allocating, when the flattened triangles would
+/// take more than half the memory this process may use (PhysicalMemoryBytes).
 void FlattenInstances(TriangleMesh* mesh);
 
 /// A copy of `mesh` with its instances flattened.

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -114,6 +115,26 @@ TEST(Instances, CrossingCountIsTheFlattenedOnes) {
     const Scene s = InstancedScene();
     const Scene f = FlatCopy(s);
     for (const Ray& r : RandomRays(s.mesh.Bounds(), 300, 7)) EXPECT_EQ(CountCrossings(s.mesh, r), CountCrossings(f.mesh, r));
+}
+
+TEST(Instances, FlatteningPastTheMemoryBudgetIsRefusedFirst) {
+    // The light mesh, brute force and the grid flatten the instances: past half the budget
+    // at the pipeline's 128 B a triangle it is one error, before anything is allocated.
+    const Scene s = InstancedScene();
+    const uint64_t need = (s.mesh.TriangleCount() + s.mesh.instances->TriangleCount()) * kPipelineBytesPerTriangle;
+    TriangleMesh m = s.mesh;
+    setenv("LIGHTMESH_MEMORY_LIMIT", std::to_string(need).c_str(), 1);  // half of it is too little
+    try {
+        FlattenInstances(&m);
+        ADD_FAILURE() << "flattened within half of " << need << " bytes";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("instances into"), std::string::npos) << e.what();
+        EXPECT_TRUE(m.instances != nullptr);  // left as it was
+    }
+    setenv("LIGHTMESH_MEMORY_LIMIT", std::to_string(2 * need + 4096).c_str(), 1);
+    EXPECT_NO_THROW(FlattenInstances(&m));
+    EXPECT_TRUE(m.instances == nullptr);
+    unsetenv("LIGHTMESH_MEMORY_LIMIT");
 }
 
 TEST(Instances, OccluderHierarchyListsTheFlattenedTriangles) {

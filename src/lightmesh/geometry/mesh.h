@@ -93,6 +93,10 @@ struct TriangleMesh {
     bool InstancedUvs(uint32_t prim, TexCoord t[3]) const;
 };
 
+/// Bytes a triangle costs through the pipeline (mesh, vertices, a back-end's structures):
+/// the import's triangle budget and the flattening of instances are checked against it.
+inline constexpr uint64_t kPipelineBytesPerTriangle = 128;
+
 /// What CleanMesh removed.
 struct CleanReport {
     size_t degenerate = 0;  ///< zero-area triangles (or with a non-finite vertex) dropped

@@ -43,7 +43,7 @@ struct MeshLoadOptions {
 struct ImportBudget {
     /// Bytes a triangle costs through the pipeline (mesh, vertices, back-end), for the
     /// triangle budget.
-    static constexpr uint64_t kBytesPerTriangle = 128;
+    static constexpr uint64_t kBytesPerTriangle = kPipelineBytesPerTriangle;
     uint64_t memory = 0;        ///< bytes the importer may use (0: no limit)
     size_t triangles = 0;       ///< triangles after instances are expanded
     size_t instances = 0;       ///< mesh instances placed (node × mesh pairs)

@@ -513,7 +513,11 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
     auto place = [&](const MeshEntry& e, uint32_t proto) {
         const Affine toWorld = e.hasTransform ? e.transform : Affine{};
         const size_t before = instances->Instances().size();
-        instances->AddInstance(proto, toWorld);
+        try {
+            instances->AddInstance(proto, toWorld);
+        } catch (const Error& err) {
+            r.Fail(e.path, err.what());  // the reference past the ids' limit
+        }
         const Bounds3& b = instances->Instances()[before].bounds;
         if (!IsFinite(b.lo) || !IsFinite(b.hi)) r.Fail(e.path, "the transform makes coordinates non-finite (too large)");
     };
