@@ -140,32 +140,56 @@ struct SoftShadows::Receiver {
     std::vector<float> soa;
 };
 
-/// A cell's triangles for one light. Each entry's plane is oriented so that the light's
-/// sphere lies on its positive side (a plane the sphere straddles is stored as 0·x − 1, on
-/// whose negative side every point lies), so a point can be shadowed by the triangle only
-/// where the plane is negative there. The planes are stored 4 entries a group, x, y, z and
-/// w of the group in turn (padding: 0·x + 1, never negative), for the per-point filter.
-/// Entries come largest triangle first. `dense`: too many entries to pay for the per-point
-/// loop; the cell's points trace rays.
+namespace {
+// The receivers every cell shares: a triangle with no part in the cell after all, and one
+// with no entry for the light on each side code (most receivers: the light reaches the
+// whole part past every triangle of the list). Not freed, not counted in the bytes.
+SoftShadows::Receiver MakeShared(float side, bool missed) {
+    SoftShadows::Receiver r;
+    r.side = side;
+    r.missed = missed;
+    return r;
+}
+const SoftShadows::Receiver kMissedReceiver = MakeShared(0.0f, true);
+const SoftShadows::Receiver kOpenReceiver[3] = {MakeShared(-1.0f, false), MakeShared(0.0f, false), MakeShared(1.0f, false)};
+bool IsShared(const SoftShadows::Receiver* r) {
+    return r == &kMissedReceiver || (r >= kOpenReceiver && r < kOpenReceiver + 3);
+}
+}  // namespace
+
+
+
+/// A cell's triangles for one light, 4 bytes an entry: the triangle's id | its side code
+/// << kSideShift. The code says which side of the triangle's plane the light's sphere lies
+/// on (kInFront, kBehind; 0: the sphere straddles it), so a point can be shadowed by the
+/// triangle only where the plane so oriented is negative there (ForSeparating). Entries
+/// come largest triangle first. `dense`: too many entries to pay for the per-point loop;
+/// the cell's points trace rays. (A list is kept per cell and light, so with many lights
+/// the lists are most of the method's memory: the planes are read from the triangles'
+/// table when needed rather than copied into every list, and receivers with no entry share
+/// one of three constant objects.)
 struct SoftShadows::CellList {
     bool dense = false;
     uint32_t count = 0;
-    Bounds3 box;                   ///< the cell
-    std::vector<float> planes;     ///< 16 floats per group of 4 entries
-    std::vector<uint32_t> prims;   ///< the triangles, padded to a multiple of 4
-    std::vector<uint32_t> codes;   ///< their side codes (kInFront, kBehind, 0)
+    Bounds3 box;                     ///< the cell
+    std::vector<uint32_t> entries;   ///< id | code << kSideShift, `count` of them
     /// The triangles whose bounds meet the cell (ascending), and each one's Receiver, built
     /// when a point on it first asks (most are never seen) and published once.
     std::vector<uint32_t> receivers;
     std::unique_ptr<std::atomic<const Receiver*>[]> recv;
-    ~CellList() {
-        for (size_t i = 0; recv && i < receivers.size(); ++i) delete recv[i].load(std::memory_order_acquire);
-    }
+    ~CellList();
 };
 
 namespace {
 const SoftShadows::CellList kEmptyList{};
 }  // namespace
+
+SoftShadows::CellList::~CellList() {
+    for (size_t i = 0; recv && i < receivers.size(); ++i) {
+        const Receiver* r = recv[i].load(std::memory_order_acquire);
+        if (!IsShared(r)) delete r;
+    }
+}
 
 SoftShadows::SoftShadows(const Scene& scene, const Accelerator& accel, SoftShadowOptions options)
     : scene_(scene),
@@ -309,8 +333,10 @@ std::unique_ptr<SoftShadows::Receiver> SoftShadows::BuildReceiverOf(const CellLi
     const float sL = Dot(nr, L - r0), margin = 1e-5f * lenR * (Length(L - r0) + R);
     const float side = sL > R * lenR + margin ? 1.0f : sL < -(R * lenR + margin) ? -1.0f : 0.0f;
     rec->side = side;
+    thread_local std::vector<uint32_t> kept;
+    kept.clear();
     for (size_t e = 0; e < list.count; ++e) {
-        const uint32_t prim = list.prims[e];
+        const uint32_t prim = list.entries[e] & kPrimMask;
         Triangle tScratch;
         const Triangle& t = TriOf<kInstanced>(prim, &tScratch);
         const Vec3 v0 = V3(t.v0), v1 = V3(t.v1), v2 = V3(t.v2);
@@ -321,7 +347,7 @@ std::unique_ptr<SoftShadows::Receiver> SoftShadows::BuildReceiverOf(const CellLi
         }
         const Vec3 lo = Min(Min(v0, v1), v2), hi = Max(Max(v0, v1), v2);
         if (!hull.MeetsBox(Bounds3(lo, hi))) continue;
-        const uint32_t code = list.codes[e];
+        const uint32_t code = list.entries[e] >> kSideShift;
         if (code) {
             // The receiver's part wholly on the light's side of the triangle's plane.
             const Vec3 n = V3(t.n) * (code == kInFront ? 1.0f : -1.0f);
@@ -331,8 +357,9 @@ std::unique_ptr<SoftShadows::Receiver> SoftShadows::BuildReceiverOf(const CellLi
                 allLit = Dot(n, poly[i] - v0) > 4 * offset * lenT + 1e-5f * lenT * Length(poly[i] - v0);
             if (allLit) continue;
         }
-        rec->entries.push_back(prim | code << kSideShift);
+        kept.push_back(prim | code << kSideShift);
     }
+    rec->entries.assign(kept.begin(), kept.end());  // its size exactly: a receiver per cell, light and triangle
     // The umbra certified: one triangle that every segment from the part to the light
     // crosses. The crossing points of the segments from a point X form the light's
     // projection from X on the triangle's plane; from a point between the part's
@@ -449,28 +476,10 @@ std::unique_ptr<SoftShadows::CellList> SoftShadows::BuildListOf(const BallHull& 
         return list;
     }
     std::sort(keys.begin(), keys.end());
-    // Each vector sized once, to what it holds.
-    const size_t groups = (list->count + 3) / 4;
-    list->prims.assign(groups * 4, 0);
-    list->codes.resize(list->count);
-    list->planes.assign(groups * 16, 0.0f);
-    for (size_t e = 0; e < groups * 4; ++e) {
-        float* g = &list->planes[(e / 4) * 16 + e % 4];
-        if (e >= list->count) {
-            g[12] = 1.0f;  // padding: never negative
-            continue;
-        }
+    list->entries.resize(list->count);
+    for (size_t e = 0; e < list->count; ++e) {
         const uint32_t id = static_cast<uint32_t>(keys[e] >> 2) & kPrimMask, code = static_cast<uint32_t>(keys[e]) & 3;
-        list->prims[e] = id;
-        list->codes[e] = code;
-        if (code) {
-            Triangle tScratch;
-            const Triangle& t = TriOf<kInstanced>(id, &tScratch);
-            const Vec3 m = V3(t.n) * (code == kInFront ? 1.0f : -1.0f);
-            g[0] = m.x, g[4] = m.y, g[8] = m.z, g[12] = -Dot(m, V3(t.v0));
-        } else {
-            g[12] = -1.0f;  // the light straddles the plane: 0·x − 1
-        }
+        list->entries[e] = id | code << kSideShift;
     }
     // The receivers: the triangles whose bounds meet the cell (grown a little, as in
     // BuildReceiver), ascending.
@@ -558,8 +567,7 @@ const SoftShadows::CellList* SoftShadows::Publish(std::atomic<const CellList*>* 
         if (built->dense) denseBuilt_.fetch_add(1, std::memory_order_relaxed);
         if (fresh != &kEmptyList) {
             const CellList* list = built.release();
-            Account(sizeof(CellList) + 4 * (list->planes.capacity() + list->prims.capacity() + list->codes.capacity() +
-                                            list->receivers.capacity()) +
+            Account(sizeof(CellList) + 4 * (list->entries.capacity() + list->receivers.capacity()) +
                     sizeof(std::atomic<const Receiver*>) * list->receivers.size());
         }
         return fresh;
@@ -567,19 +575,15 @@ const SoftShadows::CellList* SoftShadows::Publish(std::atomic<const CellList*>* 
     return expected;  // another thread published the same list first
 }
 
-/// The entries of `list` whose plane is negative at `o`: the triangles that may separate o
-/// from the light. Four planes at a time; calls f(prim) for each.
-template <typename F>
-inline void ForSeparating(const SoftShadows::CellList& list, const Vec3& o, F&& f) {
-    const __m128 ox = _mm_set1_ps(o.x), oy = _mm_set1_ps(o.y), oz = _mm_set1_ps(o.z), zero = _mm_setzero_ps();
-    const size_t groups = (list.count + 3) / 4;
-    const float* g = list.planes.data();
-    for (size_t i = 0; i < groups; ++i, g += 16) {
-        const __m128 s = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_load_ps(g), ox), _mm_mul_ps(_mm_load_ps(g + 4), oy)),
-                                    _mm_add_ps(_mm_mul_ps(_mm_load_ps(g + 8), oz), _mm_load_ps(g + 12)));
-        for (int m = _mm_movemask_ps(_mm_cmplt_ps(s, zero)); m; m &= m - 1)
-            if (!f(list.prims[i * 4 + static_cast<size_t>(__builtin_ctz(m))])) return;
-    }
+/// Whether the plane of triangle t, oriented by side code `code` with the light on its
+/// positive side, is negative at o: the triangle may separate o from the light (a light
+/// that straddles the plane, code 0: always). The operations of the receivers' vectorised
+/// filter, in its order.
+inline bool Separates(const SoftShadows::Triangle& t, uint32_t code, const Vec3& o) {
+    if (!code) return true;
+    const Vec3 m = V3(t.n) * (code == kInFront ? 1.0f : -1.0f);
+    const float w = -Dot(m, V3(t.v0));
+    return (m.x * o.x + m.y * o.y) + (m.z * o.z + w) < 0.0f;
 }
 
 namespace {
@@ -912,11 +916,19 @@ float SoftShadows::LightVisibility(const ShadingPoint& sp, size_t light, RenderC
         const Receiver* rec = list->recv[r].load(std::memory_order_acquire);
         if (!rec) {
             std::unique_ptr<Receiver> built = BuildReceiver(*list, sp.prim, scene_.lights[light].position, R);
+            // A receiver without entries is one of the shared ones (its answers depend on
+            // `missed` and `side` only).
+            const Receiver* fresh = built->missed         ? &kMissedReceiver
+                                    : built->entries.empty() ? &kOpenReceiver[built->side > 0 ? 2 : built->side < 0 ? 0 : 1]
+                                                             : built.get();
             const Receiver* expected = nullptr;
-            if (list->recv[r].compare_exchange_strong(expected, built.get(), std::memory_order_acq_rel,
+            if (list->recv[r].compare_exchange_strong(expected, fresh, std::memory_order_acq_rel,
                                                       std::memory_order_acquire)) {
-                rec = built.release();
-                Account(sizeof(Receiver) + 4 * (rec->entries.capacity() + rec->soa.capacity()));
+                rec = fresh;
+                if (!IsShared(fresh)) {
+                    built.release();
+                    Account(sizeof(Receiver) + 4 * (rec->entries.capacity() + rec->soa.capacity()));
+                }
             } else
                 rec = expected;  // another thread published the same receiver first
         }
@@ -946,11 +958,14 @@ float SoftShadows::LightVisibility(const ShadingPoint& sp, size_t light, RenderC
             ForCandidates(entries, soa, count, cone, f);
             return;
         }
-        ForSeparating(*list, O, [&](uint32_t prim) {
+        // The whole list (an origin on the far side of its own triangle, or a triangle the
+        // cell does not list): rare, so the planes are read from the triangles' table.
+        for (size_t e = 0; e < list->count; ++e) {
+            const uint32_t prim = list->entries[e] & kPrimMask;
             Triangle tScratch;
             const Triangle& t = Tri(prim, &tScratch);
-            return !BallMeetsCone(cone, t.c, t.r) || f(prim);
-        });
+            if (Separates(t, list->entries[e] >> kSideShift, O) && BallMeetsCone(cone, t.c, t.r) && !f(prim)) return;
+        }
     };
     if (R == 0) return HardLight(sp, light, each);
     return SampleLight(sp, light, each, counters);

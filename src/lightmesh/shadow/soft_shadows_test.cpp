@@ -249,6 +249,46 @@ TEST(SoftShadows, CertifiesTheUmbraUnderAWideSlab) {
     EXPECT_GT(counters.method[kSoftReceiverDark], 4u);
 }
 
+// A point whose own triangle is not among its cell's receivers tests the cell's whole list
+// (each entry's plane read from the triangles' table) instead of its receiver's short list:
+// every triangle that can block a direction is in both, so it matches the area reference as
+// the receivers' answers do, without a light leak or a false shadow.
+TEST(SoftShadows, TheWholeListMatchesTheAreaReferenceToo) {
+    const Scene s = TerrainScene(0.8f);
+    const auto accel = CreateAccelerator("grid", s.mesh);
+    const auto soft = Method(s, *accel, "soft");
+    const auto ref = Method(s, *accel, "area", 1024);
+    RenderCounters counters, refCounters;
+    double error = 0, shadowSoft = 0, shadowRef = 0;
+    int compared = 0, refDark = 0, refLit = 0, leaks = 0, falseShadows = 0;
+    for (const Probe& p : Probes(s, *accel, 800, 5)) {
+        // The terrain's first triangle, at the corner (-12, -12): in no cell of a far point.
+        if (p.sp.p.x < -9 && p.sp.p.z < -9) continue;
+        ShadingPoint elsewhere = p.sp;
+        elsewhere.prim = 0;
+        for (uint32_t l = 0; l < 2; ++l) {
+            if (!p.needed[l]) continue;
+            const uint32_t needed[1] = {l};
+            float v = -1, r = -1;
+            soft->Visibility(elsewhere, needed, &v, counters);
+            ref->Visibility(p.sp, needed, &r, refCounters);
+            error += std::abs(v - r);
+            shadowSoft += 1 - v, shadowRef += 1 - r;
+            if (r == 0) ++refDark, leaks += v > 0.1f;
+            if (r == 1) ++refLit, falseShadows += v < 0.9f;
+            ++compared;
+        }
+    }
+    ASSERT_GT(compared, 700);
+    EXPECT_LT(error / compared, 0.006);
+    EXPECT_NEAR(shadowSoft, shadowRef, 0.02 * shadowRef);
+    EXPECT_GT(refDark, 30);
+    EXPECT_GT(refLit, 300);
+    EXPECT_EQ(leaks, 0) << "light leaking into the umbra";
+    EXPECT_EQ(falseShadows, 0) << "false shadows";
+    EXPECT_GT(counters.method[kSoftWholeList], 500u);  // the whole list was taken
+}
+
 TEST(SoftShadows, RefusesBadSampleCounts) {
     const Scene s = TerrainScene(0.5f);
     const auto accel = CreateAccelerator("brute", s.mesh);
