@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstddef>
 
 #include "lightmesh/geometry/cutouts.h"
 #include "lightmesh/geometry/instances.h"
@@ -136,7 +137,9 @@ struct SoftShadows::Receiver {
     std::vector<uint32_t> entries;
     /// For the per-point filter, 4 entries a group, each of the group's x, y, z, w in turn:
     /// the plane oriented with the light on its positive side (0·x − 1 where the light
-    /// straddles it; padding 0·x + 1), then the bounding ball's centre and radius.
+    /// straddles it; padding 0·x + 1). The bounding balls are read from the triangles'
+    /// table where a plane passes (a receiver is kept per cell, light and triangle: with many
+    /// lights, receivers are most of the method's memory).
     std::vector<float> soa;
 };
 
@@ -399,9 +402,9 @@ std::unique_ptr<SoftShadows::Receiver> SoftShadows::BuildReceiverOf(const CellLi
         rec->dark = covers;
     }
     const size_t groups = (rec->entries.size() + 3) / 4;
-    rec->soa.assign(groups * 32, 0.0f);
+    rec->soa.assign(groups * 16, 0.0f);
     for (size_t e = 0; e < groups * 4; ++e) {
-        float* g = &rec->soa[(e / 4) * 32 + e % 4];
+        float* g = &rec->soa[(e / 4) * 16 + e % 4];
         if (e >= rec->entries.size()) {
             g[12] = 1.0f;  // never negative
             continue;
@@ -415,7 +418,6 @@ std::unique_ptr<SoftShadows::Receiver> SoftShadows::BuildReceiverOf(const CellLi
             g[0] = n.x, g[4] = n.y, g[8] = n.z, g[12] = -Dot(n, V3(t.v0));
         else
             g[12] = -1.0f;
-        g[16] = t.c[0], g[20] = t.c[1], g[24] = t.c[2], g[28] = t.r;
     }
     return rec;
 }
@@ -608,19 +610,29 @@ inline bool BallMeetsCone(const PointCone& k, const float c[3], float r) {
 
 /// The receiver's entries whose plane is negative at O and whose ball meets the cone, four
 /// at a time (BallMeetsCone's test, the same operations in each lane); calls f(prim).
-template <typename F>
-inline void ForCandidates(const uint32_t* entries, const float* soa, size_t count, const PointCone& k, F&& f) {
+/// ball(e) gives entry e's bounding ball as 4 floats (centre, radius), 16-byte aligned.
+static_assert(offsetof(SoftShadows::Triangle, c) % 16 == 0 &&
+                  offsetof(SoftShadows::Triangle, r) == offsetof(SoftShadows::Triangle, c) + 3 * sizeof(float),
+              "a triangle's ball is one aligned 16-byte load");
+template <typename Ball, typename F>
+inline void ForCandidates(const uint32_t* entries, const float* soa, size_t count, const PointCone& k, Ball&& ball,
+                          F&& f) {
     const __m128 ox = _mm_set1_ps(k.O.x), oy = _mm_set1_ps(k.O.y), oz = _mm_set1_ps(k.O.z), zero = _mm_setzero_ps();
     const __m128 ux = _mm_set1_ps(k.u.x), uy = _mm_set1_ps(k.u.y), uz = _mm_set1_ps(k.u.z), d = _mm_set1_ps(k.d);
     const __m128 tanT = _mm_set1_ps(k.tanT), invCos = _mm_set1_ps(k.invCos), slack = _mm_set1_ps(1.0001f);
+    alignas(16) static constexpr float kNoBall[4] = {0, 0, 0, 0};  // a padding lane's (its plane never passes)
     const size_t groups = (count + 3) / 4;
-    for (size_t i = 0; i < groups; ++i, soa += 32) {
+    for (size_t i = 0; i < groups; ++i, soa += 16) {
         const __m128 s = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_load_ps(soa), ox), _mm_mul_ps(_mm_load_ps(soa + 4), oy)),
                                     _mm_add_ps(_mm_mul_ps(_mm_load_ps(soa + 8), oz), _mm_load_ps(soa + 12)));
         const __m128 separating = _mm_cmplt_ps(s, zero);
         if (!_mm_movemask_ps(separating)) continue;
-        const __m128 cx = _mm_sub_ps(_mm_load_ps(soa + 16), ox), cy = _mm_sub_ps(_mm_load_ps(soa + 20), oy),
-                     cz = _mm_sub_ps(_mm_load_ps(soa + 24), oz), r = _mm_load_ps(soa + 28);
+        // The four balls, one load each, turned into x, y, z and r across the lanes.
+        const size_t e = i * 4;
+        __m128 bx = _mm_load_ps(ball(e)), by = _mm_load_ps(e + 1 < count ? ball(e + 1) : kNoBall),
+               bz = _mm_load_ps(e + 2 < count ? ball(e + 2) : kNoBall), br = _mm_load_ps(e + 3 < count ? ball(e + 3) : kNoBall);
+        _MM_TRANSPOSE4_PS(bx, by, bz, br);
+        const __m128 cx = _mm_sub_ps(bx, ox), cy = _mm_sub_ps(by, oy), cz = _mm_sub_ps(bz, oz), r = br;
         const __m128 a = _mm_add_ps(_mm_add_ps(_mm_mul_ps(cx, ux), _mm_mul_ps(cy, uy)), _mm_mul_ps(cz, uz));
         const __m128 len2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(cx, cx), _mm_mul_ps(cy, cy)), _mm_mul_ps(cz, cz));
         const __m128 q2 = _mm_max_ps(zero, _mm_sub_ps(len2, _mm_mul_ps(a, a)));
@@ -955,7 +967,15 @@ float SoftShadows::LightVisibility(const ShadingPoint& sp, size_t light, RenderC
     // bounding ball meets O's cone to it.
     auto each = [&](const PointCone& cone, auto&& f) {
         if (receiver) {
-            ForCandidates(entries, soa, count, cone, f);
+            Triangle scratch[4];  // instanced triangles' (computed when read)
+            ForCandidates(entries, soa, count, cone,
+                          [&](size_t e) -> const float* {
+                              const uint32_t id = entries[e] & kPrimMask;
+                              if (id < flatCount_) [[likely]]
+                                  return tris_[id].c;
+                              return InstancedTri(id, &scratch[e % 4]).c;
+                          },
+                          f);
             return;
         }
         // The whole list (an origin on the far side of its own triangle, or a triangle the
