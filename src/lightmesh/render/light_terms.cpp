@@ -16,6 +16,20 @@
 namespace lm {
 namespace {
 
+// For each mask of 8 lanes, its set lanes in ascending order, then zeros: the permutation
+// that packs the lit lanes to the front.
+struct PackLanes {
+    uint8_t lanes[256][8] = {};
+};
+constexpr PackLanes MakePackLanes() {
+    PackLanes t;
+    for (int m = 0; m < 256; ++m)
+        for (int k = 0, n = 0; k < 8; ++k)
+            if (m >> k & 1) t.lanes[m][n++] = static_cast<uint8_t>(k);
+    return t;
+}
+alignas(64) constexpr PackLanes kPackLanes = MakePackLanes();
+
 // The evaluation for 4 lanes (SSE, the x86-64 baseline) and 8 (AVX2, compiled for it with
 // a target attribute on each definition and chosen at run time): one body,
 // light_terms_lanes.inc, in a namespace per width.
@@ -66,6 +80,13 @@ LightTerms::LightTerms(const std::vector<PointLight>& lights, int width) {
         a_.range2[i] = l.range * l.range;
         a_.r[i] = l.intensity.r, a_.g[i] = l.intensity.g, a_.b[i] = l.intensity.b;
         a_.inverseSquare[i] = l.falloff == Falloff::InverseSquare ? -1 : 0;
+    }
+    a_.records.resize(8 * count_);
+    for (size_t i = 0; i < count_; ++i) {
+        float* r = &a_.records[8 * i];
+        r[0] = a_.x[i], r[1] = a_.y[i], r[2] = a_.z[i], r[3] = a_.range2[i];
+        r[4] = a_.r[i], r[5] = a_.g[i], r[6] = a_.b[i];
+        std::memcpy(&r[7], &a_.inverseSquare[i], sizeof(float));
     }
 }
 

@@ -54,6 +54,9 @@ class LightTerms {
     struct Arrays {
         std::vector<float> x, y, z, range2, r, g, b;
         std::vector<int32_t> inverseSquare;  ///< −1 (all bits) for 1/dist² falloff, else 0
+        /// The same light by light: x, y, z, range², r, g, b and the falloff's bits, 8
+        /// floats each (the lists' lights, read apart).
+        std::vector<float> records;
     };
 
   private:
