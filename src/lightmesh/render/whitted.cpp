@@ -15,7 +15,8 @@ namespace lm {
 WhittedRenderer::WhittedRenderer(const Scene& scene, const Accelerator& accel,
                                  const ShadowMethod& shadows, const RenderOptions& options)
     : scene_(scene), accel_(accel), shadows_(shadows), options_(options),
-      camera_(scene.camera, options.width, options.height), lightLists_(scene.lights, scene.mesh.Bounds()) {
+      camera_(scene.camera, options.width, options.height), lightLists_(scene.lights, scene.mesh.Bounds()),
+      lightTerms_(scene.lights) {
     if (options.aa < 1 || options.aa > 16) ThrowError("--aa %d: must be 1 to 16", options.aa);
     if (options.maxDepth < 1 || options.maxDepth > 64)
         ThrowError("max depth %d: must be 1 to 64", options.maxDepth);
@@ -72,38 +73,23 @@ void WhittedRenderer::PrepareShading(const Ray& ray, const Hit& hit, Lighting* l
     lit->ns = ns;
     lit->mat = &mat;
     lit->kd = mat.texture < 0 ? mat.kd : TexturedDiffuse(scene_, mat, ray, hit, spread_);
-    const size_t nLights = scene_.lights.size();
-    lit->litCount = 0;
-    auto term = [&](uint32_t i) {
-        const PointLight& light = scene_.lights[i];
-        const Vec3 toLight = light.position - sp.p;
-        const float dist2 = LengthSquared(toLight);
-        if (dist2 > light.range * light.range) return;  // beyond its range (infinite: never)
-        const Vec3 l = toLight / std::sqrt(dist2);
-        // A light behind the geometric surface cannot light it, whatever the shading normal.
-        const float cosN = Dot(ns, l);
-        if (!(Dot(sp.n, l) > 0 && cosN > 0)) return;
-        Color local = lit->kd * cosN;
-        if (!mat.ks.IsBlack()) {
-            const float cosR = Dot(Reflect(-l, ns), toEye);
-            if (cosR > 0) local += mat.ks * std::pow(cosR, mat.phong);
-        }
-        const float falloff = light.falloff == Falloff::InverseSquare ? 1.0f / dist2 : 1.0f;
-        const Color omega = light.intensity * local * falloff;
-        if (omega.IsBlack()) return;
-        lit->omega[lit->litCount] = omega;
-        lit->lit[lit->litCount++] = i;
-    };
+    // The lights' terms, several at a time (LightTerms: the scalar formula's floats), in
+    // ascending light order.
+    const LightTermPoint point{sp.p, sp.n, ns, toEye, lit->kd, mat.ks, mat.phong};
     if (!lightLists_.Active()) {
-        for (size_t i = 0; i < nLights; ++i) term(static_cast<uint32_t>(i));
+        lit->litCount = lightTerms_.All(point, lit->omega, lit->lit);
         return;
     }
     // Lights with a range: only those of the point's cell, merged in ascending order with
-    // the lights without one (the terms add in light order, as above).
+    // the lights without one (the terms add in light order), into lit->lit (room for every
+    // light), whose entries LightTerms then overwrites with the lit ones.
     const std::span<const uint32_t> a = lightLists_.Everywhere(), b = lightLists_.Near(sp.p);
-    size_t ia = 0, ib = 0;
-    while (ia < a.size() || ib < b.size())
-        term(ib == b.size() || (ia < a.size() && a[ia] < b[ib]) ? a[ia++] : b[ib++]);
+    const uint32_t* ids = a.empty() ? b.data() : a.data();
+    if (!a.empty() && !b.empty()) {
+        std::merge(a.begin(), a.end(), b.begin(), b.end(), lit->lit);
+        ids = lit->lit;
+    }
+    lit->litCount = lightTerms_.Listed(point, ids, static_cast<uint32_t>(a.size() + b.size()), lit->omega, lit->lit);
 }
 
 namespace {

@@ -9,6 +9,7 @@
 #include "lightmesh/accel/accelerator.h"
 #include "lightmesh/io/image.h"
 #include "lightmesh/render/light_lists.h"
+#include "lightmesh/render/light_terms.h"
 #include "lightmesh/util/counters.h"
 #include "lightmesh/settings/options.h"
 #include "lightmesh/scene/camera.h"
@@ -155,6 +156,7 @@ class WhittedRenderer {
     CameraRays camera_;
     float spread_ = 0;  ///< radians between neighbouring camera rays (textures' footprints)
     LightLists lightLists_;  // the lights near each cell, where lights have a range
+    LightTerms lightTerms_;  // the lights' arrays for their terms at a point
 };
 
 }  // namespace lm
