@@ -180,7 +180,9 @@ TEST(ManyLights, EveryMethodWritesOnlyTheLightsAPointNeeds) {
             EXPECT_EQ(rays, listed);
             EXPECT_EQ(many.shadowRays, listed);
         }
-        if (std::string(c.method) == "none") EXPECT_EQ(rays, 0u);
+        if (std::string(c.method) == "none") {
+            EXPECT_EQ(rays, 0u);
+        }
     }
 }
 
