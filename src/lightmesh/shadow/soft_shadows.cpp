@@ -503,19 +503,11 @@ std::unique_ptr<SoftShadows::CellList> SoftShadows::BuildListOf(const BallHull& 
     return list;
 }
 
-const SoftShadows::CellList* SoftShadows::List(const Vec3& o, size_t light, std::unique_ptr<CellList>* own,
-                                               RenderCounters& counters) const {
+SoftShadows::Place SoftShadows::Locate(const Vec3& o) const {
+    Place place;
     const Vec3 rel = (o - origin_) * (1.0f / h_);
     const int i = FloorToInt(rel.x), j = FloorToInt(rel.y), k = FloorToInt(rel.z);
-    const Vec3& L = scene_.lights[light].position;
-    const float R = options_.radii[light];
-    if (!(rel.x >= 0 && rel.y >= 0 && rel.z >= 0) || i >= nx_ || j >= ny_ || k >= nz_) {
-        // Outside the lattice (a point far off the scene's box): a list of its own.
-        ++counters.method[kSoftOutside];
-        const float eps = 1e-5f * MaxComponent(Abs(o)) + 1e-30f;
-        *own = BuildList(BallHull{o, eps, L, R}, Bounds3(o - Vec3(eps, eps, eps), o + Vec3(eps, eps, eps)), light);
-        return own->get();
-    }
+    if (!(rel.x >= 0 && rel.y >= 0 && rel.z >= 0) || i >= nx_ || j >= ny_ || k >= nz_) return place;  // outside
     const size_t block = (static_cast<size_t>(k / kBlockSide) * by_ + static_cast<size_t>(j / kBlockSide)) * bx_ +
                          static_cast<size_t>(i / kBlockSide);
     Slot* slots = blocks_[block].load(std::memory_order_acquire);
@@ -532,12 +524,27 @@ const SoftShadows::CellList* SoftShadows::List(const Vec3& o, size_t light, std:
     }
     const size_t cell = (static_cast<size_t>(k % kBlockSide) * kBlockSide + static_cast<size_t>(j % kBlockSide)) *
                             kBlockSide + static_cast<size_t>(i % kBlockSide);
-    Slot& slot = slots[cell * lights + light];
+    place.slots = slots + cell * lights;
+    place.i = i, place.j = j, place.k = k;
+    return place;
+}
+
+const SoftShadows::CellList* SoftShadows::List(const Vec3& o, const Place& place, size_t light,
+                                               std::unique_ptr<CellList>* own, RenderCounters& counters) const {
+    if (!place.slots) {
+        // Outside the lattice (a point far off the scene's box): a list of its own.
+        ++counters.method[kSoftOutside];
+        const float eps = 1e-5f * MaxComponent(Abs(o)) + 1e-30f;
+        *own = BuildList(BallHull{o, eps, scene_.lights[light].position, options_.radii[light]},
+                         Bounds3(o - Vec3(eps, eps, eps), o + Vec3(eps, eps, eps)), light);
+        return own->get();
+    }
+    Slot& slot = place.slots[light];
     const CellList* list = slot.load(std::memory_order_acquire);
     if (!list) {
         // Build it: the hull of the cell's bounding ball and the light's sphere holds every
         // segment from a point of the cell to a point of the light.
-        const Vec3 lo = origin_ + Vec3(static_cast<float>(i), static_cast<float>(j), static_cast<float>(k)) * h_;
+        const Vec3 lo = origin_ + Vec3(static_cast<float>(place.i), static_cast<float>(place.j), static_cast<float>(place.k)) * h_;
         list = Publish(&slot, BuildCell(Bounds3(lo, lo + Vec3(h_, h_, h_)), light));
     }
     return list;
@@ -897,9 +904,14 @@ float SoftShadows::SampleLight(const ShadingPoint& sp, size_t light, Each&& each
 }
 
 float SoftShadows::LightVisibility(const ShadingPoint& sp, size_t light, RenderCounters& counters) const {
+    Place place = Locate(sp.origin);
+    return LightVisibilityAt(sp, place, light, counters);
+}
+
+float SoftShadows::LightVisibilityAt(const ShadingPoint& sp, Place& place, size_t light, RenderCounters& counters) const {
     ++counters.method[kSoftLookups];
     std::unique_ptr<CellList> own;
-    const CellList* list = List(sp.origin, light, &own, counters);
+    const CellList* list = List(sp.origin, place, light, &own, counters);
     if (list->count == 0 && !list->dense) {
         ++counters.method[kSoftFree];
         return 1.0f;
@@ -922,9 +934,15 @@ float SoftShadows::LightVisibility(const ShadingPoint& sp, size_t light, RenderC
     const float* soa = nullptr;
     size_t count = 0;
     bool receiver = false;
-    const auto it = std::lower_bound(list->receivers.begin(), list->receivers.end(), sp.prim);
-    if (it != list->receivers.end() && *it == sp.prim) {
-        const size_t r = static_cast<size_t>(it - list->receivers.begin());
+    // The triangle's place among the receivers: every light's list of a cell has the same
+    // receivers, so after the point's first light it is checked, not searched.
+    size_t r = place.receiver;
+    if (!(r < list->receivers.size() && list->receivers[r] == sp.prim)) {
+        const auto it = std::lower_bound(list->receivers.begin(), list->receivers.end(), sp.prim);
+        r = it != list->receivers.end() && *it == sp.prim ? static_cast<size_t>(it - list->receivers.begin()) : SIZE_MAX;
+        if (r != SIZE_MAX) place.receiver = r;
+    }
+    if (r != SIZE_MAX) {
         const Receiver* rec = list->recv[r].load(std::memory_order_acquire);
         if (!rec) {
             std::unique_ptr<Receiver> built = BuildReceiver(*list, sp.prim, scene_.lights[light].position, R);
@@ -992,7 +1010,8 @@ float SoftShadows::LightVisibility(const ShadingPoint& sp, size_t light, RenderC
 }
 
 void SoftShadows::Visibility(const ShadingPoint& sp, LightIndices lights, float* vis, RenderCounters& counters) const {
-    for (size_t k = 0; k < lights.size(); ++k) vis[k] = LightVisibility(sp, lights[k], counters);
+    Place place = Locate(sp.origin);
+    for (size_t k = 0; k < lights.size(); ++k) vis[k] = LightVisibilityAt(sp, place, lights[k], counters);
 }
 
 ShadowFigures SoftShadows::Figures() const {

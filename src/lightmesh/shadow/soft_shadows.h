@@ -74,7 +74,19 @@ class SoftShadows final : public ShadowMethod {
     struct Receiver;
 
   private:
-    const CellList* List(const Vec3& o, size_t light, std::unique_ptr<CellList>* own, RenderCounters& counters) const;
+    using Slot = std::atomic<const CellList*>;
+    /// Where a point's lists are, found once for all the lights it needs: its cell's slots
+    /// (one per light; null outside the lattice) and, once known, its triangle's place
+    /// among the cell's receivers (the same in every light's list of the cell).
+    struct Place {
+        Slot* slots = nullptr;
+        int i = 0, j = 0, k = 0;
+        size_t receiver = SIZE_MAX;
+    };
+    Place Locate(const Vec3& o) const;
+    float LightVisibilityAt(const ShadingPoint& sp, Place& place, size_t light, RenderCounters& counters) const;
+    const CellList* List(const Vec3& o, const Place& place, size_t light, std::unique_ptr<CellList>* own,
+                         RenderCounters& counters) const;
     std::unique_ptr<CellList> BuildList(const BallHull& hull, const Bounds3& box, size_t light) const;
     /// BuildList and BuildReceiver for a scene with instances or without (kInstanced false:
     /// every triangle read from tris_, no test per entry).
@@ -125,7 +137,6 @@ class SoftShadows final : public ShadowMethod {
     Vec3 origin_;
     float h_ = 0;
     int nx_ = 0, ny_ = 0, nz_ = 0, bx_ = 0, by_ = 0, bz_ = 0;
-    using Slot = std::atomic<const CellList*>;
     std::unique_ptr<std::atomic<Slot*>[]> blocks_;
     size_t blockCount_ = 0;
     /// A stratified unit-disc pattern (MakeDiscPattern).
