@@ -75,7 +75,7 @@ def main():
     p.add_argument("--size", default="320x240")
     p.add_argument("--repeat", type=int, default=3)
     p.add_argument("--methods", default="none,rt,soft,lmm")
-    p.add_argument("--culling", default="off,on", help="off, on or both")
+    p.add_argument("--culling", default="both", help="off, on, or both (off then on; also written off,on)")
     p.add_argument("--markdown")
     a = p.parse_args()
     methods = a.methods.split(",")
@@ -86,7 +86,10 @@ def main():
     lines = ["Scene %s, %s, lamps in a grid over [%g, %g] x [%g, %g] at y = %g, total intensity %g; "
              "render phase, medians of %d interleaved runs, Embree." % (os.path.basename(a.scene), a.size, a.box[0], a.box[2],
                                                                       a.box[1], a.box[3], a.height, a.total, a.repeat)]
-    for culling in a.culling.split(","):
+    cullings = ["off", "on"] if a.culling == "both" else a.culling.split(",")
+    if any(c not in ("off", "on") for c in cullings):
+        sys.exit("many-lights-sweep.py: --culling %s: off, on or both" % a.culling)
+    for culling in cullings:
         rows = []
         for n in counts:
             side = int(round(math.sqrt(n)))
