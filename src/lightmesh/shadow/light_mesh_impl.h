@@ -51,11 +51,11 @@ using namespace kernels;
 template <typename T>
 using ZeroedPtr = std::unique_ptr<T[], ZeroedDeleter>;
 template <typename T>
-ZeroedPtr<std::atomic<T>> ZeroedArray(uint64_t count) {
+ZeroedPtr<std::atomic<T>> ZeroedArray(uint64_t count, bool huge = true) {
     static_assert(std::atomic<T>::is_always_lock_free && sizeof(std::atomic<T>) == sizeof(T));
     if (count > std::numeric_limits<size_t>::max() / sizeof(T)) throw std::bad_alloc();
     ZeroedDeleter deleter;
-    void* p = AllocateZeroed(std::max<uint64_t>(count, 1) * sizeof(T), &deleter);
+    void* p = AllocateZeroed(std::max<uint64_t>(count, 1) * sizeof(T), &deleter, huge);
     return ZeroedPtr<std::atomic<T>>(static_cast<std::atomic<T>*>(p), deleter);
 }
 

@@ -33,9 +33,9 @@ void* AllocateLarge(size_t bytes, size_t align, size_t hugeFrom) {
     return p;
 }
 
-void* AllocateZeroed(size_t bytes, ZeroedDeleter* deleter) {
+void* AllocateZeroed(size_t bytes, ZeroedDeleter* deleter, bool huge) {
     deleter->mapped = 0;
-    if (bytes >= kHugePagesFrom && bytes <= kZeroedHugeLimit) {
+    if (huge && bytes >= kHugePagesFrom && bytes <= kZeroedHugeLimit) {
         const size_t length = RoundToHugePages(bytes);
         // Map a huge page more than needed and unmap the slack on both sides of the 2 MiB
         // aligned part.

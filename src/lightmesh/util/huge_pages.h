@@ -36,14 +36,14 @@ size_t LargeAllocationBytes(size_t bytes, size_t hugeFrom = kHugePagesFrom);
 
 /// Zero-filled memory whose pages are mapped on first touch (lazily, like calloc's): from
 /// 256 KiB to kZeroedHugeLimit an anonymous mapping, 2 MiB aligned and marked for huge pages;
-/// other sizes from calloc (beyond the limit a sparse use would make whole 2 MiB pages
-/// resident). Release with ZeroedDeleter. Throws std::bad_alloc.
+/// other sizes, or `huge` false (a sparse use), from calloc (beyond the limit a sparse use
+/// would make whole 2 MiB pages resident). Release with ZeroedDeleter. Throws std::bad_alloc.
 constexpr size_t kZeroedHugeLimit = size_t(64) << 20;
 struct ZeroedDeleter {
     size_t mapped = 0;  // the mapping's length; 0: from calloc
     void operator()(void* p) const noexcept;
 };
-void* AllocateZeroed(size_t bytes, ZeroedDeleter* deleter);
+void* AllocateZeroed(size_t bytes, ZeroedDeleter* deleter, bool huge = true);
 
 /// std::allocator's interface over AllocateLarge, for std::vector of big buffers (images,
 /// the light mesh's per-triangle tables). Values are default-initialised by the vector as
