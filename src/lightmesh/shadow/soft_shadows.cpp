@@ -160,12 +160,10 @@ bool IsShared(const SoftShadows::Receiver* r) {
 }
 }  // namespace
 
-
-
 /// A cell's triangles for one light, 4 bytes an entry: the triangle's id | its side code
 /// << kSideShift. The code says which side of the triangle's plane the light's sphere lies
 /// on (kInFront, kBehind; 0: the sphere straddles it), so a point can be shadowed by the
-/// triangle only where the plane so oriented is negative there (ForSeparating). Entries
+/// triangle only where the plane so oriented is negative there (Separates). Entries
 /// come largest triangle first. `dense`: too many entries to pay for the per-point loop;
 /// the cell's points trace rays. (A list is kept per cell and light, so with many lights
 /// the lists are most of the method's memory: the planes are read from the triangles'
