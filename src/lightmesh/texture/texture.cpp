@@ -141,14 +141,9 @@ Texel Texture::Bilinear(const Level& level, float u, float v, TextureWrap wrapU,
     int x0, y0;
     float fx, fy;
     texel::Position(level.w, level.h, u, v, &x0, &y0, &fx, &fy);
-    // One wrap per axis; the neighbour is the next texel unless that leaves the image.
-    const int xa = texel::WrapIndex(x0, level.w, wrapU), ya = texel::WrapIndex(y0, level.h, wrapV);
-    // (Repeat: x0 + 1 wraps to xa + 1 below the edge; Clamp and Mirror: where x0 is in
-    // the image itself.)
-    const int xb = (wrapU == TextureWrap::Repeat || x0 == xa) && xa + 1 < level.w ? xa + 1
-                                                                                   : texel::WrapIndex(x0 + 1, level.w, wrapU);
-    const int yb = (wrapV == TextureWrap::Repeat || y0 == ya) && ya + 1 < level.h ? ya + 1
-                                                                                   : texel::WrapIndex(y0 + 1, level.h, wrapV);
+    int xa, xb, ya, yb;
+    texel::Neighbours(x0, level.w, wrapU, &xa, &xb);
+    texel::Neighbours(y0, level.h, wrapV, &ya, &yb);
     const float w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
     const size_t row0 = static_cast<size_t>(ya) * static_cast<size_t>(level.w),
                  row1 = static_cast<size_t>(yb) * static_cast<size_t>(level.w);

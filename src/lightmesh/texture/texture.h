@@ -37,6 +37,19 @@ inline void Position(int w, int h, float u, float v, int* x0, int* y0, float* fx
     *y0 -= static_cast<float>(*y0) > y;
     *fx = x - static_cast<float>(*x0), *fy = y - static_cast<float>(*y0);
 }
+/// The two texels a bilinear lookup reads along one axis of n texels: a = texel i wrapped,
+/// b = its neighbour i + 1 wrapped. Repeat on a side of 2^k texels (most images) is a mask
+/// instead of a division; otherwise the neighbour is a + 1 unless that leaves the image
+/// (Repeat: i + 1 wraps to a + 1 below the edge; Clamp and Mirror: where i is in the image
+/// itself), and i + 1 wrapped there.
+inline void Neighbours(int i, int n, TextureWrap wrap, int* a, int* b) {
+    if (wrap == TextureWrap::Repeat && (n & (n - 1)) == 0) {
+        *a = i & (n - 1), *b = (i + 1) & (n - 1);
+        return;
+    }
+    *a = WrapIndex(i, n, wrap);
+    *b = (wrap == TextureWrap::Repeat || i == *a) && *a + 1 < n ? *a + 1 : WrapIndex(i + 1, n, wrap);
+}
 }  // namespace texel
 
 /// A colour and its coverage, linear.
@@ -88,23 +101,8 @@ class Texture {
         int x0, y0;
         TexelCell c;
         texel::Position(level.w, level.h, u, v, &x0, &y0, &c.fx, &c.fy);
-        // Repeat on a side of 2^k texels (most images): a mask instead of a division.
-        if (wrapU == TextureWrap::Repeat && (level.w & (level.w - 1)) == 0) {
-            c.xa = x0 & (level.w - 1), c.xb = (x0 + 1) & (level.w - 1);
-        } else {
-            c.xa = texel::WrapIndex(x0, level.w, wrapU);
-            c.xb = (wrapU == TextureWrap::Repeat || x0 == c.xa) && c.xa + 1 < level.w
-                       ? c.xa + 1
-                       : texel::WrapIndex(x0 + 1, level.w, wrapU);
-        }
-        if (wrapV == TextureWrap::Repeat && (level.h & (level.h - 1)) == 0) {
-            c.ya = y0 & (level.h - 1), c.yb = (y0 + 1) & (level.h - 1);
-        } else {
-            c.ya = texel::WrapIndex(y0, level.h, wrapV);
-            c.yb = (wrapV == TextureWrap::Repeat || y0 == c.ya) && c.ya + 1 < level.h
-                       ? c.ya + 1
-                       : texel::WrapIndex(y0 + 1, level.h, wrapV);
-        }
+        texel::Neighbours(x0, level.w, wrapU, &c.xa, &c.xb);
+        texel::Neighbours(y0, level.h, wrapV, &c.ya, &c.yb);
         return c;
     }
     /// Opacity's bilinear value in `cell`: Opacity(u, v, …) is OpacityOf(CellAt(u, v, …), …).
