@@ -64,6 +64,13 @@ int ClipToBox(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Bounds3& box
 
 inline Vec3 V3(const float* f) { return {f[0], f[1], f[2]}; }
 
+/// Triangle t's plane m·x + w oriented by side code `code` (kInFront, kBehind) with the
+/// light on its positive side: the receivers' stored planes and the whole list's test.
+inline void OrientedPlane(const SoftShadows::Triangle& t, uint32_t code, Vec3* m, float* w) {
+    *m = V3(t.n) * (code == kInFront ? 1.0f : -1.0f);
+    *w = -Dot(*m, V3(t.v0));
+}
+
 }  // namespace
 
 /// N points of the golden-ratio lattice ((k + ½)/N, frac(k·(φ − 1))) mapped to the unit disc
@@ -410,12 +417,13 @@ std::unique_ptr<SoftShadows::Receiver> SoftShadows::BuildReceiverOf(const CellLi
         const uint32_t code = rec->entries[e] >> kSideShift;
         Triangle tScratch;
         const Triangle& t = TriOf<kInstanced>(rec->entries[e] & kPrimMask, &tScratch);
-        const float sign = code == kInFront ? 1.0f : -1.0f;
-        const Vec3 n = V3(t.n) * sign;
-        if (code)
-            g[0] = n.x, g[4] = n.y, g[8] = n.z, g[12] = -Dot(n, V3(t.v0));
-        else
+        if (code) {
+            Vec3 m;
+            OrientedPlane(t, code, &m, &g[12]);
+            g[0] = m.x, g[4] = m.y, g[8] = m.z;
+        } else {
             g[12] = -1.0f;
+        }
     }
     return rec;
 }
@@ -588,8 +596,9 @@ const SoftShadows::CellList* SoftShadows::Publish(std::atomic<const CellList*>* 
 /// filter, in its order.
 inline bool Separates(const SoftShadows::Triangle& t, uint32_t code, const Vec3& o) {
     if (!code) return true;
-    const Vec3 m = V3(t.n) * (code == kInFront ? 1.0f : -1.0f);
-    const float w = -Dot(m, V3(t.v0));
+    Vec3 m;
+    float w;
+    OrientedPlane(t, code, &m, &w);
     return (m.x * o.x + m.y * o.y) + (m.z * o.z + w) < 0.0f;
 }
 
