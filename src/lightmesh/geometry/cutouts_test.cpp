@@ -85,7 +85,9 @@ TEST(Cutouts, EveryBackEndAgreesWithBruteForce) {
                 // within rounding of a texel's edge or a triangle's.
                 differ += w != g || (w && want.prim != got.prim) || wo != accel->Occluded(rays[i]) ||
                           brute->CountCrossings(rays[i]) != accel->CountCrossings(rays[i]);
-                if (w && g && want.prim == got.prim) EXPECT_NEAR(want.t, got.t, 1e-4f) << i;
+                if (w && g && want.prim == got.prim) {
+                    EXPECT_NEAR(want.t, got.t, 1e-4f) << i;
+                }
             }
             // The batched queries give each ray its own answer.
             EXPECT_EQ(many[i].prim, g ? got.prim : UINT32_MAX) << i;
