@@ -135,6 +135,7 @@ int RunBench(BenchCommand& cmd);
 /// `lightmesh compare A B`: image quality of B against A (lightmesh/io/compare.h).
 struct CompareCommand {
     std::string a, b, mask, diff;
+    std::string none;  ///< --no-shadows: the render without shadows, for the shadow totals
     float diffScale = 0;
     bool diffScaleGiven = false;
     bool json = false;

@@ -92,6 +92,9 @@ int main(int argc, char** argv) {
     CLI::Option* diffScale = compareCmd->add_option("--diff-scale", compare.diffScale,
                            "Difference shown as the top colour (display units, 0..1; default 0: the largest)")
         ->check(FiniteFloat(true));
+    compareCmd->add_option("--no-shadows", compare.none,
+                           "The same render without shadows (--shadows none): also print each image's shadow total "
+                           "(sum of no-shadow minus image, linear luminance) and B's over A's");
     compareCmd->add_flag("--json", compare.json, "Print one JSON line (psnr is null for identical images)");
     compareCmd->add_option("--threshold-psnr", compare.thresholdPsnr, "Exit with 3 if the PSNR (dB) is lower");
 

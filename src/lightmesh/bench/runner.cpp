@@ -99,15 +99,6 @@ long long CountLeaks(const Image& rt, const Image& none, const Image& img, float
     return leaks;
 }
 
-/// Σ over the image of (no shadows − img) in linear luminance: the light the image's
-/// shadows take away (the competitors table's shadow total).
-double ShadowTotal(const Image& none, const Image& img) {
-    double sum = 0;
-    for (size_t i = 0; i < img.pixels.size() && i < none.pixels.size(); ++i)
-        sum += static_cast<double>(Luma(none.pixels[i])) - static_cast<double>(Luma(img.pixels[i]));
-    return sum;
-}
-
 struct LoadedScene {
     Scene scene;
     std::map<std::string, std::unique_ptr<Accelerator>> accels;

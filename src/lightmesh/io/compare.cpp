@@ -189,6 +189,19 @@ std::string JsonNumber(double v) { return std::isfinite(v) ? StringPrintf("%.8g"
 
 }  // namespace
 
+double ShadowTotal(const Image& none, const Image& img) {
+    if (none.width != img.width || none.height != img.height)
+        ThrowError("shadow total: the image without shadows is %dx%d, the image %dx%d", none.width, none.height,
+                   img.width, img.height);
+    double sum = 0;
+    for (size_t i = 0; i < img.pixels.size(); ++i) {
+        const Color &n = none.pixels[i], &c = img.pixels[i];
+        sum += static_cast<double>(0.2126f * n.r + 0.7152f * n.g + 0.0722f * n.b) -
+               static_cast<double>(0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b);
+    }
+    return sum;
+}
+
 std::string ImageMetricsJson(const ImageMetrics& m, const std::string& a, const std::string& b) {
     return "{\"a\":" + JsonString(a) + ",\"b\":" + JsonString(b) + ",\"psnr\":" + JsonNumber(m.psnr) +
            ",\"ssim\":" + JsonNumber(m.ssim) + ",\"rmse\":" + JsonNumber(m.rmse) +

@@ -49,6 +49,12 @@ void WriteDiffImage(const std::string& path, const Image& a, const Image& b, flo
 /// "identical":true (JSON has no infinity).
 std::string ImageMetricsJson(const ImageMetrics& m, const std::string& a, const std::string& b);
 
+/// Σ over the image of (none − img) in linear luminance (Rec. 709 weights): the light the
+/// image's shadows take away from the same render without shadows. The ratio of two
+/// images' totals says whether one has too little shadow (below 1) or too much; a hard
+/// shadow moves light around its edges but keeps the total. Throws Error if the sizes differ.
+double ShadowTotal(const Image& none, const Image& img);
+
 /// Turbo (Mikhailov 2019), Ruofei Du's polynomial fit: x in [0, 1] → sRGB in [0, 1].
 Color TurboColormap(float x);
 
