@@ -207,7 +207,7 @@ void PrintRender(const RenderCommand& cmd, const PreparedRender& p, const lm::Re
                 Count(c.reflectionRays).c_str(), Count(c.shadingPoints).c_str());
     PrintFigures("accel", p.job->Accel().Figures());
     // The shadow method's own counts (under MPI every rank's, summed), as lines it words itself.
-    for (const auto& [label, text] : p.job->Shadows().CounterLines(c))
+    for (const auto& [label, text] : p.job->CounterLines(c))
         std::printf("%-10s%s\n", label.c_str(), text.c_str());
     PrintFigures(ranks ? "shadows (rank 0)" : "shadows", p.job->Shadows().Figures());
     std::printf("memory    peak %s%s\n", lm::FormatBytes(lm::PeakMemoryBytes()).c_str(), ranks ? " (rank 0)" : "");
@@ -278,8 +278,8 @@ int RunRenderMpi(const RenderCommand& cmd, const lm::MpiSession& session) {
         lm::ProgressReporter progress(p->job->Renderer().TileCount(), "Rendering",
                                       root && !cmd.common.quiet && lm::ProgressReporter::StderrIsTerminal());
         if (root && !cmd.common.quiet) progress.AnnounceIfLong(kAnnouncedRenderSeconds, RenderWork(p->job->Options()));
-        d = p->job->Denoiser()
-                ? lm::RenderDistributedBands(session, p->job->Renderer(), *p->job->Denoiser(), root ? &progress : nullptr)
+        d = p->job->Bands()
+                ? lm::RenderDistributedBands(session, p->job->Renderer(), *p->job->Bands(), root ? &progress : nullptr)
                 : lm::RenderDistributed(session, p->job->Renderer(), nodes, root ? &progress : nullptr);
     }
     if (d.errorRank >= 0) return fail(d.error, d.errorRank);

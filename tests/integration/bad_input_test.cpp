@@ -583,7 +583,7 @@ std::vector<Case> Corpus() {
          .files = {{"scene.json", WithExtra(R"(, "render": {"variant": "fastest"})")}}},
         {.name = "shadows_unknown",
          .args = "render builtin:gazebo --shadows hard -o $OUT",
-         .expected = "--shadows: hard not in {soft,none,rt,lmm"},
+         .expected = "--shadows: hard not in {soft,exact,none,rt,lmm"},
         // --- Memory: refused with the figure, before allocating -----------------------------
         {.name = "light_mesh_too_big_for_the_machine",
          .args = "render builtin:gazebo --shadows lmm --cc 4096 -o $OUT",
@@ -618,10 +618,19 @@ std::vector<Case> Corpus() {
                      "machine's 64.0 MiB: lower CC\n",
          .files = {{"scene.json", WithLights(ManyLights(200))}},
          .env = "LIGHTMESH_MEMORY_LIMIT=64M"},
-        {.name = "soft_shadow_lists_of_many_lights_past_the_limit",
+        {.name = "soft_shadow_rows_of_many_lights_past_the_limit",
+         // 200 lights over a box: every hit keeps a (hit, light) pair per light in the rows of
+         // tiles in flight, 44 MiB at 640x480: past half of 64 MiB, the render stops first.
+         .args = "render $D/scene.json -o $OUT",
+         .expected = "soft shadows: the 14 rows of tiles in flight hold 44.0 MiB for 200 lights, more than half "
+                     "the memory budget (64.0 MiB); give the lights a \"range\", render a narrower image, or use "
+                     "--shadows rt\n",
+         .files = {{"scene.json", WithLights(ManyLights(200))}},
+         .env = "LIGHTMESH_MEMORY_LIMIT=64M"},
+        {.name = "exact_soft_shadow_lists_of_many_lights_past_the_limit",
          // 200 lights over a box: the cells' lists (one per cell and light, built as points
          // need them) pass half of 64 MiB during the render, which stops and writes nothing.
-         .args = "render $D/scene.json -o $OUT",
+         .args = "render $D/scene.json --shadows exact -o $OUT",
          .expected = "lightmesh: error: soft shadows: the cells' occluder lists for 200 lights have grown past "
                      "32.0 MiB, half of the 64.0 MiB this process may use; give the lights a \"range\", lower "
                      "--cc, or use --shadows lmm or rt\n",

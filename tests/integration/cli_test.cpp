@@ -43,7 +43,7 @@ TEST(Cli, HelpForEveryCommand) {
 TEST(Cli, HelpShowsTheDefaults) {
     const std::string render = Lightmesh("render --help").output;
     for (const char* text : {"default soft", "default 640", "default 480", "(default 1)", "default 5",
-                             "default 100 for lmm, 64 for soft", "(default 2)", "default 8", "(default 16)",
+                             "default 100 for lmm, 64 for exact", "(default 2)", "default 8", "(default 16)",
                              "default 64", "default auto", "default all"})
         EXPECT_NE(render.find(text), std::string::npos) << text << "\n" << render;
     const std::string templates = Lightmesh("templates --help").output;
@@ -198,7 +198,8 @@ TEST(Cli, InstancesInInfoStatsAndEveryMethod) {
         << info.output;
     EXPECT_NE(info.output.find("embree instances 64 instance geometries of 1 prototype scenes"), std::string::npos)
         << info.output;
-    const CliRun soft = Lightmesh("render " + Temp("balls.json") + " --width 64 --height 48 --stats -o " + Temp("balls.png"));
+    const CliRun soft = Lightmesh("render " + Temp("balls.json") + " --shadows exact --width 64 --height 48 --stats -o " +
+                                  Temp("balls.png"));
     ASSERT_EQ(soft.exitCode, 0) << soft.output;
     EXPECT_NE(soft.output.find("1 prototype hierarchies under one over 64 instances"), std::string::npos) << soft.output;
     for (const char* args : {"--shadows lmm", "--shadows area --accel grid", "--shadows rt --accel brute"}) {

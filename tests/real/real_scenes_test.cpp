@@ -391,7 +391,7 @@ TEST(RealManyLights, ScenesLoadAndRenderTheSameForAnyThreadCount) {
         EXPECT_EQ(s.lights.size(), lights) << file;
         for (const PointLight& l : s.lights) EXPECT_TRUE(std::isfinite(l.range)) << file;
         const testing::ScratchFolder scratch("lm_real_many");
-        for (const char* method : {"rt", "soft", "lmm"}) {
+        for (const char* method : {"rt", "soft", "exact", "lmm"}) {
             std::string first;
             for (const char* threads : {"1", "2"}) {
                 const std::string out = scratch.path + "/" + method + threads + ".png";

@@ -324,7 +324,7 @@ DistributedRender RenderDistributed(const MpiSession& session, const WhittedRend
 }
 
 DistributedRender RenderDistributedBands(const MpiSession& session, const WhittedRenderer& renderer,
-                                         const ShadowDenoiser& denoiser, ProgressReporter* progress) {
+                                         const BandRenderer& bands, ProgressReporter* progress) {
     const int rank = session.Rank(), size = session.Size();
     const int tilesX = renderer.TilesX(), tileRows = renderer.TileCount() / tilesX;
     constexpr int T = WhittedRenderer::kTileSize;
@@ -340,7 +340,7 @@ DistributedRender RenderDistributedBands(const MpiSession& session, const Whitte
     try {
         image = Image(renderer.Width(), renderer.Height());
         if (row1 > row0) {
-            denoiser.RenderRows(row0 * T, std::min(row1 * T, renderer.Height()), &image, report.counters, progress);
+            bands.RenderRows(row0 * T, std::min(row1 * T, renderer.Height()), &image, report.counters, progress);
             report.batches = 1;
         }
         for (int t = row0 * tilesX; t < row1 * tilesX; ++t) mine.push_back(t);

@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "lightmesh/distributed/rank_report.h"
-#include "lightmesh/render/shadow_denoiser.h"
+#include "lightmesh/render/band_renderer.h"
 #include "lightmesh/render/whitted.h"
 
 namespace lm {
@@ -65,12 +65,12 @@ DistributedRender RenderDistributed(const MpiSession& session, const WhittedRend
                                     const std::function<uint64_t()>& nodesEvaluated,
                                     ProgressReporter* progress);
 
-/// Collective: RenderDistributed for "--shadows denoised", whose pixels read their
-/// neighbours' noisy visibility: rank r renders an even share of the image's rows of tiles,
-/// one band, with the denoiser's apron of noisy rows above and below it
-/// (ShadowDenoiser::RenderRows; the aprons are rendered twice, by both neighbours), and
-/// rank 0 gathers the bands. The image is one process's, byte for byte.
+/// Collective: RenderDistributed for the renderers whose pixels read their neighbours'
+/// (BandRenderer: the soft default, "--shadows denoised"): rank r renders an even share of
+/// the image's rows of tiles, one band, with the apron of rows it reads above and below it
+/// (BandRenderer::RenderRows; the aprons are rendered twice, by both neighbours), and rank
+/// 0 gathers the bands. The image is one process's, byte for byte.
 DistributedRender RenderDistributedBands(const MpiSession& session, const WhittedRenderer& renderer,
-                                         const ShadowDenoiser& denoiser, ProgressReporter* progress);
+                                         const BandRenderer& bands, ProgressReporter* progress);
 
 }  // namespace lm

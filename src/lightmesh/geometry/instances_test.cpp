@@ -246,7 +246,7 @@ TEST(Instances, ImagesMatchTheFlattenedScenes) {
     // Embree's instance traversal moves each ray into the prototype's space, so hits differ
     // from the flattened scene's in the last bits: near-equal images, not equal bytes.
     // (Measured: rt 147 dB, soft 74 dB, area 65 dB.)
-    for (const auto& [method, least] : {std::pair{"rt", 100.0}, {"soft", 55.0}, {"area", 55.0}}) {
+    for (const auto& [method, least] : {std::pair{"rt", 100.0}, {"soft", 55.0}, {"exact", 55.0}, {"area", 55.0}}) {
         RenderOptions o = s.render;
         o.accel = "embree";
         o.shadows = method;
@@ -408,7 +408,7 @@ TEST(Instances, TexturedAndCutOutFilesAreInstancedAsTheirCopies) {
         ASSERT_EQ(cut.mesh.cutouts->IsCutout(id), cutFlat.mesh.cutouts->IsCutout(id));
         ASSERT_EQ(cut.mesh.cutouts->Solid(cut.mesh, id, b1, b2), cutFlat.mesh.cutouts->Solid(cutFlat.mesh, id, b1, b2)) << id;
     }
-    for (const char* method : {"rt", "soft", "area"}) {
+    for (const char* method : {"rt", "soft", "exact", "area"}) {
         o.shadows = method;
         const RenderResult ci = RenderJob(cut, o).Render(), cf = RenderJob(cutFlat, o).Render();
         EXPECT_GT(CompareImages(ci.image, cf.image).psnr, 40.0) << method;

@@ -51,7 +51,7 @@ Image Render(const Scene& s, const std::string& method, int threads = 2) {
     return image;
 }
 
-const char* const kMethods[] = {"rt", "soft", "lmm", "area"};
+const char* const kMethods[] = {"rt", "soft", "exact", "lmm", "area"};
 
 TEST(ManyLights, ImagesAreIdenticalForAnyThreadCount) {
     for (const float range : {Infinity, 2.5f}) {
@@ -143,7 +143,7 @@ TEST(ManyLights, EveryMethodWritesOnlyTheLightsAPointNeeds) {
         const char* method;
         float lightRadius;  // > 0: the override (lmm's contact-hardening mode)
     };
-    for (const Case c : {Case{"none", 0}, Case{"rt", 0}, Case{"soft", 0}, Case{"area", 0}, Case{"denoised", 0},
+    for (const Case c : {Case{"none", 0}, Case{"rt", 0}, Case{"soft", 0}, Case{"exact", 0}, Case{"area", 0}, Case{"denoised", 0},
                          Case{"lmm", 0}, Case{"lmm", 0.06f}}) {
         RenderOptions options = s.render;
         if (c.lightRadius > 0) options.areaLight.radius = c.lightRadius;

@@ -47,6 +47,9 @@ RenderJob::RenderJob(const Scene& scene, const RenderOptions& options, const Acc
     renderer_ = std::make_unique<WhittedRenderer>(scene, *accel_, *shadows_, options_);
     if (options_.shadows == "denoised")
         denoiser_ = std::make_unique<ShadowDenoiser>(scene, *accel_, *renderer_, options_, LightRadii(scene, options_));
+    if (options_.shadows == "soft")
+        frame_ = std::make_unique<SoftFrame>(scene, *accel_, *renderer_, options_, LightRadii(scene, options_),
+                                             SoftFrameSamples(options_.soft));
 }
 
 }  // namespace lm

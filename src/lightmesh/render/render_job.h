@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "lightmesh/render/shadow_denoiser.h"
+#include "lightmesh/render/soft_frame.h"
 #include "lightmesh/render/whitted.h"
 
 namespace lm {
@@ -21,15 +22,25 @@ class RenderJob {
     /// Renders the whole image (WhittedRenderer::Render; with "--shadows denoised",
     /// ShadowDenoiser::Render).
     RenderResult Render(ProgressReporter* progress = nullptr) const {
-        return denoiser_ ? denoiser_->Render(progress) : renderer_->Render(progress);
+        const BandRenderer* bands = Bands();
+        return bands ? bands->Render(options_.width, options_.height, progress) : renderer_->Render(progress);
     }
 
     const Accelerator& Accel() const { return *accel_; }
     const ShadowMethod& Shadows() const { return *shadows_; }
+    /// The shadow work's counts for --stats: the frame's (the soft default) or the method's.
+    StatsLines CounterLines(const RenderCounters& counters) const {
+        return frame_ ? frame_->CounterLines(counters) : shadows_->CounterLines(counters);
+    }
     const WhittedRenderer& Renderer() const { return *renderer_; }
-    /// The shadow denoiser of "--shadows denoised" (which renders by bands of rows, not by
-    /// the renderer's tiles), else null.
+    /// The shadow denoiser of "--shadows denoised", else null.
     const ShadowDenoiser* Denoiser() const { return denoiser_.get(); }
+    /// What renders the image by bands of rows, not by the renderer's tiles: the soft
+    /// default's frame or the denoiser; null for the per-tile methods.
+    const BandRenderer* Bands() const {
+        if (frame_) return frame_.get();
+        return denoiser_.get();
+    }
     const RenderOptions& Options() const { return options_; }
     /// Seconds spent building the back-end (0 when it was given) and the shadow method.
     double BuildSeconds() const { return buildSeconds_; }
@@ -42,6 +53,7 @@ class RenderJob {
     std::unique_ptr<ShadowMethod> shadows_;
     std::unique_ptr<WhittedRenderer> renderer_;
     std::unique_ptr<ShadowDenoiser> denoiser_;
+    std::unique_ptr<SoftFrame> frame_;
     double buildSeconds_ = 0, shadowSetupSeconds_ = 0;
 };
 

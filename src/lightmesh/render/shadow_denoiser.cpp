@@ -395,13 +395,5 @@ float ShadowDenoiser::NoisyVisibility(const ShadingPoint& sp, size_t light, floa
     return static_cast<float>(visible) / static_cast<float>(samples);
 }
 
-RenderResult ShadowDenoiser::Render(ProgressReporter* progress) const {
-    RenderResult result;
-    result.image = Image(options_.width, options_.height);
-    const auto start = std::chrono::steady_clock::now();
-    RenderRows(0, options_.height, &result.image, result.counters, progress);
-    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return result;
-}
 
 }  // namespace lm

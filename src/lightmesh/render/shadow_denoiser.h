@@ -25,6 +25,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "lightmesh/render/band_renderer.h"
 #include "lightmesh/render/whitted.h"
 
 namespace lm {
@@ -77,7 +78,7 @@ void FilterShadowLayer(const DenoiseFrame& frame, const DenoiseLayer& layer, int
 /// Renders "--shadows denoised": the Whitted image with each camera hit's lights'
 /// visibility from options.areaLight.samples stratified rays per light (area's rays and
 /// seeds), filtered by FilterShadowLayer, and the rest of its shading from `renderer`.
-class ShadowDenoiser {
+class ShadowDenoiser final : public BandRenderer {
   public:
     /// `renderer` (whose shadow method renders the mirrors' shadows), `scene` and `accel`
     /// must outlive it. radii: LightRadii. Throws Error for bad options or radii.
@@ -85,12 +86,15 @@ class ShadowDenoiser {
                    const RenderOptions& options, std::vector<float> radii);
 
     /// The whole image (one band, no apron).
-    RenderResult Render(ProgressReporter* progress = nullptr) const;
+    RenderResult Render(ProgressReporter* progress = nullptr) const {
+        return BandRenderer::Render(options_.width, options_.height, progress);
+    }
     /// Image rows [y0, y1) into the same rows of *image (of the render's size), from the
     /// noisy data of rows [y0 − kDenoiseApron, y1 + kDenoiseApron) (clipped to the image).
     /// `progress` gets one unit per tile of the band's rows. Throws Error when the band's
     /// buffers would need more than half the memory budget.
-    void RenderRows(int y0, int y1, Image* image, RenderCounters& counters, ProgressReporter* progress = nullptr) const;
+    void RenderRows(int y0, int y1, Image* image, RenderCounters& counters,
+                    ProgressReporter* progress = nullptr) const override;
 
     /// Bytes of buffers per pixel of a band (and its apron).
     size_t BytesPerPixel() const;

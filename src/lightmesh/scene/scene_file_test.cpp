@@ -521,8 +521,8 @@ TEST(SceneFile, BadInputsGiveExactMessages) {
          .expected = "scene.json /render/grid: must be between 0 and 4096, got -1",
          .extra = R"(, "render": {"grid": -1})"},
         {.name = "shadows",
-         .expected = "scene.json /render/shadows: must be one of \"soft\", \"none\", \"rt\", \"lmm\", \"area\", "
-                     "\"denoised\"; got \"hard\"",
+         .expected = "scene.json /render/shadows: must be one of \"soft\", \"exact\", \"none\", \"rt\", \"lmm\", "
+                     "\"area\", \"denoised\"; got \"hard\"",
          .extra = R"(, "render": {"shadows": "hard"})"},
         {.name = "light_radius_negative",
          .expected = "scene.json /render/light_radius: must not be negative, got -0.5",

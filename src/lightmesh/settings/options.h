@@ -72,13 +72,15 @@ struct AreaLightOptions {
 };
 
 
-/// Settings of the default soft shadows ("--shadows soft", shadow/soft_shadows.h; ours).
+/// Settings of the soft shadows: the default ("--shadows soft", render/soft_frame.h) and
+/// the exact mode ("--shadows exact", shadow/soft_shadows.h); ours.
 struct SoftShadowOptions {
-    /// Cells across the longest side of the scene's box (the light mesh's CC).
+    /// exact: cells across the longest side of the scene's box (the light mesh's CC).
     int cc = 64;
-    /// Directions per light at a point whose cone meets a listed triangle: 4 .. 256, a
-    /// multiple of 4.
-    int samples = 64;
+    /// Rays (soft) or directions (exact) per light at a point in a penumbra; 0: the
+    /// method's default (kSoftFrameSamples, kExactSoftSamples). soft: 4 .. 256, a multiple
+    /// of 4; exact: 16 .. 256, a multiple of 16.
+    int samples = 0;
     /// Rays per light at a point of a dense cell (traced through the back-end); 0: a
     /// quarter of `samples`, at least 8.
     int denseSamples = 0;
@@ -89,6 +91,11 @@ struct SoftShadowOptions {
     std::vector<float> radii;
 };
 
+/// The soft default's and the exact mode's rays (directions) per light in a penumbra.
+inline constexpr int kSoftFrameSamples = 16, kExactSoftSamples = 64;
+/// SoftShadowOptions::samples for the soft default: the option, or its default.
+inline int SoftFrameSamples(const SoftShadowOptions& o) { return o.samples ? o.samples : kSoftFrameSamples; }
+
 struct RenderOptions {
     int width = 640;
     int height = 480;
@@ -96,8 +103,9 @@ struct RenderOptions {
     int aa = 1;
     /// Mirror recursion limit (1 = no reflected rays).
     int maxDepth = 5;
-    /// Shadow method: "soft" (the default: soft shadows of the lights' spheres), "none",
-    /// "rt" (one shadow ray per light), "lmm" (the paper's light mesh) or "area".
+    /// Shadow method: "soft" (the default: soft shadows of the lights' spheres), "exact"
+    /// (the same, exact per point), "none", "rt" (one shadow ray per light), "lmm" (the
+    /// paper's light mesh), "area" or "denoised".
     std::string shadows = "soft";
     /// Ray-query back-end: "brute", "grid" or "embree". The default is the fastest one
     /// measured (README, Benchmarks): Embree when the build has it; the nested grid (the

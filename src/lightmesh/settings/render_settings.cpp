@@ -18,11 +18,13 @@ const std::vector<RenderSetting>& RenderSettings() {
         {"aa", "--aa", K::Int, 1, 16, {}, "Anti-aliasing: N x N camera rays per pixel (default 1)", nullptr, {}},
         {"max_depth", "--max-depth", K::Int, 1, 64, {}, "Mirror recursion limit (1: no reflections; default 5)",
          nullptr, {}},
-        {"shadows", "--shadows", K::Choice, 0, 0, {"soft", "none", "rt", "lmm", "area", "denoised"},
-         "Shadows: soft (soft shadows of the lights' spheres from the light mesh's cells), none, rt "
-         "(hard: one shadow ray per light), lmm (the paper's light mesh method), area (soft reference: "
-         "--samples shadow rays per light) or denoised (area's --samples rays, then a shadow denoiser); "
-         "default soft", nullptr, {}},
+        {"shadows", "--shadows", K::Choice, 0, 0, {"soft", "exact", "none", "rt", "lmm", "area", "denoised"},
+         "Shadows: soft (soft shadows of the lights' spheres: one ray per pixel and light, penumbrae "
+         "found between neighbouring pixels and sampled), exact (the same, exact per point from the cells' "
+         "occluder lists), none, rt (hard: one shadow ray per light), lmm (the paper's light mesh method), "
+         "area (soft reference: --samples shadow rays per light) or denoised (area's --samples rays, then a "
+         "shadow denoiser); default soft",
+         nullptr, {}},
         {"accel", "--accel", K::Choice, 0, 0, {"brute", "grid", "embree"},
          std::string("Ray-query back-end: brute, grid (the paper's nested grid) or embree; default ") +
              kDefaultAccelerator,
@@ -32,8 +34,8 @@ const std::vector<RenderSetting>& RenderSettings() {
          "Nested grid: top-level cells along the longest side (default 0: automatic)",
          "accel", {"grid"}},
         {"cc", "--cc", K::Int, 1, 4096, {},
-         "Light mesh: cells across the longest side of the scene (the paper's CC; default 100 for lmm, 64 for soft)",
-         "shadows", {"lmm", "soft"}},
+         "Light mesh: cells across the longest side of the scene (the paper's CC; default 100 for lmm, 64 for exact)",
+         "shadows", {"lmm", "exact"}},
         {"ki", "--ki", K::Float, 0.01, 16, {}, "Light mesh: interpolation radius in mesh steps, r = kI*h (default 2)",
          "shadows", {"lmm"}},
         {"variant", "--variant", K::String, 0, 0, {},
@@ -56,7 +58,7 @@ const std::vector<RenderSetting>& RenderSettings() {
          "scene's centre) with this one (default: no override); 0: point lights. Soft and area shadows use "
          "spheres of it; lmm sizes "
          "its penumbrae by it (contact hardening), which only this option turns on, not the lights' own radii",
-         "shadows", {"soft", "area", "denoised", "lmm"}},
+         "shadows", {"soft", "exact", "area", "denoised", "lmm"}},
         {"thin_check", "--thin-check", K::Choice, 0, 0, {"off", "lit", "all"},
          "Light mesh with --light-radius: P's own shadow ray checks where the nodes agree, so occluders (lit) "
          "and also gaps (all) thinner than the mesh step keep their effect; off: the nodes decide (default all)",
@@ -64,10 +66,10 @@ const std::vector<RenderSetting>& RenderSettings() {
         {"samples", "--samples", K::Int, 1, 4096, {},
          "Area and denoised shadows: stratified shadow rays per light and shading point (default 16)", "shadows",
          {"area", "denoised"}},
-        {"soft_samples", "--soft-samples", K::Int, 16, 256, {},
-         "Soft shadows: directions per light where a triangle is in a point's cone to it, a multiple of 16 (a "
-         "quarter first; the rest only in a penumbra; default 64)",
-         "shadows", {"soft"}},
+        {"soft_samples", "--soft-samples", K::Int, 4, 256, {},
+         "Soft shadows in a penumbra, per light: rays (soft: a multiple of 4, default 16) or directions "
+         "(exact: a multiple of 16, a quarter first, the rest only in a penumbra; default 64)",
+         "shadows", {"soft", "exact"}},
         {"textures", "--no-textures", K::Bool, 0, 0, {},
          "Leave the materials' images out (colour textures and alpha cut-outs): flat colours and solid "
          "surfaces (default: textures on)",

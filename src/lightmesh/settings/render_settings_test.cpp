@@ -55,22 +55,25 @@ TEST(RenderSettings, HelpNamesEachDefault) {
     names("max_depth", "default " + std::to_string(o.maxDepth));
     names("shadows", "default " + o.shadows);
     names("grid", "default " + std::to_string(o.accelOptions.gridResolution));
-    names("cc", "default " + std::to_string(o.lightMesh.cc) + " for lmm, " + std::to_string(o.soft.cc) + " for soft");
+    names("cc", "default " + std::to_string(o.lightMesh.cc) + " for lmm, " + std::to_string(o.soft.cc) + " for exact");
     names("ki", "default 2");
     EXPECT_EQ(o.lightMesh.ki, 2.0f);
     names("cell_summaries", "default " + o.lightMesh.cellSummaries);
     names("thin_check", "default " + o.lightMesh.thinCheck);
     names("samples", "default " + std::to_string(o.areaLight.samples));
-    names("soft_samples", "default " + std::to_string(o.soft.samples));
+    // 0 is each soft method's own default.
+    EXPECT_EQ(o.soft.samples, 0);
+    names("soft_samples", "default " + std::to_string(kSoftFrameSamples) + ")");
+    names("soft_samples", "default " + std::to_string(kExactSoftSamples) + ")");
 }
 
 // Which knobs a method or back-end uses is the table's: a flag given for a render that does
 // not use it gets one warning naming the users; a knob every render uses, none.
 TEST(RenderSettings, UnusedFlagsAreNamedByTheTable) {
-    EXPECT_EQ(UnusedSettingWarning("cc", "rt"), "--cc is not used by --shadows rt (only by lmm and soft); ignored");
+    EXPECT_EQ(UnusedSettingWarning("cc", "rt"), "--cc is not used by --shadows rt (only by lmm and exact); ignored");
     EXPECT_EQ(UnusedSettingWarning("cc", "lmm"), "");
     EXPECT_EQ(UnusedSettingWarning("light_radius", "none"),
-              "--light-radius is not used by --shadows none (only by soft, area, denoised and lmm); ignored");
+              "--light-radius is not used by --shadows none (only by soft, exact, area, denoised and lmm); ignored");
     EXPECT_EQ(UnusedSettingWarning("light_radius", "area"), "");
     EXPECT_EQ(UnusedSettingWarning("samples", "lmm"), "--samples is not used by --shadows lmm (only by area and denoised); ignored");
     EXPECT_EQ(UnusedSettingWarning("grid", "embree"), "--grid is not used by --accel embree (only by grid); ignored");

@@ -62,21 +62,6 @@ uint64_t AreaLightSeed(const ShadingPoint& sp, uint32_t light) {
     return h;
 }
 
-void ConcentricDisc(float u0, float u1, float* dx, float* dy) {
-    const float ox = 2.0f * u0 - 1.0f, oy = 2.0f * u1 - 1.0f;
-    *dx = *dy = 0;
-    if (ox == 0 && oy == 0) return;
-    float r, theta;
-    if (std::abs(ox) > std::abs(oy)) {
-        r = ox;
-        theta = (Pi / 4) * (oy / ox);
-    } else {
-        r = oy;
-        theta = Pi / 2 - (Pi / 4) * (ox / oy);
-    }
-    *dx = r * std::cos(theta);
-    *dy = r * std::sin(theta);
-}
 
 namespace {
 

@@ -7,6 +7,7 @@
 #include <memory>
 #include <vector>
 
+#include "lightmesh/shadow/disc_pattern.h"
 #include "lightmesh/shadow/shadow.h"
 
 namespace lm {
@@ -87,10 +88,6 @@ class DiscRings {
     int perRing_ = 1;
     bool inside_ = false;
 };
-
-/// Shirley and Chiu's concentric map of [0, 1)² to the unit disc (pbrt-v4's
-/// SampleUniformDiskConcentric): area-preserving, and it keeps strata compact.
-void ConcentricDisc(float u0, float u1, float* dx, float* dy);
 
 /// Direction `index` of `samples` in the cone around the unit vector `axis` whose
 /// half-angle θmax has 1 - cos θmax = `oneMinusCosMax` (in [0, 1]): uniform in solid

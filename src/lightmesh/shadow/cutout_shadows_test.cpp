@@ -49,7 +49,7 @@ TEST(CutoutShadows, ACheckersShadowIsACheckerForEveryMethodOnEveryBackEnd) {
     for (const std::string& accelName : AcceleratorNames()) {
         const auto accel = CreateAccelerator(accelName, cut.mesh);
         const auto solidAccel = CreateAccelerator(accelName, solid.mesh);
-        for (const char* method : {"rt", "area", "soft"}) {
+        for (const char* method : {"rt", "area", "soft", "exact"}) {
             SCOPED_TRACE(accelName + " " + method);
             EXPECT_NEAR(LitFraction(cut, *accel, method), 0.5, 0.04);
             EXPECT_LT(LitFraction(solid, *solidAccel, method), 0.01);
@@ -90,7 +90,7 @@ TEST(CutoutShadows, AnInstancedCheckersShadowIsAChecker) {
     EXPECT_EQ(cut.mesh.cutouts->Count(), 2u);
     for (const std::string& accelName : AcceleratorNames()) {
         const auto accel = CreateAccelerator(accelName, cut.mesh);
-        for (const char* method : {"rt", "area", "soft"}) {
+        for (const char* method : {"rt", "area", "soft", "exact"}) {
             SCOPED_TRACE(accelName + " " + method);
             EXPECT_NEAR(LitFraction(cut, *accel, method), 0.5, 0.04);
         }

@@ -164,7 +164,7 @@ float CameraRayAngle(const Camera& camera, const RenderOptions& options) {
 
 }  // namespace
 
-std::vector<std::string> ShadowMethodNames() { return {"soft", "none", "rt", "lmm", "area", "denoised"}; }
+std::vector<std::string> ShadowMethodNames() { return {"soft", "exact", "none", "rt", "lmm", "area", "denoised"}; }
 
 std::vector<float> LightRadii(const Scene& scene, const RenderOptions& options) {
     std::vector<float> radii;
@@ -179,6 +179,13 @@ std::unique_ptr<ShadowMethod> CreateShadowMethod(std::string_view name, const Sc
     if (name == "none") return std::make_unique<NoShadows>();
     if (name == "rt") return std::make_unique<HardShadows>(scene, accel);
     if (name == "soft") {
+        // The default renders by frames (render/soft_frame.h, RenderJob); this per-point
+        // method answers the hits it cannot see from the camera (mirrors): area's N rays.
+        AreaLightOptions area = options.areaLight;
+        area.samples = SoftFrameSamples(options.soft);
+        return CreateAreaLightShadows(scene, accel, area, LightRadii(scene, options), "soft");
+    }
+    if (name == "exact") {
         SoftShadowOptions soft = options.soft;
         soft.radii = LightRadii(scene, options);
         return CreateSoftShadows(scene, accel, soft);
@@ -195,7 +202,7 @@ std::unique_ptr<ShadowMethod> CreateShadowMethod(std::string_view name, const Sc
     if (name == "area") return CreateAreaLightShadows(scene, accel, options.areaLight, LightRadii(scene, options));
     if (name == "denoised")
         return CreateAreaLightShadows(scene, accel, options.areaLight, LightRadii(scene, options), "denoised");
-    ThrowSettingError("shadows", "unknown shadow method \"%.*s\" (choose soft, none, rt, lmm, area or denoised)", static_cast<int>(name.size()),
+    ThrowSettingError("shadows", "unknown shadow method \"%.*s\" (choose soft, exact, none, rt, lmm, area or denoised)", static_cast<int>(name.size()),
                name.data());
 }
 

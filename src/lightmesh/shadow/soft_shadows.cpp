@@ -209,8 +209,9 @@ SoftShadows::SoftShadows(const Scene& scene, const Accelerator& accel, SoftShado
     for (float r : options_.radii)
         if (!(std::isfinite(r) && r >= 0)) throw Error(StringPrintf("soft shadows: light radius %g is not a finite number >= 0", static_cast<double>(r)));
     if (options_.cc < 1 || options_.cc > 4096) ThrowSettingError("cc", "soft shadows: CC %d: must be 1 to 4096", options_.cc);
+    if (options_.samples == 0) options_.samples = kExactSoftSamples;
     if (options_.samples < 16 || options_.samples > kMaxSamples || options_.samples % 16)
-        ThrowSettingError("soft_samples", "soft shadows: %d samples: must be a multiple of 16 from 16 to %d", options_.samples,
+        ThrowSettingError("soft_samples", "exact soft shadows: %d samples: must be a multiple of 16 from 16 to %d", options_.samples,
                           kMaxSamples);
     if (options_.denseSamples == 0) options_.denseSamples = std::max(8, options_.samples / 4);
     if (options_.denseSamples < 4 || options_.denseSamples > kMaxSamples || options_.denseSamples % 4)

@@ -52,7 +52,7 @@ class SoftShadows final : public ShadowMethod {
   public:
     SoftShadows(const Scene& scene, const Accelerator& accel, SoftShadowOptions options);
     ~SoftShadows() override;
-    std::string_view Name() const override { return "soft"; }
+    std::string_view Name() const override { return "exact"; }
     void Visibility(const ShadingPoint& sp, LightIndices lights, float* vis, RenderCounters& counters) const override;
     ShadowFigures Figures() const override;
     StatsLines CounterLines(const RenderCounters& counters) const override;

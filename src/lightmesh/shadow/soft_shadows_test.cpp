@@ -125,7 +125,7 @@ Comparison Compare(const Scene& s, const Accelerator& accel, const ShadowMethod&
 TEST(SoftShadows, MatchesTheAreaReferenceOnATerrainWithBuildings) {
     const Scene s = TerrainScene(0.8f);
     const auto accel = CreateAccelerator("grid", s.mesh);
-    const auto soft = Method(s, *accel, "soft");
+    const auto soft = Method(s, *accel, "exact");
     const auto ref = Method(s, *accel, "area", 1024);
     const Comparison c = Compare(s, *accel, *soft, *ref, 1500, 1);
     EXPECT_LT(c.meanError, 0.006);
@@ -142,7 +142,7 @@ TEST(SoftShadows, MatchesTheAreaReferenceOnATerrainWithBuildings) {
 TEST(SoftShadows, DenseCellsTraceRaysAndStillMatch) {
     const Scene s = TerrainScene(0.8f);
     const auto accel = CreateAccelerator("grid", s.mesh);
-    const auto soft = Method(s, *accel, "soft", 16, 1);
+    const auto soft = Method(s, *accel, "exact", 16, 1);
     const auto ref = Method(s, *accel, "area", 1024);
     const Comparison c = Compare(s, *accel, *soft, *ref, 500, 2);
     EXPECT_LT(c.meanError, 0.02);
@@ -154,7 +154,7 @@ TEST(SoftShadows, DenseCellsTraceRaysAndStillMatch) {
 TEST(SoftShadows, ThinOccludersAndGapsKeepTheirShadows) {
     const Scene s = TerrainScene(0.3f);
     const auto accel = CreateAccelerator("brute", s.mesh);
-    const auto soft = Method(s, *accel, "soft");
+    const auto soft = Method(s, *accel, "exact");
     const auto* ss = dynamic_cast<const SoftShadows*>(soft.get());
     ASSERT_NE(ss, nullptr);
     EXPECT_GT(ss->Step(), 0.3f);  // the cells are wider than the pole, the bars and the slot
@@ -187,7 +187,7 @@ TEST(SoftShadows, ThinOccludersAndGapsKeepTheirShadows) {
 TEST(SoftShadows, PointLightsGetRtsHardShadow) {
     const Scene s = TerrainScene(0.0f);
     const auto accel = CreateAccelerator("brute", s.mesh);
-    const auto soft = Method(s, *accel, "soft");
+    const auto soft = Method(s, *accel, "exact");
     const auto rt = Method(s, *accel, "rt");
     RenderCounters counters;
     int shadowed = 0;
@@ -212,15 +212,15 @@ TEST(SoftShadows, SameImageForAnyThreadCount) {
     s.render.height = 72;
     const auto accel = CreateAccelerator("brute", s.mesh);
     RenderOptions o = s.render;
-    o.shadows = "soft";
+    o.shadows = "exact";
     Image one, many;
     {
-        const auto soft = CreateShadowMethod("soft", s, *accel, o);
+        const auto soft = CreateShadowMethod("exact", s, *accel, o);
         const WhittedRenderer r(s, *accel, *soft, o);
         tbb::task_arena(1).execute([&] { one = r.Render().image; });
     }
     {
-        const auto soft = CreateShadowMethod("soft", s, *accel, o);
+        const auto soft = CreateShadowMethod("exact", s, *accel, o);
         const WhittedRenderer r(s, *accel, *soft, o);
         tbb::task_arena(4).execute([&] { many = r.Render().image; });
     }
@@ -235,7 +235,7 @@ TEST(SoftShadows, CertifiesTheUmbraUnderAWideSlab) {
     testing::AddBox(&s, {-6, 2, -6}, {6, 2.2f, 6});
     s.lights[0].radius = 0.3f;
     const auto accel = CreateAccelerator("brute", s.mesh);
-    const auto soft = Method(s, *accel, "soft");
+    const auto soft = Method(s, *accel, "exact");
     RenderCounters counters;
     for (float x = -2; x <= 2; x += 0.25f) {
         const ShadingPoint sp = testing::RenderedFloorPoint(x, 0.3f * x);
@@ -256,7 +256,7 @@ TEST(SoftShadows, CertifiesTheUmbraUnderAWideSlab) {
 TEST(SoftShadows, TheWholeListMatchesTheAreaReferenceToo) {
     const Scene s = TerrainScene(0.8f);
     const auto accel = CreateAccelerator("grid", s.mesh);
-    const auto soft = Method(s, *accel, "soft");
+    const auto soft = Method(s, *accel, "exact");
     const auto ref = Method(s, *accel, "area", 1024);
     RenderCounters counters, refCounters;
     double error = 0, shadowSoft = 0, shadowRef = 0;
@@ -293,9 +293,9 @@ TEST(SoftShadows, RefusesBadSampleCounts) {
     const Scene s = TerrainScene(0.5f);
     const auto accel = CreateAccelerator("brute", s.mesh);
     RenderOptions o = s.render;
-    for (int bad : {0, 8, 20, 512}) {
+    for (int bad : {-16, 8, 20, 512}) {  // 0 is the default (64)
         o.soft.samples = bad;
-        EXPECT_THROW(CreateShadowMethod("soft", s, *accel, o), Error) << bad;
+        EXPECT_THROW(CreateShadowMethod("exact", s, *accel, o), Error) << bad;
     }
 }
 

@@ -1,0 +1,566 @@
+// soft_frame.cpp -- the soft default's stream of tiles (see the header).
+#include "lightmesh/render/soft_frame.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+
+#include "lightmesh/render/penumbra_classifier.h"
+#include "lightmesh/shadow/area_light.h"
+#include "lightmesh/util/error.h"
+#include "lightmesh/util/parallel.h"
+#include "lightmesh/util/system.h"
+
+namespace lm {
+
+/// One (camera hit, light) pair.
+struct SoftFrame::Entry {
+    uint32_t light = 0;
+    Color omega;       ///< the light's unshadowed term at the hit
+    float v = 0;       ///< its visibility, once known
+    uint8_t probe = 0;   ///< the centre ray reached the light
+    uint8_t seed = 0;    ///< a neighbour's probe disagrees
+    uint8_t marked = 0;  ///< in a penumbra
+    uint8_t spacing = 1; ///< its penumbra's samples per independent value (1, 2 or 4)
+    uint8_t direct = 0;  ///< sampled (else interpolated from the anchors of its spacing)
+};
+
+/// One camera ray's hit.
+struct SoftFrame::Sample {
+    ShadingPoint sp;
+    float footprint = 0;  ///< the world size of a sample on the surface there
+    Color rest;           ///< the shading without the lights' terms (ambient, mirror)
+    uint32_t first = 0;   ///< its entries in its tile's list, ascending by light
+    uint32_t count = 0;
+    bool hit = false;
+    /// With at most 64 lights: bit l set where it needs light l, and where light l's probe
+    /// reached it (the seeds' test compares neighbours by these words).
+    uint64_t need = 0, lit = 0;
+};
+
+/// A tile's hits, entries and silhouette points.
+struct SoftFrame::Tile {
+    std::vector<Sample> samples;  ///< tileSamples_² (row-major), clipped to the frame
+    std::vector<Entry> entries;
+    std::vector<SilhouettePoint> seeds;
+    std::vector<uint32_t> seedLight;
+    int x0 = 0, y0 = 0, w = 0, h = 0;  ///< its samples in the frame
+};
+
+/// The rows of tiles the stream holds, in a ring.
+struct SoftFrame::Window {
+    int tilesX = 0, tileRows = 0, ring = 0, ts = 0;
+    std::vector<int> rowHeld;        ///< per ring slot, the tile row it holds (−1: none)
+    std::vector<std::vector<Tile>> slots;
+    Tile& At(int row, int col) { return slots[static_cast<size_t>(row % ring)][static_cast<size_t>(col)]; }
+    /// The sample at frame coordinates (x, y) and its tile, or null outside the frame or
+    /// the held rows.
+    const Sample* SampleAt(int x, int y, const Tile** tile) {
+        if (x < 0 || y < 0 || x >= tilesX * ts || y >= tileRows * ts) return nullptr;
+        const int row = y / ts, col = x / ts;
+        if (rowHeld[static_cast<size_t>(row % ring)] != row) return nullptr;
+        const Tile& t = At(row, col);
+        if (x - t.x0 >= t.w || y - t.y0 >= t.h) return nullptr;
+        *tile = &t;
+        return &t.samples[static_cast<size_t>(y - t.y0) * static_cast<size_t>(ts) + static_cast<size_t>(x - t.x0)];
+    }
+};
+
+namespace {
+
+/// The entry of `light` among a sample's entries (ascending by light), or null.
+template <typename E>
+E* FindEntry(E* first, uint32_t count, uint32_t light) {
+    for (uint32_t k = 0; k < count; ++k) {
+        if (first[k].light == light) return first + k;
+        if (first[k].light > light) break;
+    }
+    return nullptr;
+}
+
+/// A silhouette point that may mark a tile's pairs: its light, and the box of samples it reaches.
+struct Candidate {
+    uint32_t light;
+    const SilhouettePoint* p;
+    int xa, xb, ya, yb;
+};
+
+/// A thread's buffers, kept from tile to tile (a tile's steps run on one thread, none nested).
+struct Scratch {
+    std::vector<Ray> rays;
+    std::vector<Hit> hits;
+    std::vector<Color> omega;
+    std::vector<uint32_t> ids, owner, lights, slotOf, start, order, who;
+    std::vector<std::pair<uint32_t, uint32_t>> blocked;
+    std::vector<Candidate> cand;
+    std::unique_ptr<bool[]> occluded;
+    size_t room = 0;
+    bool* Occluded(size_t n) {
+        if (room < n) occluded.reset(new bool[room = std::max<size_t>(n, 2 * room)]);
+        return occluded.get();
+    }
+};
+Scratch& ThreadScratch() {
+    thread_local Scratch scratch;
+    return scratch;
+}
+
+/// Whether two neighbouring samples lie on one surface (no depth edge between them): their
+/// points within 3 footprints.
+bool Continuous(const ShadingPoint& a, float fa, const ShadingPoint& b, float fb) {
+    const float reach = 3.0f * std::max(fa, fb);
+    return LengthSquared(a.p - b.p) <= reach * reach;
+}
+
+/// Whether a marked pair at (x, y) of spacing s is sampled by its position alone: spacing 1,
+/// or on the grid of its spacing.
+inline bool OnGrid(int x, int y, int s) { return s == 1 || (x % s == 0 && y % s == 0); }
+
+/// The spacing of the values of a penumbra whose silhouette point reaches `reach` samples:
+/// the visibility across it changes over about 2·(reach − 2) samples, so values every 2 or
+/// 4 samples, interpolated, keep its profile.
+inline uint8_t SpacingOf(float reach) {
+    static const float t2 = std::getenv("LM_S2") ? std::atof(std::getenv("LM_S2")) : 6.0f;
+    static const float t4 = std::getenv("LM_S4") ? std::atof(std::getenv("LM_S4")) : 12.0f;
+    static const float t8 = std::getenv("LM_S8") ? std::atof(std::getenv("LM_S8")) : 1e9f;
+    return reach < t2 ? 1 : reach < t4 ? 2 : reach < t8 ? 4 : 8;
+}
+
+}  // namespace
+
+void SoftFrame::CheckMemory(Window& w) const {
+    // The rows held: their hits and (hit, light) pairs. Past half the memory budget the
+    // render stops with an error rather than running the machine out of memory (many
+    // lights without a range: every hit keeps a pair per light).
+    uint64_t bytes = 0;
+    for (const std::vector<Tile>& slot : w.slots)
+        for (const Tile& t : slot)
+            bytes += t.samples.capacity() * sizeof(Sample) + t.entries.capacity() * sizeof(Entry) +
+                     t.seeds.capacity() * (sizeof(SilhouettePoint) + sizeof(uint32_t));
+    const uint64_t limit = PhysicalMemoryBytes() / 2;
+    if (limit && bytes > limit)
+        ThrowErrorAt({scene_.name},
+                     "soft shadows: the %d rows of tiles in flight hold %s for %zu lights, more than half the memory "
+                     "budget (%s); give the lights a \"range\", render a narrower image, or use --shadows rt",
+                     w.ring, FormatBytes(bytes).c_str(), scene_.lights.size(), FormatBytes(limit * 2).c_str());
+}
+
+bool SoftFrame::Interpolable(Window& w, const Sample& s, uint32_t light, int x, int y, int sp) const {
+    const int ax = x - x % sp, ay = y - y % sp;
+    for (int k = 0; k < 4; ++k) {
+        const int qx = ax + (k & 1) * sp, qy = ay + (k >> 1) * sp;
+        const Tile* at;
+        const Sample* a = w.SampleAt(qx, qy, &at);
+        if (!a || !a->hit) return false;
+        const Entry* en = FindEntry(at->entries.data() + a->first, a->count, light);
+        if (!en || (en->marked && !OnGrid(qx, qy, en->spacing))) return false;
+        // On the sample's surface: the anchor within its plane (half a sample per sample of
+        // distance) and facing the same way.
+        const Vec3 d = a->sp.p - s.sp.p;
+        if (std::abs(Dot(d, s.sp.n)) > 0.25f * Length(d) + s.footprint || Dot(a->sp.n, s.sp.n) < 0.9f) return false;
+    }
+    return true;
+}
+
+SoftFrame::SoftFrame(const Scene& scene, const Accelerator& accel, const WhittedRenderer& renderer,
+                     const RenderOptions& options, std::vector<float> radii, int samples)
+    : scene_(scene), accel_(accel), renderer_(renderer), options_(options), radii_(std::move(radii)),
+      samples_(samples), pattern_(DiscPattern::Golden(samples)) {
+    if (radii_.size() != scene.lights.size())
+        ThrowError("soft shadows: %zu radii for %zu lights", radii_.size(), scene.lights.size());
+    if (samples < 4 || samples > 256 || samples % 4)
+        ThrowSettingError("soft_samples", "soft shadows: %d rays per light in a penumbra: must be a multiple of 4 from 4 to 256",
+                          samples);
+    sampleAngle_ = 2.0f * std::tan(0.5f * scene.camera.fovY * Pi / 180.0f) / static_cast<float>(options.height * options.aa);
+    tilePixels_ = std::max(1, 16 / options.aa);
+    tileSamples_ = tilePixels_ * options.aa;
+    reachTiles_ = (kReach + tileSamples_ - 1) / tileSamples_;
+}
+
+
+void SoftFrame::ShadeTile(Window& w, int row, int col, RenderCounters& c) const {
+    Tile& t = w.At(row, col);
+    const int ts = tileSamples_, aa = options_.aa;
+    const int sw = options_.width * aa, sh = options_.height * aa;
+    t.x0 = col * ts, t.y0 = row * ts;
+    t.w = std::min(ts, sw - t.x0), t.h = std::min(ts, sh - t.y0);
+    t.samples.assign(static_cast<size_t>(ts) * ts, Sample{});
+    t.entries.clear(), t.seeds.clear(), t.seedLight.clear();
+    const size_t lights = scene_.lights.size();
+    Scratch& sc = ThreadScratch();
+    std::vector<Ray>& rays = sc.rays;
+    std::vector<Hit>& hits = sc.hits;
+    std::vector<Color>& omega = sc.omega;
+    std::vector<uint32_t>& ids = sc.ids;
+    omega.resize(lights), ids.resize(lights);
+    // The camera rays of 8×8 samples at a time (a packet).
+    for (int by = 0; by < t.h; by += 8)
+        for (int bx = 0; bx < t.w; bx += 8) {
+            rays.clear();
+            for (int y = by; y < std::min(by + 8, t.h); ++y)
+                for (int x = bx; x < std::min(bx + 8, t.w); ++x) {
+                    const int X = t.x0 + x, Y = t.y0 + y;
+                    rays.push_back(renderer_.CameraRay(X / aa, Y / aa, X % aa, Y % aa));
+                }
+            hits.resize(rays.size());
+            accel_.IntersectMany(rays.data(), rays.size(), hits.data());
+            c.cameraRays += rays.size();
+            size_t k = 0;
+            for (int y = by; y < std::min(by + 8, t.h); ++y)
+                for (int x = bx; x < std::min(bx + 8, t.w); ++x, ++k) {
+                    Sample& s = t.samples[static_cast<size_t>(y) * ts + x];
+                    if (hits[k].prim == UINT32_MAX) {
+                        s.rest = scene_.background;
+                        continue;
+                    }
+                    uint32_t count = 0;
+                    s.sp = renderer_.ShadeSplit(rays[k], hits[k], omega.data(), ids.data(), &count, &s.rest, c);
+                    s.hit = true;
+                    const float cosView = std::max(0.2f, std::abs(Dot(s.sp.n, rays[k].d)) / Length(rays[k].d));
+                    s.footprint = hits[k].t * Length(rays[k].d) * sampleAngle_ / cosView;
+                    s.first = static_cast<uint32_t>(t.entries.size());
+                    s.count = count;
+                    for (uint32_t e = 0; e < count; ++e) t.entries.push_back(Entry{ids[e], omega[e]});
+                }
+        }
+    c.method[kSoftFrameLookups] += t.entries.size();
+    // The probes, light by light: the tile's rays to one light's centre go together (the
+    // entries ordered by light, each sample's in place: a counting sort over the tile's
+    // lights, which its samples list in ascending order).
+    std::vector<uint32_t>& owner = sc.owner;
+    owner.resize(t.entries.size());
+    for (size_t i = 0; i < t.samples.size(); ++i)
+        for (uint32_t e = 0; e < t.samples[i].count; ++e) owner[t.samples[i].first + e] = static_cast<uint32_t>(i);
+    // The tile's lights (each once: slotOf marks them), ascending, then the entries by light.
+    std::vector<uint32_t>& tileLights = sc.lights;
+    std::vector<uint32_t>& slotOf = sc.slotOf;
+    if (slotOf.size() < lights) slotOf.assign(lights, UINT32_MAX);
+    tileLights.clear();
+    for (const Entry& en : t.entries)
+        if (slotOf[en.light] == UINT32_MAX) slotOf[en.light] = 0, tileLights.push_back(en.light);
+    std::sort(tileLights.begin(), tileLights.end());
+    for (uint32_t k = 0; k < tileLights.size(); ++k) slotOf[tileLights[k]] = k;
+    std::vector<uint32_t>&start = sc.start, &order = sc.order;
+    start.assign(tileLights.size() + 1, 0);
+    order.resize(t.entries.size());
+    for (const Entry& en : t.entries) ++start[slotOf[en.light] + 1];
+    for (size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
+    for (uint32_t e = 0; e < t.entries.size(); ++e) order[start[slotOf[t.entries[e].light]]++] = e;
+    for (const uint32_t l : tileLights) slotOf[l] = UINT32_MAX;
+    bool* occluded = sc.Occluded(order.size());
+    rays.clear();
+    for (uint32_t e : order) {
+        const Entry& en = t.entries[e];
+        rays.push_back(LightSegment(t.samples[owner[e]].sp.origin, scene_.lights[en.light].position));
+    }
+    if (!rays.empty()) accel_.OccludedMany(rays.data(), rays.size(), occluded);
+    c.shadowRays += rays.size();
+    for (size_t k = 0; k < order.size(); ++k) {
+        Entry& en = t.entries[order[k]];
+        en.probe = !occluded[k];
+        en.v = en.probe ? 1.0f : 0.0f;
+    }
+    if (lights <= 64)
+        for (Sample& s : t.samples)
+            for (uint32_t e = s.first; e < s.first + s.count; ++e) {
+                const uint64_t bit = uint64_t(1) << t.entries[e].light;
+                s.need |= bit;
+                if (t.entries[e].probe) s.lit |= bit;
+            }
+}
+
+void SoftFrame::SeedTile(Window& w, int row, int col, RenderCounters& c) const {
+    Tile& t = w.At(row, col);
+    const int ts = tileSamples_;
+    Scratch& sc = ThreadScratch();
+    std::vector<Ray>& rays = sc.rays;
+    std::vector<Hit>& hits = sc.hits;
+    std::vector<std::pair<uint32_t, uint32_t>>& blocked = sc.blocked;  // (sample, entry) of the blocked seeds
+    rays.clear(), blocked.clear();
+    const bool lights64 = scene_.lights.size() <= 64;
+    for (int y = 0; y < t.h; ++y)
+        for (int x = 0; x < t.w; ++x) {
+            const size_t i = static_cast<size_t>(y) * ts + x;
+            const Sample& s = t.samples[i];
+            if (!s.hit || s.count == 0) continue;
+            const Sample* nb[4];
+            const Tile* nt[4] = {&t, &t, &t, &t};
+            const int X = t.x0 + x, Y = t.y0 + y;
+            if (x > 0 && y > 0 && x + 1 < t.w && y + 1 < t.h) {  // inside the tile
+                nb[0] = &s - 1, nb[1] = &s + 1, nb[2] = &s - ts, nb[3] = &s + ts;
+            } else {
+                nb[0] = w.SampleAt(X - 1, Y, &nt[0]), nb[1] = w.SampleAt(X + 1, Y, &nt[1]);
+                nb[2] = w.SampleAt(X, Y - 1, &nt[2]), nb[3] = w.SampleAt(X, Y + 1, &nt[3]);
+            }
+            // The lights whose probes may disagree (all of them past 64 lights).
+            uint64_t differ = 0;
+            for (int k = 0; k < 4; ++k) {
+                if (!nb[k] || !nb[k]->hit) {
+                    nb[k] = nullptr;
+                    continue;
+                }
+                const uint64_t d = lights64 ? (s.lit ^ nb[k]->lit) & s.need & nb[k]->need : ~uint64_t(0);
+                if (d && !Continuous(s.sp, s.footprint, nb[k]->sp, nb[k]->footprint)) nb[k] = nullptr;
+                else differ |= d;
+            }
+            if (!differ) continue;
+            for (uint32_t e = s.first; e < s.first + s.count; ++e) {
+                Entry& en = t.entries[e];
+                if (radii_[en.light] <= 0) continue;  // a point light: the probe is the answer
+                if (lights64 && !(differ >> en.light & 1)) continue;
+                for (int k = 0; k < 4 && !en.seed; ++k) {
+                    if (!nb[k]) continue;
+                    const Entry* other = FindEntry(nt[k]->entries.data() + nb[k]->first, nb[k]->count, en.light);
+                    if (other && other->probe != en.probe) en.seed = 1;
+                }
+                if (en.seed) {
+                    ++c.method[kSoftFrameSeeds];
+                    if (!en.probe) blocked.emplace_back(static_cast<uint32_t>(i), e);
+                }
+            }
+        }
+    // The blocked seeds' probes again, to their closest hit: a point of the silhouette.
+    for (const auto& [i, e] : blocked)
+        rays.push_back(LightSegment(t.samples[i].sp.origin, scene_.lights[t.entries[e].light].position));
+    hits.resize(rays.size());
+    if (!rays.empty()) accel_.IntersectMany(rays.data(), rays.size(), hits.data());
+    c.shadowRays += rays.size();
+    for (size_t k = 0; k < blocked.size(); ++k) {
+        if (hits[k].prim == UINT32_MAX) continue;  // cannot happen for an occluded ray; kept safe
+        const auto [i, e] = blocked[k];
+        const Sample& s = t.samples[i];
+        const uint32_t light = t.entries[e].light;
+        SilhouettePoint p;
+        p.x = rays[k].At(hits[k].t);
+        p.slop = 1.5f * s.footprint;
+        p.sx = t.x0 + static_cast<int>(i % ts), p.sy = t.y0 + static_cast<int>(i / ts);
+        p.reach = PenumbraReach(s.sp.origin, s.sp.n, scene_.lights[light].position, radii_[light],
+                                Length(p.x - s.sp.origin), s.footprint, static_cast<float>(kReach));
+        {  // DEBUG histogram
+            const int bucket = p.reach < 4 ? 0 : p.reach < 8 ? 1 : p.reach < 16 ? 2 : p.reach < 32 ? 3 : 4;
+            ++c.method[8 + bucket];
+        }
+        t.seeds.push_back(p);
+        t.seedLight.push_back(light);
+    }
+    c.method[kSoftFrameSilhouettes] += t.seeds.size();
+}
+
+void SoftFrame::MarkTile(Window& w, int row, int col, RenderCounters& c) const {
+    Tile& t = w.At(row, col);
+    const int ts = tileSamples_;
+    // Mark the pairs whose cone holds a silhouette point of the seeds within reach. The
+    // candidates: the seeds whose box meets the tile, by light, the nearest tiles' first
+    // (a pair stops at the first that holds it).
+    std::vector<Candidate>& cand = ThreadScratch().cand;
+    cand.clear();
+    for (int ring = 0; ring <= reachTiles_; ++ring)
+        for (int r = row - ring; r <= row + ring; ++r) {
+            if (r < 0 || r >= w.tileRows) continue;
+            const bool edgeRow = r == row - ring || r == row + ring;
+            for (int q = col - ring; q <= col + ring; q += edgeRow || ring == 0 ? 1 : 2 * ring) {
+                if (q < 0 || q >= w.tilesX) continue;
+                const Tile& o = w.At(r, q);
+                for (size_t k = 0; k < o.seeds.size(); ++k) {
+                    const SilhouettePoint& p = o.seeds[k];
+                    const int reach = static_cast<int>(std::ceil(p.reach));
+                    const int xa = std::max(p.sx - reach, t.x0), xb = std::min(p.sx + reach, t.x0 + t.w - 1);
+                    const int ya = std::max(p.sy - reach, t.y0), yb = std::min(p.sy + reach, t.y0 + t.h - 1);
+                    if (xa <= xb && ya <= yb) cand.push_back(Candidate{o.seedLight[k], &p, xa, xb, ya, yb});
+                }
+            }
+        }
+    std::stable_sort(cand.begin(), cand.end(), [](const Candidate& a, const Candidate& b) { return a.light < b.light; });
+    for (size_t i = 0; i < t.samples.size(); ++i) {
+        const Sample& s = t.samples[i];
+        const int x = t.x0 + static_cast<int>(i % ts), y = t.y0 + static_cast<int>(i / ts);
+        for (uint32_t e = s.first; e < s.first + s.count; ++e) {
+            Entry& en = t.entries[e];
+            auto it = std::lower_bound(cand.begin(), cand.end(), en.light,
+                                       [](const Candidate& c, uint32_t l) { return c.light < l; });
+            const Vec3& center = scene_.lights[en.light].position;
+            for (; it != cand.end() && it->light == en.light; ++it) {
+                if (x < it->xa || x > it->xb || y < it->ya || y > it->yb) continue;
+                if (ConeHolds(s.sp.origin, center, radii_[en.light], it->p->x, it->p->slop)) {
+                    en.marked = 1;
+                    en.spacing = SpacingOf(it->p->reach);
+                    break;
+                }
+            }
+            if (en.seed && !en.marked) en.marked = 1, en.spacing = 1;
+            c.method[kSoftFrameMarked] += en.marked;
+        }
+    }
+}
+
+void SoftFrame::SampleTile(Window& w, int row, int col, RenderCounters& c) const {
+    Tile& t = w.At(row, col);
+    const int ts = tileSamples_;
+    // Which marked pairs are sampled: those on their spacing's grid, and those whose four
+    // anchors (the grid's samples around them) are not all known without them: an anchor
+    // is known when it is unmarked (its probe) or sampled by its position.
+    for (size_t i = 0; i < t.samples.size(); ++i) {
+        const Sample& s = t.samples[i];
+        const int x = t.x0 + static_cast<int>(i % ts), y = t.y0 + static_cast<int>(i / ts);
+        for (uint32_t e = s.first; e < s.first + s.count; ++e) {
+            Entry& en = t.entries[e];
+            if (!en.marked) continue;
+            const int sp = en.spacing;
+            en.direct = OnGrid(x, y, sp) || !Interpolable(w, s, en.light, x, y, sp);
+        }
+    }
+    // Sample the marked pairs: N rays each, a point's rays together.
+    Scratch& sc = ThreadScratch();
+    std::vector<Ray>& rays = sc.rays;
+    std::vector<uint32_t>& who = sc.who;
+    rays.clear(), who.clear();
+    for (size_t i = 0; i < t.samples.size(); ++i) {
+        const Sample& s = t.samples[i];
+        for (uint32_t e = s.first; e < s.first + s.count; ++e) {
+            Entry& en = t.entries[e];
+            if (!en.marked || !en.direct) continue;
+            ++c.method[kSoftFrameDirect];
+            SphereCone cone(s.sp.origin, scene_.lights[en.light].position, radii_[en.light]);
+            if (cone.Inside()) {
+                en.v = 1;
+                continue;
+            }
+            cone.Turn(static_cast<int>(AreaLightSeed(s.sp, en.light) >> 54));
+            for (int k = 0; k < samples_; ++k) rays.push_back(cone.RayTo(pattern_.x[k], pattern_.y[k], pattern_.r2[k]));
+            who.push_back(e);
+        }
+    }
+    if (!rays.empty()) {
+        bool* occluded = sc.Occluded(rays.size());
+        accel_.OccludedMany(rays.data(), rays.size(), occluded);
+        c.shadowRays += rays.size();
+        for (size_t k = 0; k < who.size(); ++k) {
+            int visible = 0;
+            for (int j = 0; j < samples_; ++j) visible += !occluded[k * samples_ + j];
+            Entry& en = t.entries[who[k]];
+            en.v = static_cast<float>(visible) / static_cast<float>(samples_);
+            c.method[kSoftFramePartial] += visible > 0 && visible < samples_;
+        }
+    }
+}
+
+void SoftFrame::ComposeTile(Window& w, int row, int col, int y0, int y1, Image* image, RenderCounters& /*c*/) const {
+    Tile& t = w.At(row, col);
+    const int ts = tileSamples_, aa = options_.aa;
+    // The interpolated pairs: bilinear in their anchors' values.
+    for (size_t i = 0; i < t.samples.size(); ++i) {
+        const Sample& s = t.samples[i];
+        const int x = t.x0 + static_cast<int>(i % ts), y = t.y0 + static_cast<int>(i / ts);
+        for (uint32_t e = s.first; e < s.first + s.count; ++e) {
+            Entry& en = t.entries[e];
+            if (!en.marked || en.direct) continue;
+            const int sp = en.spacing;
+            const int ax = x - x % sp, ay = y - y % sp;
+            const float fx = static_cast<float>(x - ax) / sp, fy = static_cast<float>(y - ay) / sp;
+            float v[4];
+            for (int k = 0; k < 4; ++k) {
+                const Tile* at;
+                const Sample* a = w.SampleAt(ax + (k & 1) * sp, ay + (k >> 1) * sp, &at);
+                v[k] = FindEntry(at->entries.data() + a->first, a->count, en.light)->v;
+            }
+            en.v = (v[0] * (1 - fx) + v[1] * fx) * (1 - fy) + (v[2] * (1 - fx) + v[3] * fx) * fy;
+        }
+    }
+    // The pixels: the mean of their samples' rest + Σ Ω·V (lights in ascending order).
+    const float inv = 1.0f / static_cast<float>(aa * aa);
+    for (int py = t.y0 / aa; py < (t.y0 + t.h) / aa; ++py) {
+        if (py < y0 || py >= y1) continue;
+        for (int px = t.x0 / aa; px < (t.x0 + t.w) / aa; ++px) {
+            Color sum;
+            for (int sy = 0; sy < aa; ++sy)
+                for (int sx = 0; sx < aa; ++sx) {
+                    const Sample& s = t.samples[static_cast<size_t>(py * aa + sy - t.y0) * ts + (px * aa + sx - t.x0)];
+                    Color colour = s.rest;
+                    for (uint32_t e = s.first; e < s.first + s.count; ++e) colour += t.entries[e].omega * t.entries[e].v;
+                    sum += colour;
+                }
+            image->At(px, py) = sum * inv;
+        }
+    }
+}
+
+void SoftFrame::RenderRows(int y0, int y1, Image* image, RenderCounters& counters, ProgressReporter* progress) const {
+    const int height = options_.height;
+    y0 = std::clamp(y0, 0, height);
+    y1 = std::clamp(y1, y0, height);
+    if (y0 == y1) return;
+    Window w;
+    w.ts = tileSamples_;
+    w.tilesX = (options_.width + tilePixels_ - 1) / tilePixels_;
+    w.tileRows = (height + tilePixels_ - 1) / tilePixels_;
+    const int R = reachTiles_;
+    // Rows of tiles: the band's (k0 .. k1), the seeds they read (R more each side), the
+    // hits those read (one more).
+    const int k0 = y0 / tilePixels_, k1 = (y1 + tilePixels_ - 1) / tilePixels_;
+    w.ring = 2 * R + 6;
+    w.rowHeld.assign(static_cast<size_t>(w.ring), -1);
+    w.slots.assign(static_cast<size_t>(w.ring), std::vector<Tile>(static_cast<size_t>(w.tilesX)));
+    // The stages, each a row of tiles behind the one before: hits and probes; seeds (the
+    // rows above and below); marks (the seeds within R rows); samples (the marks of the
+    // neighbouring rows: the anchors); the pixels (the neighbouring rows' samples).
+    struct Stage {
+        int lag, first, last;
+    };
+    const int T = w.tileRows;
+    const Stage stages[5] = {{0, k0 - R - 3, k1 + R + 3},
+                             {1, k0 - R - 2, k1 + R + 2},
+                             {2 + R, k0 - 2, k1 + 2},
+                             {3 + R, k0 - 1, k1 + 1},
+                             {4 + R, k0, k1}};
+    std::vector<RenderCounters> tileCounters(static_cast<size_t>(w.tilesX) * 5);
+    const int64_t rendererTilesX = renderer_.TilesX();
+    const int64_t unitsTotal = int64_t((y1 - y0 + 15) / 16) * rendererTilesX;
+    int64_t unitsDone = 0;
+    for (int j = std::max(0, k0 - R - 3); j < std::min(T, k1) + 4 + R + 1; ++j)
+        for (int which = 0; which < 5; ++which) {
+            const Stage& st = stages[which];
+            const int row = j - st.lag;
+            if (row < std::max(0, st.first) || row >= std::min(T, st.last)) continue;
+            if (which == 0) w.rowHeld[static_cast<size_t>(row % w.ring)] = row;
+            if (which == 1) CheckMemory(w);
+            ParallelFor(tbb::blocked_range<int>(0, w.tilesX, 1), [&](const tbb::blocked_range<int>& range) {
+                for (int col = range.begin(); col != range.end(); ++col) {
+                    RenderCounters& c = tileCounters[static_cast<size_t>(which * w.tilesX + col)];
+                    switch (which) {
+                        case 0: ShadeTile(w, row, col, c); break;
+                        case 1: SeedTile(w, row, col, c); break;
+                        case 2: MarkTile(w, row, col, c); break;
+                        case 3: SampleTile(w, row, col, c); break;
+                        default: ComposeTile(w, row, col, y0, y1, image, c); break;
+                    }
+                }
+            });
+            if (which == 4 && progress) {
+                // One unit per renderer tile (16² pixels) of the band, as rows complete.
+                const int rowsDone = std::min(y1, (row + 1) * tilePixels_) - y0;
+                const int64_t units = rowsDone >= y1 - y0 ? unitsTotal : int64_t(rowsDone / 16) * rendererTilesX;
+                progress->Update(units - unitsDone);
+                unitsDone = units;
+            }
+        }
+    for (const RenderCounters& c : tileCounters) counters += c;
+}
+
+std::vector<std::pair<std::string, std::string>> SoftFrame::CounterLines(const RenderCounters& c) const {
+    const double n = static_cast<double>(std::max<uint64_t>(c.method[kSoftFrameLookups], 1));
+    if (std::getenv("LM_DEBUG"))
+        std::fprintf(stderr, "reach <4 %llu, <8 %llu, <16 %llu, <32 %llu, more %llu\n", (unsigned long long)c.method[8],
+                     (unsigned long long)c.method[9], (unsigned long long)c.method[10], (unsigned long long)c.method[11],
+                     (unsigned long long)c.method[12]);
+    return {{"soft", StringPrintf("%llu (hit, light) pairs: %.1f %% seeds, %.1f %% sampled (%d rays), %.1f %% partly lit; "
+                                  "%llu silhouette points",
+                                  static_cast<unsigned long long>(c.method[kSoftFrameLookups]),
+                                  100.0 * c.method[kSoftFrameSeeds] / n, 100.0 * c.method[kSoftFrameMarked] / n, samples_,
+                                  100.0 * c.method[kSoftFramePartial] / n,
+                                  static_cast<unsigned long long>(c.method[kSoftFrameSilhouettes]))}};
+}
+
+}  // namespace lm
