@@ -170,6 +170,11 @@ void FilterShadowLayer(const DenoiseFrame& f, const DenoiseLayer& layer, int out
                 float r = sum / static_cast<float>(count);
                 if (layer.penumbra[i] >= 0) r = 0.5f * (r + layer.penumbra[i]);
                 r = std::min(r * scale, kDenoiseMaxRadius);
+                // At least min(2r, kDenoiseMinRadius): a footprint under about a pixel and a half
+                // averages the pixel with hardly any neighbour (pass 2's taps, at r/2, round to
+                // the pixel itself), so thin penumbrae, and the dappled shadows of leaves
+                // (blockers a few metres up, penumbrae a pixel wide), kept their noise.
+                r = std::max(r, std::min(2.0f * r, kDenoiseMinRadius));
                 if (r >= 0.5f) radius[i] = r;
             }
         }

@@ -33,6 +33,11 @@ namespace lm {
 /// The filter's fixed sizes.
 inline constexpr int kDenoiseBlock = 8;              ///< pixels per side of the blocks that classify the image
 inline constexpr float kDenoiseMaxRadius = 32.0f;    ///< the widest footprint, in pixels (its radius)
+/// The floor of a footprint's radius, in pixels: a penumbra of half width r is filtered at
+/// max(r, min(2r, kDenoiseMinRadius)). The pixel grid, not the penumbra, bounds how fine the
+/// filter can usefully be (Mehta et al. 2012 take the smaller of the shadow's and the
+/// pixels' bandwidths): under it the passes' taps round to the pixel itself.
+inline constexpr float kDenoiseMinRadius = 1.5f;
 inline constexpr int kDenoiseTaps = 16;              ///< taps per pass besides the centre (two passes)
 /// Rows of noisy data computed above and below a band. Its filtered pixels read at most 48
 /// rows away (the second pass 16, the first 32, a pixel's blocks 15); the apron is kept at
@@ -67,7 +72,7 @@ struct DenoiseLayer {
 /// fully lit or only fully shadowed values, or whose footprint is under half a pixel, keep
 /// their value bit for bit. The others: two passes (radius r, then r/2; r = scale × the
 /// mean penumbra of the blocked pixels in those blocks, averaged with the pixel's own
-/// where it has one, at most kDenoiseMaxRadius) of a
+/// where it has one, raised to min(2r, kDenoiseMinRadius), at most kDenoiseMaxRadius) of a
 /// Gaussian-weighted disc of kDenoiseTaps taps turned per pixel, the ratio estimator
 /// Σ k·w·V / Σ k·w with the edge stops. A filtered pixel reads the noisy data within 48
 /// rows and columns.
