@@ -4,8 +4,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <memory>
 
 #include "lightmesh/render/penumbra_classifier.h"
@@ -96,6 +94,7 @@ struct Scratch {
     std::vector<uint32_t> ids, owner, lights, slotOf, start, order, who;
     std::vector<std::pair<uint32_t, uint32_t>> blocked;
     std::vector<Candidate> cand;
+    std::vector<std::vector<uint32_t>> blocks;
     std::unique_ptr<bool[]> occluded;
     size_t room = 0;
     bool* Occluded(size_t n) {
@@ -120,14 +119,9 @@ bool Continuous(const ShadingPoint& a, float fa, const ShadingPoint& b, float fb
 inline bool OnGrid(int x, int y, int s) { return s == 1 || (x % s == 0 && y % s == 0); }
 
 /// The spacing of the values of a penumbra whose silhouette point reaches `reach` samples:
-/// the visibility across it changes over about 2·(reach − 2) samples, so values every 2 or
-/// 4 samples, interpolated, keep its profile.
-inline uint8_t SpacingOf(float reach) {
-    static const float t2 = std::getenv("LM_S2") ? std::atof(std::getenv("LM_S2")) : 6.0f;
-    static const float t4 = std::getenv("LM_S4") ? std::atof(std::getenv("LM_S4")) : 12.0f;
-    static const float t8 = std::getenv("LM_S8") ? std::atof(std::getenv("LM_S8")) : 1e9f;
-    return reach < t2 ? 1 : reach < t4 ? 2 : reach < t8 ? 4 : 8;
-}
+/// the visibility across it changes over about 2·(reach − 2) samples, so values every 2, 4
+/// or 8 samples (3 to 4 across the penumbra), interpolated, keep its profile.
+inline uint8_t SpacingOf(float reach) { return reach < 4 ? 1 : reach < 8 ? 2 : reach < 16 ? 4 : 8; }
 
 }  // namespace
 
@@ -168,7 +162,7 @@ bool SoftFrame::Interpolable(Window& w, const Sample& s, uint32_t light, int x, 
 SoftFrame::SoftFrame(const Scene& scene, const Accelerator& accel, const WhittedRenderer& renderer,
                      const RenderOptions& options, std::vector<float> radii, int samples)
     : scene_(scene), accel_(accel), renderer_(renderer), options_(options), radii_(std::move(radii)),
-      samples_(samples), pattern_(DiscPattern::Golden(samples)) {
+      samples_(samples), pattern_(DiscPattern::Golden(samples, 2)) {
     if (radii_.size() != scene.lights.size())
         ThrowError("soft shadows: %zu radii for %zu lights", radii_.size(), scene.lights.size());
     if (samples < 4 || samples > 256 || samples % 4)
@@ -339,10 +333,6 @@ void SoftFrame::SeedTile(Window& w, int row, int col, RenderCounters& c) const {
         p.sx = t.x0 + static_cast<int>(i % ts), p.sy = t.y0 + static_cast<int>(i / ts);
         p.reach = PenumbraReach(s.sp.origin, s.sp.n, scene_.lights[light].position, radii_[light],
                                 Length(p.x - s.sp.origin), s.footprint, static_cast<float>(kReach));
-        {  // DEBUG histogram
-            const int bucket = p.reach < 4 ? 0 : p.reach < 8 ? 1 : p.reach < 16 ? 2 : p.reach < 32 ? 3 : 4;
-            ++c.method[8 + bucket];
-        }
         t.seeds.push_back(p);
         t.seedLight.push_back(light);
     }
@@ -373,20 +363,37 @@ void SoftFrame::MarkTile(Window& w, int row, int col, RenderCounters& c) const {
                 }
             }
         }
-    std::stable_sort(cand.begin(), cand.end(), [](const Candidate& a, const Candidate& b) { return a.light < b.light; });
+    if (cand.empty()) {
+        for (const Entry& en : t.entries) c.method[kSoftFrameMarked] += en.seed;
+        for (Entry& en : t.entries) en.marked = en.seed;
+        return;
+    }
+    // The candidates of each block of 4×4 samples (those whose box meets it), in order.
+    constexpr int B = 4;
+    const int blocksX = (ts + B - 1) / B;
+    std::vector<std::vector<uint32_t>>& blocks = ThreadScratch().blocks;
+    blocks.resize(static_cast<size_t>(blocksX * blocksX));
+    for (auto& b : blocks) b.clear();
+    for (uint32_t k = 0; k < cand.size(); ++k) {
+        const Candidate& q = cand[k];
+        for (int by = (q.ya - t.y0) / B; by <= (q.yb - t.y0) / B; ++by)
+            for (int bx = (q.xa - t.x0) / B; bx <= (q.xb - t.x0) / B; ++bx) blocks[by * blocksX + bx].push_back(k);
+    }
     for (size_t i = 0; i < t.samples.size(); ++i) {
         const Sample& s = t.samples[i];
-        const int x = t.x0 + static_cast<int>(i % ts), y = t.y0 + static_cast<int>(i / ts);
+        if (!s.count) continue;
+        const int lx = static_cast<int>(i % ts), ly = static_cast<int>(i / ts);
+        const int x = t.x0 + lx, y = t.y0 + ly;
+        const std::vector<uint32_t>& list = blocks[(ly / B) * blocksX + lx / B];
         for (uint32_t e = s.first; e < s.first + s.count; ++e) {
             Entry& en = t.entries[e];
-            auto it = std::lower_bound(cand.begin(), cand.end(), en.light,
-                                       [](const Candidate& c, uint32_t l) { return c.light < l; });
             const Vec3& center = scene_.lights[en.light].position;
-            for (; it != cand.end() && it->light == en.light; ++it) {
-                if (x < it->xa || x > it->xb || y < it->ya || y > it->yb) continue;
-                if (ConeHolds(s.sp.origin, center, radii_[en.light], it->p->x, it->p->slop)) {
+            for (const uint32_t k : list) {
+                const Candidate& q = cand[k];
+                if (q.light != en.light || x < q.xa || x > q.xb || y < q.ya || y > q.yb) continue;
+                if (ConeHolds(s.sp.origin, center, radii_[en.light], q.p->x, q.p->slop)) {
                     en.marked = 1;
-                    en.spacing = SpacingOf(it->p->reach);
+                    en.spacing = SpacingOf(q.p->reach);
                     break;
                 }
             }
@@ -417,6 +424,7 @@ void SoftFrame::SampleTile(Window& w, int row, int col, RenderCounters& c) const
     std::vector<Ray>& rays = sc.rays;
     std::vector<uint32_t>& who = sc.who;
     rays.clear(), who.clear();
+    const int first = samples_ / 2;
     for (size_t i = 0; i < t.samples.size(); ++i) {
         const Sample& s = t.samples[i];
         for (uint32_t e = s.first; e < s.first + s.count; ++e) {
@@ -429,21 +437,49 @@ void SoftFrame::SampleTile(Window& w, int row, int col, RenderCounters& c) const
                 continue;
             }
             cone.Turn(static_cast<int>(AreaLightSeed(s.sp, en.light) >> 54));
-            for (int k = 0; k < samples_; ++k) rays.push_back(cone.RayTo(pattern_.x[k], pattern_.y[k], pattern_.r2[k]));
-            who.push_back(e);
+            for (int k = 0; k < first; ++k) rays.push_back(cone.RayTo(pattern_.x[k], pattern_.y[k], pattern_.r2[k]));
+            who.push_back(e), sc.owner.resize(who.size()), sc.owner.back() = static_cast<uint32_t>(i);
         }
     }
-    if (!rays.empty()) {
-        bool* occluded = sc.Occluded(rays.size());
-        accel_.OccludedMany(rays.data(), rays.size(), occluded);
-        c.shadowRays += rays.size();
-        for (size_t k = 0; k < who.size(); ++k) {
-            int visible = 0;
-            for (int j = 0; j < samples_; ++j) visible += !occluded[k * samples_ + j];
-            Entry& en = t.entries[who[k]];
-            en.v = static_cast<float>(visible) / static_cast<float>(samples_);
-            c.method[kSoftFramePartial] += visible > 0 && visible < samples_;
-        }
+    if (rays.empty()) return;
+    bool* occluded = sc.Occluded(rays.size());
+    accel_.OccludedMany(rays.data(), rays.size(), occluded);
+    c.shadowRays += rays.size();
+    std::vector<uint32_t>& again = sc.order;
+    std::vector<uint32_t>& seen = sc.start;
+    again.clear(), seen.assign(who.size(), 0);
+    for (size_t k = 0; k < who.size(); ++k) {
+        int visible = 0;
+        for (int j = 0; j < first; ++j) visible += !occluded[k * first + j];
+        seen[k] = static_cast<uint32_t>(visible);
+        Entry& en = t.entries[who[k]];
+        const bool agrees = en.probe ? visible == first : visible == 0;
+        if (first < samples_ && !agrees) again.push_back(static_cast<uint32_t>(k));
+        en.v = static_cast<float>(visible) / static_cast<float>(first);
+    }
+    if (first == samples_) {
+        for (size_t k = 0; k < who.size(); ++k) c.method[kSoftFramePartial] += seen[k] > 0 && seen[k] < uint32_t(samples_);
+        return;
+    }
+    rays.clear();
+    for (const uint32_t k : again) {
+        const Sample& s = t.samples[sc.owner[k]];
+        const Entry& en = t.entries[who[k]];
+        SphereCone cone(s.sp.origin, scene_.lights[en.light].position, radii_[en.light]);
+        cone.Turn(static_cast<int>(AreaLightSeed(s.sp, en.light) >> 54));
+        for (int j = first; j < samples_; ++j) rays.push_back(cone.RayTo(pattern_.x[j], pattern_.y[j], pattern_.r2[j]));
+    }
+    if (rays.empty()) return;
+    occluded = sc.Occluded(rays.size());
+    accel_.OccludedMany(rays.data(), rays.size(), occluded);
+    c.shadowRays += rays.size();
+    const int rest = samples_ - first;
+    for (size_t m = 0; m < again.size(); ++m) {
+        int visible = static_cast<int>(seen[again[m]]);
+        for (int j = 0; j < rest; ++j) visible += !occluded[m * rest + j];
+        Entry& en = t.entries[who[again[m]]];
+        en.v = static_cast<float>(visible) / static_cast<float>(samples_);
+        c.method[kSoftFramePartial] += visible > 0 && visible < samples_;
     }
 }
 
@@ -551,15 +587,11 @@ void SoftFrame::RenderRows(int y0, int y1, Image* image, RenderCounters& counter
 
 std::vector<std::pair<std::string, std::string>> SoftFrame::CounterLines(const RenderCounters& c) const {
     const double n = static_cast<double>(std::max<uint64_t>(c.method[kSoftFrameLookups], 1));
-    if (std::getenv("LM_DEBUG"))
-        std::fprintf(stderr, "reach <4 %llu, <8 %llu, <16 %llu, <32 %llu, more %llu\n", (unsigned long long)c.method[8],
-                     (unsigned long long)c.method[9], (unsigned long long)c.method[10], (unsigned long long)c.method[11],
-                     (unsigned long long)c.method[12]);
-    return {{"soft", StringPrintf("%llu (hit, light) pairs: %.1f %% seeds, %.1f %% sampled (%d rays), %.1f %% partly lit; "
-                                  "%llu silhouette points",
+    return {{"soft", StringPrintf("%llu (hit, light) pairs: %.1f %% seeds, %.1f %% in a penumbra, %.1f %% sampled "
+                                  "(%d rays, half first), %.1f %% partly lit; %llu silhouette points",
                                   static_cast<unsigned long long>(c.method[kSoftFrameLookups]),
-                                  100.0 * c.method[kSoftFrameSeeds] / n, 100.0 * c.method[kSoftFrameMarked] / n, samples_,
-                                  100.0 * c.method[kSoftFramePartial] / n,
+                                  100.0 * c.method[kSoftFrameSeeds] / n, 100.0 * c.method[kSoftFrameMarked] / n,
+                                  100.0 * c.method[kSoftFrameDirect] / n, samples_, 100.0 * c.method[kSoftFramePartial] / n,
                                   static_cast<unsigned long long>(c.method[kSoftFrameSilhouettes]))}};
 }
 
