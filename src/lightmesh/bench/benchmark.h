@@ -104,7 +104,7 @@ struct BenchResult {
 /// One row of the default-vs-competitors table.
 struct CompetitorRow {
     std::string label;   ///< "RT", "soft (default)", "LMM consensus CC 100 kI 2", "area N=4", "reference area N=256"
-    std::string method;  ///< "rt", "soft", "lmm", "area", "denoised"
+    std::string method;  ///< "rt", "soft", "exact", "lmm", "area", "denoised"
     int samples = 0;     ///< "area", "denoised": rays per light
     bool reference = false;  ///< the reference itself (one run, not in the round-robin)
     double seconds = 0;  ///< median render time of the interleaved runs (the reference: its one run)
@@ -121,9 +121,10 @@ struct CompetitorRow {
 
 /// Where naive area sampling reaches the default's PSNR: N read off the area rows' PSNR,
 /// linear in log2(N) between the two measured N around the default's PSNR; past the
-/// largest N extrapolated from the last two points (the same line), below the smallest N
-/// the smallest N itself (`atMost`: area needs at most that). Area's time at that N is
-/// interpolated the same way (linear in log2 N), or extrapolated linearly in N.
+/// largest N measured, 3.01 dB per doubling of N from it (independent samples: the
+/// variance halves); below the smallest N the smallest N itself (`atMost`: area needs at
+/// most that). Area's time at that N is interpolated the same way (linear in log2 N), or
+/// extrapolated linearly in N from the last two rows.
 struct EqualQuality {
     bool valid = false;         ///< false: no area rows, or PSNR not rising where it must be extrapolated
     double targetPsnr = 0;      ///< the default's PSNR
@@ -135,6 +136,23 @@ struct EqualQuality {
     double speedup = 0;         ///< areaSeconds / softSeconds: "soft is X× faster"
 };
 
+/// The denoiser's PSNR at the default's render time, from its rows (N rays per light and a
+/// filter): linear in log2(time) between the two rows around the default's time; past the
+/// slowest row, 3.01 dB per doubling of time (of its rays); faster than the fastest row,
+/// that row itself (`atLeast`: the denoiser needs at least its time for its PSNR).
+struct EqualTime {
+    bool valid = false;
+    double seconds = 0;         ///< the default's time
+    double psnr = 0;            ///< the denoiser's PSNR at that time
+    bool extrapolated = false;  ///< beyond the slowest denoiser row
+    bool atLeast = false;       ///< the default is faster than the fastest row
+    double softPsnr = 0;        ///< the default's
+};
+struct TimePoint {
+    double seconds = 0, psnr = 0;
+};
+EqualTime EqualTimeFrom(std::vector<TimePoint> rows, double softPsnr, double softSeconds);
+
 /// The default-vs-competitors table of one (scene, size) (--quality; BenchMatrix::
 /// competitorSamples). The lights keep their own radii (`lightRadii`) unless the bench's
 /// --light-radius overrides them; the reference is "area" with `refSamples` rays per light
@@ -145,8 +163,9 @@ struct BenchCompetitors {
     bool radiusOverride = false;    ///< the radii come from --light-radius
     int refSamples = 0;
     int repeat = 0;                 ///< interleaved timed runs per row
-    std::vector<CompetitorRow> rows;  ///< RT, soft, LMM, area N…, denoised N…, then the reference
+    std::vector<CompetitorRow> rows;  ///< RT, soft, exact, LMM, area N…, denoised N…, then the reference
     EqualQuality equal;
+    EqualTime denoised;
 };
 
 /// EqualQuality from area rows (N, PSNR dB, seconds; any order) and the default's PSNR and

@@ -106,6 +106,9 @@ struct LoadedScene {
 
 }  // namespace
 
+/// PSNR per doubling of independent samples: 10·log10(2).
+constexpr double kDbPerDoubling = 3.0103;
+
 EqualQuality EqualQualityFrom(std::vector<AreaPoint> area, double targetPsnr, double softSeconds) {
     EqualQuality e;
     e.targetPsnr = targetPsnr;
@@ -132,16 +135,38 @@ EqualQuality EqualQualityFrom(std::vector<AreaPoint> area, double targetPsnr, do
         const double la = std::log2(a.samples), lb = std::log2(b.samples);
         return finish(std::exp2(la + f * (lb - la)), a.seconds + f * (b.seconds - a.seconds));
     }
-    // Past the largest N: the line through the last two points (PSNR in log2 N), and the
-    // time linear in N.
+    // Past the largest N: 3.01 dB per doubling of N (the error's variance halves), the time
+    // linear in N through the last two rows.
     e.extrapolated = true;
     if (area.size() < 2) return e;
     const AreaPoint &a = area[area.size() - 2], &b = area.back();
-    if (!(b.psnr > a.psnr)) return e;  // not rising: no line to follow
-    const double f = (targetPsnr - a.psnr) / (b.psnr - a.psnr);
-    const double la = std::log2(a.samples), lb = std::log2(b.samples);
-    const double n = std::exp2(la + f * (lb - la));
+    const double n = b.samples * std::exp2((targetPsnr - b.psnr) / kDbPerDoubling);
     return finish(n, b.seconds + (n - b.samples) * (b.seconds - a.seconds) / (b.samples - a.samples));
+}
+
+EqualTime EqualTimeFrom(std::vector<TimePoint> rows, double softPsnr, double softSeconds) {
+    EqualTime e;
+    e.seconds = softSeconds;
+    e.softPsnr = softPsnr;
+    rows.erase(std::remove_if(rows.begin(), rows.end(), [](const TimePoint& p) { return !(p.seconds > 0); }), rows.end());
+    std::sort(rows.begin(), rows.end(), [](const TimePoint& a, const TimePoint& b) { return a.seconds < b.seconds; });
+    if (rows.empty() || !(softSeconds > 0)) return e;
+    e.valid = true;
+    if (softSeconds <= rows.front().seconds) {
+        e.atLeast = true;
+        e.psnr = rows.front().psnr;
+        return e;
+    }
+    for (size_t i = 1; i < rows.size(); ++i) {
+        const TimePoint &a = rows[i - 1], &b = rows[i];
+        if (b.seconds < softSeconds) continue;
+        const double f = (std::log2(softSeconds) - std::log2(a.seconds)) / (std::log2(b.seconds) - std::log2(a.seconds));
+        e.psnr = a.psnr + f * (b.psnr - a.psnr);
+        return e;
+    }
+    e.extrapolated = true;
+    e.psnr = rows.back().psnr + kDbPerDoubling * std::log2(softSeconds / rows.back().seconds);
+    return e;
 }
 
 /// The light radius of --quality's main reference and of the penumbra cells: R = r = kI·h of
@@ -463,6 +488,13 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                 soft.paperName = "soft";
                 soft.role = "competitor";
                 add(soft, compAcc, compBase);
+                BenchResult exact;
+                exact.method = "exact";
+                exact.paperName = "exact";
+                exact.role = "competitor";
+                RenderOptions exactOptions = compBase;
+                exactOptions.shadows = "exact";
+                add(exact, compAcc, exactOptions);
                 if (!compLmmInMatrix)
                     addLmm("lmm", kDefaultLightMeshVariant, lmmDefaults.cc, lmmDefaults.ki, 0.0f, compAcc, "competitor");
                 for (int n : m.competitorSamples) {
@@ -633,6 +665,7 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
             };
             findCell([](const BenchResult& r) { return r.method == "rt"; });
             findCell([](const BenchResult& r) { return r.method == "soft"; });
+            findCell([](const BenchResult& r) { return r.method == "exact"; });
             findCell([&](const BenchResult& r) {
                 return r.method == "lmm" && r.variant == kDefaultLightMeshVariant && r.cc == lmmDefaults.cc &&
                        r.ki == lmmDefaults.ki;
@@ -712,6 +745,7 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                 row.label = row.reference      ? StringPrintf("reference: area N=%d", r.samples)
                             : r.method == "rt"   ? "RT"
                             : r.method == "soft" ? "soft (default)"
+                            : r.method == "exact" ? "exact (the cells' lists)"
                             : r.method == "lmm"  ? StringPrintf("LMM %s CC %d kI %g", r.variant.c_str(), r.cc, r.ki)
                             : r.method == "denoised" ? StringPrintf("area N=%d + denoiser", r.samples)
                                                  : StringPrintf("area N=%d", r.samples);
@@ -720,12 +754,15 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
             for (size_t i : compCells) judgeCompetitor(results[i], images[i]);
             judgeCompetitor(ref, refImage);
             std::vector<AreaPoint> area;
+            std::vector<TimePoint> denoised;
             const CompetitorRow* softRow = nullptr;
             for (const CompetitorRow& row : comp.rows) {
                 if (row.method == "area" && !row.reference) area.push_back({row.samples, row.psnr, row.seconds});
+                if (row.method == "denoised") denoised.push_back({row.seconds, row.psnr});
                 if (row.method == "soft") softRow = &row;
             }
             comp.equal = EqualQualityFrom(area, softRow->psnr, softRow->seconds);
+            comp.denoised = EqualTimeFrom(denoised, softRow->psnr, softRow->seconds);
             results.push_back(std::move(ref));
             if (progress) progress(++done, total, results.back());
             report.quality.push_back(std::move(q));

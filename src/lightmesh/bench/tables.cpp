@@ -267,8 +267,9 @@ std::string BenchCompetitorsMarkdown(const BenchQuality& q) {
         if (row.method == "area" && !row.reference) ns.push_back(row.samples);
     std::sort(ns.begin(), ns.end());
     if (ns.empty()) return out + "\nNo area rows: no equal-quality comparison.\n\n";
-    out += StringPrintf("\nEqual quality (area's PSNR linear in log2 N between the measured N = %d…%d): ", ns.front(),
-                        ns.back());
+    out += StringPrintf("\nEqual quality (area's PSNR linear in log2 N between the measured N = %d…%d, 3.01 dB per "
+                        "doubling of N past N = %d): ",
+                        ns.front(), ns.back(), ns.back());
     if (!e.valid) {
         out += StringPrintf("area sampling does not reach soft's %s dB at the N tried and its PSNR does not rise "
                             "between the last two N, so there is no line to extrapolate.\n\n",
@@ -290,11 +291,20 @@ std::string BenchCompetitorsMarkdown(const BenchQuality& q) {
         out += StringPrintf("area sampling reaches soft's %s dB at N ≈ %.1f%s, where it takes %.3f s (%s) against "
                             "soft's %.3f s: %s%s.\n\n",
                             Psnr(e.targetPsnr).c_str(), e.samples,
-                            e.extrapolated ? StringPrintf(" (extrapolated from N = %d and %d)", ns[ns.size() - 2], ns.back()).c_str()
-                                           : "",
+                            e.extrapolated ? StringPrintf(" (extrapolated from N = %d, 3.01 dB per doubling)", ns.back()).c_str()
+                                           : " (measured)",
                             e.areaSeconds,
                             e.extrapolated ? "extrapolated linearly in N" : "interpolated in log2 N", e.softSeconds,
                             verdict.c_str(), e.extrapolated ? " (extrapolated)" : "");
+    const EqualTime& d = c.denoised;
+    if (d.valid) {
+        const double ahead = d.softPsnr - d.psnr;
+        out += StringPrintf(
+            "Equal time against the denoiser: %s %s dB at soft's %.3f s%s; soft's %s dB is %s by %.2f dB.\n\n",
+            d.atLeast ? "its fastest row (N = 1) takes longer and reaches" : "it reaches", Psnr(d.psnr).c_str(), d.seconds,
+            d.atLeast ? "" : d.extrapolated ? " (extrapolated, 3.01 dB per doubling of time)" : " (interpolated in log2 time)",
+            Psnr(d.softPsnr).c_str(), ahead >= 0 ? "ahead" : "behind", std::abs(ahead));
+    }
     return out;
 }
 
