@@ -44,7 +44,6 @@ constexpr uint64_t Mix64(uint64_t z) {
 /// A float in [0, 1) from 24 bits.
 constexpr float UnitFloat(uint64_t bits24) { return static_cast<float>(bits24 & 0xFFFFFF) * 0x1p-24f; }
 
-constexpr float OneMinusEpsilon = 0x1.fffffep-1f;
 
 }  // namespace
 
@@ -65,64 +64,39 @@ uint64_t AreaLightSeed(const ShadingPoint& sp, uint32_t light) {
 
 namespace {
 
-/// SampleConeStratified in the frame (e1, e2, axis), built once per light and point.
-Vec3 SampleCone(const Vec3& e1, const Vec3& e2, const Vec3& axis, float oneMinusCosMax, int index,
-                int samples, float shift0, float shift1) {
-    // The lattice point, rotated by the shift.
-    constexpr double GoldenFraction = 0.61803398874989484820;  // φ − 1
-    double a = (index + 0.5) / samples + shift0;
-    double b = index * GoldenFraction + shift1;
-    a -= std::floor(a);
-    b -= std::floor(b);
-    const float u0 = std::min(static_cast<float>(a), OneMinusEpsilon);
-    const float u1 = std::min(static_cast<float>(b), OneMinusEpsilon);
-
-    float dx, dy;
+/// Direction `index` of `samples`: the golden-ratio lattice point shifted by (shift0,
+/// shift1), on the disc, mapped to the cone (disc_pattern.h).
+Vec3 SampleCone(const SphereCone& cone, int index, int samples, float shift0, float shift1) {
+    float u0, u1, dx, dy;
+    GoldenLattice(index, samples, shift0, shift1, &u0, &u1);
     ConcentricDisc(u0, u1, &dx, &dy);
-
-    // Disc to cone: 1 − cos θ = r²·k keeps solid angle uniform; sin θ = r·sqrt(k(2 − r²k)).
-    const float r2k = (dx * dx + dy * dy) * oneMinusCosMax;
-    const float cosTheta = 1.0f - r2k;
-    const float s = std::sqrt(std::max(0.0f, oneMinusCosMax * (2.0f - r2k)));
-    return e1 * (dx * s) + e2 * (dy * s) + axis * cosTheta;
+    return cone.Direction(dx, dy, dx * dx + dy * dy);
 }
 
 }  // namespace
 
 Vec3 SampleConeStratified(const Vec3& axis, float oneMinusCosMax, int index, int samples,
                           float shift0, float shift1) {
+    float u0, u1, dx, dy;
+    GoldenLattice(index, samples, shift0, shift1, &u0, &u1);
+    ConcentricDisc(u0, u1, &dx, &dy);
     Vec3 e1, e2;
     CoordinateSystem(axis, &e1, &e2);
-    return SampleCone(e1, e2, axis, oneMinusCosMax, index, samples, shift0, shift1);
+    return ConeDirection(e1, e2, axis, oneMinusCosMax, dx, dy, dx * dx + dy * dy);
 }
 
 // Rays handed to Accelerator::OccludedMany at once: Embree's widest packet here (8, AVX2).
 constexpr int kRayBatch = 8;
 
 SphereLightRays::SphereLightRays(const Vec3& origin, const Vec3& center, float radius, int samples, uint64_t seed)
-    : origin_(origin), oc_(center - origin), r2_(radius * radius), samples_(samples) {
-    const float d2 = LengthSquared(oc_);
-    inside_ = d2 <= r2_;  // inside the light: all of it is visible
-    if (inside_) return;
-    const float d = std::sqrt(d2);
-    axis_ = oc_ / d;
-    // 1 − cos θmax without cancellation: sin²/(1 + cos), sin² θmax = R²/d².
-    const float sin2 = r2_ / d2;
-    oneMinusCosMax_ = sin2 / (1.0f + std::sqrt(std::max(0.0f, 1.0f - sin2)));
+    : cone_(origin, center, radius), samples_(samples) {
     shift0_ = UnitFloat(seed >> 40);
     shift1_ = UnitFloat(seed >> 8);
-    CoordinateSystem(axis_, &e1_, &e2_);
 }
 
 Ray SphereLightRays::Get(int index) const {
-    const Vec3 w = SampleCone(e1_, e2_, axis_, oneMinusCosMax_, index, samples_, shift0_, shift1_);
-    // The near intersection with the sphere, from the perpendicular distance of C to the ray
-    // (stabler than b² − c); rounding at the cone's rim is clamped to the tangent.
-    const float b = Dot(w, oc_);
-    const float h2 = r2_ - LengthSquared(oc_ - w * b);
-    const float t = b - std::sqrt(std::max(0.0f, h2));
-    // Like LightVisible, stop just short of the light itself.
-    return Ray{origin_, w * t, 0.0f, 1.0f - 1e-5f};
+    // Like LightVisible, the ray stops just short of the light itself.
+    return cone_.RayAlong(SampleCone(cone_, index, samples_, shift0_, shift1_));
 }
 
 float SphereLightVisibility(const Accelerator& accel, const Vec3& origin, const Vec3& center,

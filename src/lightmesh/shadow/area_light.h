@@ -38,14 +38,13 @@ class SphereLightRays {
   public:
     SphereLightRays(const Vec3& origin, const Vec3& center, float radius, int samples, uint64_t seed);
     /// The origin lies inside the light: V = 1 without rays.
-    bool Inside() const { return inside_; }
+    bool Inside() const { return cone_.Inside(); }
     Ray Get(int index) const;
 
   private:
-    Vec3 origin_, oc_, axis_, e1_, e2_;
-    float r2_ = 0, oneMinusCosMax_ = 0, shift0_ = 0, shift1_ = 0;
+    SphereCone cone_;
+    float shift0_ = 0, shift1_ = 0;
     int samples_ = 1;
-    bool inside_ = false;
 };
 
 /// A cheaper estimate of the same fraction, for the light mesh's narrow penumbrae: the

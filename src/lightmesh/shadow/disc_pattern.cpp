@@ -61,9 +61,8 @@ DiscPattern DiscPattern::Golden(int n, int passes) {
 
 DiscTurns::DiscTurns() {
     for (int t = 0; t < kDiscTurns; ++t) {
-        const double a = 2.0 * 3.14159265358979323846 * t / kDiscTurns;
-        cs[t] = static_cast<float>(std::cos(a));
-        sn[t] = static_cast<float>(std::sin(a));
+        cs[t] = std::cos((static_cast<float>(t) + 0.5f) * (2 * Pi / kDiscTurns));
+        sn[t] = std::sin((static_cast<float>(t) + 0.5f) * (2 * Pi / kDiscTurns));
     }
 }
 
@@ -94,11 +93,7 @@ void SphereCone::Turn(int turn) {
     f2_ = e2_ * cs - e1_ * sn;
 }
 
-Ray SphereCone::RayTo(float dx, float dy, float r2) const {
-    const float r2k = r2 * oneMinusCosMax_;
-    const float cosTheta = 1.0f - r2k;
-    const float s = std::sqrt(std::max(0.0f, oneMinusCosMax_ * (2.0f - r2k)));
-    const Vec3 w = f1_ * (dx * s) + f2_ * (dy * s) + axis_ * cosTheta;
+Ray SphereCone::RayAlong(const Vec3& w) const {
     // The near intersection with the sphere, from the perpendicular distance of the centre
     // to the ray (stabler than b² − c); rounding at the cone's rim is clamped to the tangent.
     const float b = Dot(w, oc_);

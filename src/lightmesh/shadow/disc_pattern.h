@@ -3,6 +3,8 @@
 // method that samples a light's sphere (area, soft, exact) takes its directions from here.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -30,8 +32,19 @@ struct DiscPattern {
     static DiscPattern Golden(int n, int passes = 1);
 };
 
-/// The turns a point gives a DiscPattern: kDiscTurns angles 2π·t/kDiscTurns, their cosines
-/// and sines tabulated once.
+/// The unit direction of disc point (dx, dy) (r2 = dx² + dy²) in the cone of axis `axis`
+/// (frame e1, e2) whose half-angle has 1 − cos θmax = oneMinusCosMax: uniform in solid
+/// angle, 1 − cos θ = r²·(1 − cos θmax), sin θ = r·sqrt(k(2 − r²k)).
+inline Vec3 ConeDirection(const Vec3& e1, const Vec3& e2, const Vec3& axis, float oneMinusCosMax, float dx, float dy,
+                          float r2) {
+    const float r2k = r2 * oneMinusCosMax;
+    const float cosTheta = 1.0f - r2k;
+    const float s = std::sqrt(std::max(0.0f, oneMinusCosMax * (2.0f - r2k)));
+    return e1 * (dx * s) + e2 * (dy * s) + axis * cosTheta;
+}
+
+/// The turns a point gives a DiscPattern: kDiscTurns angles 2π·(t + ½)/kDiscTurns, their
+/// cosines and sines tabulated once.
 inline constexpr int kDiscTurns = 1024;
 struct DiscTurns {
     float cs[kDiscTurns], sn[kDiscTurns];
@@ -50,10 +63,16 @@ class SphereCone {
     bool Inside() const { return inside_; }
     /// The frame turned by kDiscTurns turn `turn` (e1, e2 rotated about the axis).
     void Turn(int turn);
-    /// The ray from the origin through disc point (dx, dy) (|(dx, dy)| <= 1, r2 its squared
-    /// radius) to the near side of the sphere, ending just short of it (t in (0, 1 − 1e-5)
-    /// like LightSegment's).
-    Ray RayTo(float dx, float dy, float r2) const;
+    /// The unit direction through disc point (dx, dy) (|(dx, dy)| <= 1, r2 its squared
+    /// radius).
+    Vec3 Direction(float dx, float dy, float r2) const {
+        return ConeDirection(f1_, f2_, axis_, oneMinusCosMax_, dx, dy, r2);
+    }
+    /// The ray from the origin along unit direction w (in the cone) to the near side of the
+    /// sphere, ending just short of it (t in (0, 1 − 1e-5) like LightSegment's).
+    Ray RayAlong(const Vec3& w) const;
+    /// RayAlong(Direction(dx, dy, r2)).
+    Ray RayTo(float dx, float dy, float r2) const { return RayAlong(Direction(dx, dy, r2)); }
     /// The unit axis and the distance to the centre.
     const Vec3& Axis() const { return axis_; }
     float Distance() const { return d_; }

@@ -73,26 +73,6 @@ inline void OrientedPlane(const SoftShadows::Triangle& t, uint32_t code, Vec3* m
 
 }  // namespace
 
-/// N points of the golden-ratio lattice ((k + ½)/N, frac(k·(φ − 1))) mapped to the unit disc
-/// (area_light.cpp's pattern, unshifted; each point turns it by an angle of its own
-/// instead), stored in 4 passes, points k = 4m + p of pass p: each pass on its own is a
-/// lattice of N/4 points spread over the whole disc, so the first pass can decide alone
-/// where it sees the light wholly or not at all.
-SoftShadows::DiscPattern SoftShadows::MakeDiscPattern(int n) {
-    DiscPattern d;
-    d.x.resize(n), d.y.resize(n), d.r2.resize(n);
-    for (int k = 0; k < n; ++k) {
-        constexpr double GoldenFraction = 0.61803398874989484820;
-        const double a = (k + 0.5) / n;
-        double b = k * GoldenFraction;
-        b -= std::floor(b);
-        const int at = (k % 4) * (n / 4) + k / 4;
-        ConcentricDisc(static_cast<float>(a), static_cast<float>(b), &d.x[at], &d.y[at]);
-        d.r2[at] = d.x[at] * d.x[at] + d.y[at] * d.y[at];
-    }
-    return d;
-}
-
 void SoftShadows::Directions(const ShadingPoint& sp, size_t light, const DiscPattern& pattern, int s0, int s1,
                              Directions4* out) const {
     const Vec3 oc = scene_.lights[light].position - sp.origin;
@@ -103,7 +83,8 @@ void SoftShadows::Directions(const ShadingPoint& sp, size_t light, const DiscPat
     Vec3 e1, e2;
     CoordinateSystem(u, &e1, &e2);
     const uint64_t seed = AreaLightSeed(sp, static_cast<uint32_t>(light));
-    const float cs = turnCos_[seed >> 54], sn = turnSin_[seed >> 54];
+    const DiscTurns& turns = DiscTurns::Get();
+    const float cs = turns.cs[seed >> 54], sn = turns.sn[seed >> 54];
     const Vec3 f1 = e1 * cs + e2 * sn, f2 = e2 * cs - e1 * sn;
     const float k1 = sin2 / (1.0f + cosT);  // 1 − cos θmax without cancellation
     const __m128 K = _mm_set1_ps(k1), two = _mm_set1_ps(2.0f), one = _mm_set1_ps(1.0f), zero = _mm_setzero_ps();
@@ -260,12 +241,11 @@ SoftShadows::SoftShadows(const Scene& scene, const Accelerator& accel, SoftShado
     // The stratified disc pattern: point k of the golden-ratio lattice ((k + ½)/N,
     // frac(k·(φ − 1))), mapped to the unit disc (area_light.cpp's pattern, unshifted; each
     // point turns it by an angle of its own instead).
-    for (int i = 0; i < kTurns; ++i) {
-        turnCos_[i] = std::cos((static_cast<float>(i) + 0.5f) * (2 * Pi / kTurns));
-        turnSin_[i] = std::sin((static_cast<float>(i) + 0.5f) * (2 * Pi / kTurns));
-    }
-    pattern_ = MakeDiscPattern(options_.samples);
-    densePattern_ = MakeDiscPattern(options_.denseSamples);
+    // The lattice on the disc in 4 passes (disc_pattern.h; each point turns it by an angle
+    // of its own): each pass alone spreads over the whole disc, so the first can decide
+    // alone where it sees the light wholly or not at all.
+    pattern_ = DiscPattern::Golden(options_.samples, 4);
+    densePattern_ = DiscPattern::Golden(options_.denseSamples, 4);
 }
 
 void SoftShadows::MakeTriangle(const Vec3& p0, const Vec3& p1, const Vec3& p2, Triangle* t, float* area) {

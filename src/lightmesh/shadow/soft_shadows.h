@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "lightmesh/accel/occluder_bvh.h"
+#include "lightmesh/shadow/disc_pattern.h"
 #include "lightmesh/shadow/shadow.h"
 
 namespace lm {
@@ -139,11 +140,6 @@ class SoftShadows final : public ShadowMethod {
     int nx_ = 0, ny_ = 0, nz_ = 0, bx_ = 0, by_ = 0, bz_ = 0;
     std::unique_ptr<std::atomic<Slot*>[]> blocks_;
     size_t blockCount_ = 0;
-    /// A stratified unit-disc pattern (MakeDiscPattern).
-    struct DiscPattern {
-        std::vector<float> x, y, r2;
-    };
-    static DiscPattern MakeDiscPattern(int n);
     /// Directions s0 .. s1 − 1 of `pattern` from sp's origin to the light's sphere: the
     /// pattern turned by an angle from a hash of the point (the area reference's seed),
     /// mapped to the cone uniformly in solid angle (1 − cos θ = r²·(1 − cos θmax)), with each
@@ -155,8 +151,6 @@ class SoftShadows final : public ShadowMethod {
                     Directions4* out) const;
     float DenseLight(const ShadingPoint& sp, size_t light, RenderCounters& counters) const;
     DiscPattern pattern_, densePattern_;
-    static constexpr int kTurns = 1024;           ///< the pattern's turns, from a point's hash
-    float turnCos_[kTurns], turnSin_[kTurns];
     mutable std::atomic<uint64_t> cellsBuilt_{0}, entriesBuilt_{0}, denseBuilt_{0};
     /// The bytes of the blocks, lists and receivers published so far, and the most they may
     /// take: half the memory budget (PhysicalMemoryBytes; 0: no limit). Lists are built
