@@ -620,9 +620,9 @@ std::vector<Case> Corpus() {
          .env = "LIGHTMESH_MEMORY_LIMIT=64M"},
         {.name = "soft_shadow_rows_of_many_lights_past_the_limit",
          // 200 lights over a box: every hit keeps a (hit, light) pair per light in the rows of
-         // tiles in flight, 44 MiB at 640x480: past half of 64 MiB, the render stops first.
+         // tiles in flight, 38 MiB at 640x480: past half of 64 MiB, the render stops first.
          .args = "render $D/scene.json -o $OUT",
-         .expected = "soft shadows: the 14 rows of tiles in flight hold 44.0 MiB for 200 lights, more than half "
+         .expected = "soft shadows: the 10 rows of tiles in flight hold 38.1 MiB for 200 lights, more than half "
                      "the memory budget (64.0 MiB); give the lights a \"range\", render a narrower image, or use "
                      "--shadows rt\n",
          .files = {{"scene.json", WithLights(ManyLights(200))}},
@@ -817,7 +817,7 @@ std::vector<Case> Corpus() {
         {.name = "unused_option_warns",
          .args = kRender + " --shadows rt --light-radius 0.5",
          .expected = "lightmesh: warning: --light-radius is not used by --shadows rt (only by "
-                     "soft, area, denoised and lmm); ignored\n",
+                     "soft, exact, area, denoised and lmm); ignored\n",
          .files = {{"scene.json", good}},
          .exitCode = 0},
         {.name = "thin_check_without_a_light_radius_warns",

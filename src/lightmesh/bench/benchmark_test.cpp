@@ -193,21 +193,21 @@ TEST(RunBenchmark, QuickHtmlReport) {
     int calls = 0;
     double estimate = -1;
     const BenchReport report = RunBenchmarkReport(
-        m, [&](int done, int total, const BenchResult&) { EXPECT_EQ(done, ++calls); EXPECT_EQ(total, 19); },
+        m, [&](int done, int total, const BenchResult&) { EXPECT_EQ(done, ++calls); EXPECT_EQ(total, 20); },
         [&](double s) { estimate = s; });
-    EXPECT_EQ(calls, 19);
+    EXPECT_EQ(calls, 20);
     EXPECT_GE(estimate, 0);
     // none, RT, 2 variants × 2 kI, and with --quality the penumbra mode per kI; then the
-    // competitors' cells: soft, the LMM default (the matrix has no consensus), area N = 1,
-    // 2, 4, 8, 16, denoised N = 1, 2, 4 (RT is the matrix's, on the default back-end) and
-    // their reference.
-    ASSERT_EQ(report.results.size(), 19u);
+    // competitors' cells: soft, exact, the LMM default (the matrix has no consensus), area
+    // N = 1, 2, 4, 8, 16, denoised N = 1, 2, 4 (RT is the matrix's, on the default back-end)
+    // and their reference.
+    ASSERT_EQ(report.results.size(), 20u);
     int competitors = 0, references = 0;
     for (const BenchResult& r : report.results) {
         competitors += r.role == "competitor";
         references += r.role == "reference";
     }
-    EXPECT_EQ(competitors, 10);
+    EXPECT_EQ(competitors, 11);
     EXPECT_EQ(references, 1);
     int penumbrae = 0;
     for (const BenchResult& r : report.results)
@@ -240,8 +240,9 @@ TEST(RunBenchmark, QuickHtmlReport) {
     EXPECT_NE(html.find("light radius"), std::string::npos);  // the penumbra image's caption
     EXPECT_NE(html.find("area-light reference, R ="), std::string::npos);  // beside the reference
     EXPECT_TRUE(fs::exists(report.quality[0].refImage));
-    // The competitors' rows, their images' captions and their reference's.
-    EXPECT_EQ(report.quality[0].competitors.rows.size(), 1u + 1u + 1u + 5u + 3u + 1u);
+    // The competitors' rows (RT, soft, exact, LMM, area N…, denoised N…, reference),
+    // their images' captions and their reference's.
+    EXPECT_EQ(report.quality[0].competitors.rows.size(), 1u + 1u + 1u + 1u + 5u + 3u + 1u);
     EXPECT_NE(html.find("competitors' soft (default)"), std::string::npos);
     EXPECT_NE(html.find("competitors' area N = 2 + shadow denoiser"), std::string::npos);
     EXPECT_NE(html.find("competitors' area N = 16"), std::string::npos);
@@ -285,10 +286,10 @@ TEST(RunBenchmark, DefaultAgainstCompetitors) {
     }
     EXPECT_EQ(rt, 1);
     EXPECT_EQ(lmm, 1);
-    ASSERT_EQ(c.rows.size(), 12u);
-    const std::vector<std::string> methods{"rt",   "soft",     "lmm",      "area",     "area",     "area",
-                                           "area", "area",     "denoised", "denoised", "denoised", "area"};
-    const std::vector<int> samples{0, 0, 0, 1, 2, 4, 8, 16, 1, 2, 4, 64};
+    ASSERT_EQ(c.rows.size(), 13u);
+    const std::vector<std::string> methods{"rt",   "soft", "exact",    "lmm",      "area",     "area", "area",
+                                           "area", "area", "denoised", "denoised", "denoised", "area"};
+    const std::vector<int> samples{0, 0, 0, 0, 1, 2, 4, 8, 16, 1, 2, 4, 64};
     for (size_t i = 0; i < c.rows.size(); ++i) {
         const CompetitorRow& row = c.rows[i];
         EXPECT_EQ(row.method, methods[i]) << i;
@@ -303,15 +304,15 @@ TEST(RunBenchmark, DefaultAgainstCompetitors) {
     EXPECT_EQ(ref.psnr, 99.0);  // equal to itself
     // Area sampling converges: more rays per light, a higher PSNR (strictly, on a scene
     // with penumbrae; the noise halves its power with each doubling, about +3 dB or more).
-    for (size_t i = 4; i < 8; ++i) EXPECT_GT(c.rows[i].psnr, c.rows[i - 1].psnr) << c.rows[i].label;
-    // The shadow totals of soft and of area are near the reference's, RT's too (a hard
+    for (size_t i = 5; i < 9; ++i) EXPECT_GT(c.rows[i].psnr, c.rows[i - 1].psnr) << c.rows[i].label;
+    // The shadow totals of soft, exact and area are near the reference's, RT's too (a hard
     // shadow takes about the light a soft one does).
-    for (size_t i : {0, 1, 3, 7, 8, 9, 10}) EXPECT_NEAR(c.rows[i].shadowRatio, 1.0, 0.05) << c.rows[i].label;
+    for (size_t i : {0, 1, 2, 4, 8, 9, 10, 11}) EXPECT_NEAR(c.rows[i].shadowRatio, 1.0, 0.05) << c.rows[i].label;
     // The denoiser beats its own noisy input: denoised N above area N for N = 1 and 2 (at
     // N = 4 this small image's footprints, shrunk by 1/√N, are under half a pixel, so it is
     // area's image but for the order of the sums).
-    for (size_t i = 0; i < 2; ++i) EXPECT_GT(c.rows[8 + i].psnr, c.rows[3 + i].psnr) << c.rows[8 + i].label;
-    EXPECT_GE(c.rows[10].psnr, c.rows[5].psnr - 0.01) << c.rows[10].label;
+    for (size_t i = 0; i < 2; ++i) EXPECT_GT(c.rows[9 + i].psnr, c.rows[4 + i].psnr) << c.rows[9 + i].label;
+    EXPECT_GE(c.rows[11].psnr, c.rows[6].psnr - 0.01) << c.rows[11].label;
     const EqualQuality& e = c.equal;
     EXPECT_TRUE(e.valid);
     EXPECT_DOUBLE_EQ(e.targetPsnr, c.rows[1].psnr);
@@ -346,7 +347,7 @@ TEST(RunBenchmark, DefaultAgainstCompetitors) {
     const BenchCompetitors& o = over.quality[0].competitors;
     EXPECT_TRUE(o.radiusOverride);
     EXPECT_EQ(o.lightRadii, (std::vector<float>{0.3f, 0.3f}));
-    EXPECT_EQ(o.rows.size(), 9u);
+    EXPECT_EQ(o.rows.size(), 10u);
     EXPECT_NE(BenchQualityMarkdown(over).find("every light of radius 0.3 (--light-radius)"), std::string::npos);
 }
 
@@ -365,9 +366,9 @@ TEST(BenchEqualQuality, InterpolatesInLog2N) {
     e = EqualQualityFrom(area, 36, 1.0);
     EXPECT_NEAR(e.samples, 4, 1e-9);
     EXPECT_NEAR(e.areaSeconds, 4, 1e-9);
-    // Past N = 16: the line through N = 4 and 16 (+6 dB over 2 octaves) reaches 45 dB one
-    // octave on, N = 32; time linear in N through (4, 4 s) and (16, 16 s): 32 s.
-    e = EqualQualityFrom(area, 45, 2.0);
+    // Past N = 16: 3.0103 dB per doubling of N (10·log10 2, the error's variance halves), so
+    // one doubling above 42 dB is N = 32; time linear in N through (4, 4 s) and (16, 16 s): 32 s.
+    e = EqualQualityFrom(area, 42 + 10 * std::log10(2.0), 2.0);
     EXPECT_TRUE(e.valid);
     EXPECT_TRUE(e.extrapolated);
     EXPECT_NEAR(e.samples, 32, 1e-9);
@@ -379,8 +380,14 @@ TEST(BenchEqualQuality, InterpolatesInLog2N) {
     EXPECT_TRUE(e.atMost);
     EXPECT_EQ(e.samples, 1);
     EXPECT_EQ(e.areaSeconds, 1.0);
-    // PSNR falling at the end: no line to extrapolate along.
+    // PSNR falling at the end: the slope is the variance's, not the last rows' (which would
+    // never reach 40 dB): from N = 4 at 32 dB, 8 dB more is 2^(8 / 3.0103) times the rays.
     e = EqualQualityFrom({{1, 30, 1.0}, {2, 33, 2.0}, {4, 32, 4.0}}, 40, 1.0);
+    EXPECT_TRUE(e.valid);
+    EXPECT_TRUE(e.extrapolated);
+    EXPECT_NEAR(e.samples, 4 * std::exp2(8 / (10 * std::log10(2.0))), 1e-3);
+    // A single row has no time slope to extrapolate along.
+    e = EqualQualityFrom({{4, 32, 4.0}}, 40, 1.0);
     EXPECT_FALSE(e.valid);
     EXPECT_TRUE(e.extrapolated);
     // The order of the points does not matter.

@@ -107,7 +107,7 @@ struct LoadedScene {
 }  // namespace
 
 /// PSNR per doubling of independent samples: 10·log10(2).
-constexpr double kDbPerDoubling = 3.0103;
+constexpr double kDbPerDoubling = 3.010299956639812;  // 10·log10 2
 
 EqualQuality EqualQualityFrom(std::vector<AreaPoint> area, double targetPsnr, double softSeconds) {
     EqualQuality e;
@@ -291,7 +291,7 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                     [](const std::string& v) { return ParseLightMeshVariant(v).name == kDefaultLightMeshVariant; }) &&
         std::find(m.cc.begin(), m.cc.end(), lmmDefaults.cc) != m.cc.end() &&
         std::find(m.ki.begin(), m.ki.end(), lmmDefaults.ki) != m.ki.end();
-    const int competitorCells = m.quality ? (compRtInMatrix ? 0 : 1) + 1 + (compLmmInMatrix ? 0 : 1) +
+    const int competitorCells = m.quality ? (compRtInMatrix ? 0 : 1) + 2 /* soft, exact */ + (compLmmInMatrix ? 0 : 1) +
                                                 static_cast<int>(m.competitorSamples.size() + m.denoisedSamples.size()) +
                                                 1  // + the reference
                                           : 0;

@@ -5,10 +5,13 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <memory_resource>
+#include <mutex>
 
 #include "lightmesh/render/penumbra_classifier.h"
 #include "lightmesh/shadow/area_light.h"
 #include "lightmesh/util/error.h"
+#include "lightmesh/util/huge_pages.h"
 #include "lightmesh/util/parallel.h"
 #include "lightmesh/util/system.h"
 
@@ -39,21 +42,64 @@ struct SoftFrame::Sample {
     uint64_t need = 0, lit = 0;
 };
 
-/// A tile's hits, entries and silhouette points.
+/// Where the rows' buffers come from: 2 MiB chunks on huge pages (AllocateLarge), handed
+/// out in turn and released together at the end of the render. The first touch of a 4 KiB
+/// page costs a fault, about 11 µs on the machines measured here (util/huge_pages.h): the
+/// rows of the castle at 1024×768 took 8,000 of them, 90 ms against RT's 170 ms render. A
+/// tile's vectors grow a few times and keep their room from row to row, so what a growth
+/// leaves behind is bounded by what the vectors hold.
+class RowMemory final : public std::pmr::memory_resource {
+  public:
+    ~RowMemory() override {
+        for (void* c : chunks_) std::free(c);
+    }
+
+  private:
+    static constexpr size_t kChunk = size_t(2) << 20;
+    void* do_allocate(size_t bytes, size_t align) override {
+        std::lock_guard<std::mutex> lock(mutex_);
+        size_t at = (used_ + align - 1) & ~(align - 1);
+        if (chunks_.empty() || at + bytes > size_) {
+            size_ = std::max(kChunk, (bytes + kChunk - 1) / kChunk * kChunk);
+            chunks_.push_back(AllocateLarge(size_, 64, kChunk));
+            at = 0;
+        }
+        used_ = at + bytes;
+        return static_cast<char*>(chunks_.back()) + at;
+    }
+    void do_deallocate(void*, size_t, size_t) override {}
+    bool do_is_equal(const std::pmr::memory_resource& o) const noexcept override { return this == &o; }
+    std::mutex mutex_;
+    std::vector<void*> chunks_;
+    size_t used_ = 0, size_ = 0;
+};
+
+/// A tile's hits and their (hit, light) pairs.
 struct SoftFrame::Tile {
-    std::vector<Sample> samples;  ///< tileSamples_² (row-major), clipped to the frame
-    std::vector<Entry> entries;
-    std::vector<SilhouettePoint> seeds;
-    std::vector<uint32_t> seedLight;
+    explicit Tile(std::pmr::memory_resource* m) : samples(m), entries(m) {}
+    std::pmr::vector<Sample> samples;  ///< tileSamples_² (row-major), clipped to the frame
+    std::pmr::vector<Entry> entries;
     int x0 = 0, y0 = 0, w = 0, h = 0;  ///< its samples in the frame
 };
 
-/// The rows of tiles the stream holds, in a ring.
+/// A tile's silhouette points and their lights.
+struct SoftFrame::TileSeeds {
+    explicit TileSeeds(std::pmr::memory_resource* m) : points(m), light(m) {}
+    std::pmr::vector<SilhouettePoint> points;
+    std::pmr::vector<uint32_t> light;
+};
+
+/// The rows of tiles the stream holds, in two rings: the hits of the rows the stages from
+/// the seeds to the pixels read, and the silhouette points of the rows the marks read.
 struct SoftFrame::Window {
-    int tilesX = 0, tileRows = 0, ring = 0, ts = 0;
+    int tilesX = 0, tileRows = 0, ring = 0, seedRing = 0, ts = 0;
     std::vector<int> rowHeld;        ///< per ring slot, the tile row it holds (−1: none)
     std::vector<std::vector<Tile>> slots;
+    std::vector<std::vector<TileSeeds>> seedSlots;
     Tile& At(int row, int col) { return slots[static_cast<size_t>(row % ring)][static_cast<size_t>(col)]; }
+    TileSeeds& SeedsAt(int row, int col) {
+        return seedSlots[static_cast<size_t>(row % seedRing)][static_cast<size_t>(col)];
+    }
     /// The sample at frame coordinates (x, y) and its tile, or null outside the frame or
     /// the held rows.
     const Sample* SampleAt(int x, int y, const Tile** tile) {
@@ -95,6 +141,7 @@ struct Scratch {
     std::vector<std::pair<uint32_t, uint32_t>> blocked;
     std::vector<Candidate> cand;
     std::vector<std::vector<uint32_t>> blocks;
+    std::vector<SoftFrame::Entry> entries;
     std::unique_ptr<bool[]> occluded;
     size_t room = 0;
     bool* Occluded(size_t n) {
@@ -130,10 +177,10 @@ void SoftFrame::CheckMemory(Window& w) const {
     // render stops with an error rather than running the machine out of memory (many
     // lights without a range: every hit keeps a pair per light).
     uint64_t bytes = 0;
-    for (const std::vector<Tile>& slot : w.slots)
-        for (const Tile& t : slot)
-            bytes += t.samples.capacity() * sizeof(Sample) + t.entries.capacity() * sizeof(Entry) +
-                     t.seeds.capacity() * (sizeof(SilhouettePoint) + sizeof(uint32_t));
+    for (const auto& slot : w.slots)
+        for (const Tile& t : slot) bytes += t.samples.capacity() * sizeof(Sample) + t.entries.capacity() * sizeof(Entry);
+    for (const auto& slot : w.seedSlots)
+        for (const TileSeeds& t : slot) bytes += t.points.capacity() * (sizeof(SilhouettePoint) + sizeof(uint32_t));
     const uint64_t limit = PhysicalMemoryBytes() / 2;
     if (limit && bytes > limit)
         ThrowErrorAt({scene_.name},
@@ -182,7 +229,10 @@ void SoftFrame::ShadeTile(Window& w, int row, int col, RenderCounters& c) const 
     t.x0 = col * ts, t.y0 = row * ts;
     t.w = std::min(ts, sw - t.x0), t.h = std::min(ts, sh - t.y0);
     t.samples.assign(static_cast<size_t>(ts) * ts, Sample{});
-    t.entries.clear(), t.seeds.clear(), t.seedLight.clear();
+    // The pairs gathered in the thread's buffer, then copied to the tile at their size (the
+    // row memory does not take back what a growing vector leaves).
+    std::vector<Entry>& entries = ThreadScratch().entries;
+    entries.clear();
     const size_t lights = scene_.lights.size();
     Scratch& sc = ThreadScratch();
     std::vector<Ray>& rays = sc.rays;
@@ -215,11 +265,14 @@ void SoftFrame::ShadeTile(Window& w, int row, int col, RenderCounters& c) const 
                     s.hit = true;
                     const float cosView = std::max(0.2f, std::abs(Dot(s.sp.n, rays[k].d)) / Length(rays[k].d));
                     s.footprint = hits[k].t * Length(rays[k].d) * sampleAngle_ / cosView;
-                    s.first = static_cast<uint32_t>(t.entries.size());
+                    s.first = static_cast<uint32_t>(entries.size());
                     s.count = count;
-                    for (uint32_t e = 0; e < count; ++e) t.entries.push_back(Entry{ids[e], omega[e]});
+                    for (uint32_t e = 0; e < count; ++e) entries.push_back(Entry{ids[e], omega[e]});
                 }
         }
+    // A quarter more room than the first row needs, so that the rows after it seldom grow.
+    if (t.entries.capacity() < entries.size()) t.entries.reserve(entries.size() + entries.size() / 4);
+    t.entries.assign(entries.begin(), entries.end());
     c.method[kSoftFrameLookups] += t.entries.size();
     // The probes, light by light: the tile's rays to one light's centre go together (the
     // entries ordered by light, each sample's in place: a counting sort over the tile's
@@ -268,6 +321,8 @@ void SoftFrame::ShadeTile(Window& w, int row, int col, RenderCounters& c) const 
 
 void SoftFrame::SeedTile(Window& w, int row, int col, RenderCounters& c) const {
     Tile& t = w.At(row, col);
+    TileSeeds& seeds = w.SeedsAt(row, col);
+    seeds.points.clear(), seeds.light.clear();
     const int ts = tileSamples_;
     Scratch& sc = ThreadScratch();
     std::vector<Ray>& rays = sc.rays;
@@ -333,10 +388,10 @@ void SoftFrame::SeedTile(Window& w, int row, int col, RenderCounters& c) const {
         p.sx = t.x0 + static_cast<int>(i % ts), p.sy = t.y0 + static_cast<int>(i / ts);
         p.reach = PenumbraReach(s.sp.origin, s.sp.n, scene_.lights[light].position, radii_[light],
                                 Length(p.x - s.sp.origin), s.footprint, static_cast<float>(kReach));
-        t.seeds.push_back(p);
-        t.seedLight.push_back(light);
+        seeds.points.push_back(p);
+        seeds.light.push_back(light);
     }
-    c.method[kSoftFrameSilhouettes] += t.seeds.size();
+    c.method[kSoftFrameSilhouettes] += seeds.points.size();
 }
 
 void SoftFrame::MarkTile(Window& w, int row, int col, RenderCounters& c) const {
@@ -353,13 +408,13 @@ void SoftFrame::MarkTile(Window& w, int row, int col, RenderCounters& c) const {
             const bool edgeRow = r == row - ring || r == row + ring;
             for (int q = col - ring; q <= col + ring; q += edgeRow || ring == 0 ? 1 : 2 * ring) {
                 if (q < 0 || q >= w.tilesX) continue;
-                const Tile& o = w.At(r, q);
-                for (size_t k = 0; k < o.seeds.size(); ++k) {
-                    const SilhouettePoint& p = o.seeds[k];
+                const TileSeeds& o = w.SeedsAt(r, q);
+                for (size_t k = 0; k < o.points.size(); ++k) {
+                    const SilhouettePoint& p = o.points[k];
                     const int reach = static_cast<int>(std::ceil(p.reach));
                     const int xa = std::max(p.sx - reach, t.x0), xb = std::min(p.sx + reach, t.x0 + t.w - 1);
                     const int ya = std::max(p.sy - reach, t.y0), yb = std::min(p.sy + reach, t.y0 + t.h - 1);
-                    if (xa <= xb && ya <= yb) cand.push_back(Candidate{o.seedLight[k], &p, xa, xb, ya, yb});
+                    if (xa <= xb && ya <= yb) cand.push_back(Candidate{o.light[k], &p, xa, xb, ya, yb});
                 }
             }
         }
@@ -528,6 +583,7 @@ void SoftFrame::RenderRows(int y0, int y1, Image* image, RenderCounters& counter
     y0 = std::clamp(y0, 0, height);
     y1 = std::clamp(y1, y0, height);
     if (y0 == y1) return;
+    RowMemory pool;
     Window w;
     w.ts = tileSamples_;
     w.tilesX = (options_.width + tilePixels_ - 1) / tilePixels_;
@@ -536,9 +592,18 @@ void SoftFrame::RenderRows(int y0, int y1, Image* image, RenderCounters& counter
     // Rows of tiles: the band's (k0 .. k1), the seeds they read (R more each side), the
     // hits those read (one more).
     const int k0 = y0 / tilePixels_, k1 = (y1 + tilePixels_ - 1) / tilePixels_;
-    w.ring = 2 * R + 6;
+    // At step j the hits of rows j − R − 5 (the pixels' anchors) to j are read, and the
+    // silhouette points of rows j − 2R − 2 (the marks') to j − 1.
+    w.ring = R + 6;
+    w.seedRing = 2 * R + 3;
     w.rowHeld.assign(static_cast<size_t>(w.ring), -1);
-    w.slots.assign(static_cast<size_t>(w.ring), std::vector<Tile>(static_cast<size_t>(w.tilesX)));
+    // Each tile's vectors built on the pool (a copy would take the default resource).
+    w.slots.resize(static_cast<size_t>(w.ring));
+    for (auto& slot : w.slots)
+        for (int c = 0; c < w.tilesX; ++c) slot.emplace_back(&pool);
+    w.seedSlots.resize(static_cast<size_t>(w.seedRing));
+    for (auto& slot : w.seedSlots)
+        for (int c = 0; c < w.tilesX; ++c) slot.emplace_back(&pool);
     // The stages, each a row of tiles behind the one before: hits and probes; seeds (the
     // rows above and below); marks (the seeds within R rows); samples (the marks of the
     // neighbouring rows: the anchors); the pixels (the neighbouring rows' samples).

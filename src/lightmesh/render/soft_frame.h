@@ -58,10 +58,12 @@ class SoftFrame final : public BandRenderer {
     /// Lines for --stats.
     std::vector<std::pair<std::string, std::string>> CounterLines(const RenderCounters& counters) const;
 
+    struct Entry;   ///< one (camera hit, light) pair (soft_frame.cpp)
+    struct Sample;  ///< one camera ray's hit
+
   private:
-    struct Entry;
-    struct Sample;
     struct Tile;
+    struct TileSeeds;
     struct Window;
     void ShadeTile(Window& w, int row, int col, RenderCounters& c) const;
     void SeedTile(Window& w, int row, int col, RenderCounters& c) const;
