@@ -1092,6 +1092,45 @@ std::vector<Case> Corpus() {
          .args = kRender + " --threads 0",
          .expected = "lightmesh: error: --threads: must be between 1 and 1024, got 0\n",
          .files = {{"scene.json", good}}},
+        // --- Issue 56: a memory budget outside the grammar was ignored without a word ---------
+        {.name = "memory_limit_not_a_size",
+         .args = kRender,
+         .expected = "lightmesh: error: LIGHTMESH_MEMORY_LIMIT=abc: not a size; write bytes or a number with K, M, "
+                     "G or T (powers of 1024), e.g. 8G, 8GB, 8GiB, 512M, 1073741824\n",
+         .files = {{"scene.json", good}},
+         .env = "LIGHTMESH_MEMORY_LIMIT=abc"},
+        {.name = "memory_limit_negative",
+         .args = "info builtin:gazebo",
+         .expected = "lightmesh: error: LIGHTMESH_MEMORY_LIMIT=-5G: not a size: no sign is allowed; ",
+         .env = "LIGHTMESH_MEMORY_LIMIT=-5G"},
+        {.name = "memory_limit_exponent",
+         .args = "compare $D/a.png $D/a.png --diff $OUT",
+         .expected = "lightmesh: error: LIGHTMESH_MEMORY_LIMIT=1e3G: not a size: unknown unit \"e3G\"; ",
+         .output = "$D/out/diff.png",
+         .env = "LIGHTMESH_MEMORY_LIMIT=1e3G"},
+        {.name = "memory_limit_overflows",
+         .args = "bench --csv $OUT",
+         .expected = "lightmesh: error: LIGHTMESH_MEMORY_LIMIT=99999999999999999999: too large (more than 16 EiB); ",
+         .output = "$D/out/bench.csv",
+         .env = "LIGHTMESH_MEMORY_LIMIT=99999999999999999999"},
+        {.name = "memory_limit_zero",
+         .args = kRender,
+         .expected = "lightmesh: error: LIGHTMESH_MEMORY_LIMIT=0G: must be at least 1 byte; ",
+         .files = {{"scene.json", good}},
+         .env = "LIGHTMESH_MEMORY_LIMIT=0G"},
+        // The spellings people write are budgets: 64KiB and 64kB as 64K (they were ignored).
+        {.name = "memory_limit_kib_is_a_budget",
+         .args = "info $D/dag.gltf",
+         .expected = "lightmesh: error: $D/dag.gltf: expanding its instances gives more than 256 "
+                     "triangles, the budget for 32.0 KiB of memory",
+         .files = {{"dag.gltf", Gltf(GltfSharedChildren(9))}},
+         .env = "LIGHTMESH_MEMORY_LIMIT=64KiB"},
+        {.name = "memory_limit_kb_is_a_budget",
+         .args = "info $D/dag.gltf",
+         .expected = "lightmesh: error: $D/dag.gltf: expanding its instances gives more than 256 "
+                     "triangles, the budget for 32.0 KiB of memory",
+         .files = {{"dag.gltf", Gltf(GltfSharedChildren(9))}},
+         .env = "LIGHTMESH_MEMORY_LIMIT=64kB"},
     };
 }
 

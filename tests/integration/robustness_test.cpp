@@ -276,14 +276,35 @@ TEST(Robustness, MemoryLimitComesFromTheEnvironment) {
     EXPECT_EQ(lm::ParseByteCount("64M"), 64u << 20);
     EXPECT_EQ(lm::ParseByteCount("1.5G"), 3ull << 29);
     EXPECT_EQ(lm::ParseByteCount("2T"), 2ull << 40);
-    for (const char* bad : {"", "-1", "0", "M", "12Q", "1e300", "nan", "inf"})
+    // Issue 56: the spellings people write, all powers of 1024.
+    for (const char* eight : {"8G", "8g", "8GB", "8gb", "8GiB", "8gib", "8 GB", " 8G ", "8589934592", "8589934592B",
+                              "8192M", "8192MiB", "0.0078125T", "8.0G"})
+        EXPECT_EQ(lm::ParseByteCount(eight), 8ull << 30) << eight;
+    EXPECT_EQ(lm::ParseByteCount("1B"), 1u);
+    EXPECT_EQ(lm::ParseByteCount("18446744073709551615"), UINT64_MAX);
+    for (const char* bad : {"", "-1", "0", "0G", "M", "12Q", "1e300", "1e3G", "-5G", "+5G", "abc", "nan", "inf",
+                            "8GBB", "8Gi", "8 G B", "1.5", "1.", ".", "8G8", "18446744073709551616",
+                            "99999999999999999999", "16777216T", "1..5G", "0x10M"})
         EXPECT_EQ(lm::ParseByteCount(bad), 0u) << bad;
+    uint64_t bytes = 0;
+    EXPECT_EQ(lm::ByteCountProblem("abc", &bytes), "not a size");
+    EXPECT_EQ(lm::ByteCountProblem("-5G", &bytes), "not a size: no sign is allowed");
+    EXPECT_EQ(lm::ByteCountProblem("1e3G", &bytes), "not a size: unknown unit \"e3G\"");
+    EXPECT_EQ(lm::ByteCountProblem("99999999999999999999", &bytes), "too large (more than 16 EiB)");
+    EXPECT_EQ(lm::ByteCountProblem("0", &bytes), "must be at least 1 byte");
+    EXPECT_EQ(lm::ByteCountProblem("1.5", &bytes), "not a size: a fraction of a byte");
     const uint64_t machine = lm::PhysicalMemoryBytes();
     ASSERT_GT(machine, 0u);
     setenv("LIGHTMESH_MEMORY_LIMIT", "64M", 1);
     EXPECT_EQ(lm::PhysicalMemoryBytes(), std::min<uint64_t>(machine, 64u << 20));
-    setenv("LIGHTMESH_MEMORY_LIMIT", "not a size", 1);
+    setenv("LIGHTMESH_MEMORY_LIMIT", "64MiB", 1);
+    EXPECT_EQ(lm::PhysicalMemoryBytes(), std::min<uint64_t>(machine, 64u << 20));
+    setenv("LIGHTMESH_MEMORY_LIMIT", "", 1);  // empty: as unset
     EXPECT_EQ(lm::PhysicalMemoryBytes(), machine);
+    // Not a size: an error, no longer a process without a budget.
+    setenv("LIGHTMESH_MEMORY_LIMIT", "not a size", 1);
+    EXPECT_THROW(lm::PhysicalMemoryBytes(), lm::Error);
+    EXPECT_THROW(lm::MemoryLimitFromEnvironment(), lm::Error);
     unsetenv("LIGHTMESH_MEMORY_LIMIT");
 }
 
