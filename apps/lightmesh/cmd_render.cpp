@@ -142,10 +142,13 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
                        options.width, options.height, lm::FormatBytes(imageBytes).c_str(),
                        lm::FormatBytes(physical).c_str());
 
-    // The light mesh reads triangles as one array: instances are flattened for it.
+    // The light mesh, brute force and the grid read triangles as one array: instances are
+    // flattened for them, refused first past the budget, naming the scene and the option.
+    const std::string sceneName = lm::Printable(cmd.common.scene) + ": ";
+    if (options.accel != "embree") lm::CheckFlatteningFits(scene.mesh, sceneName + "--accel " + options.accel + ": ");
     if (options.shadows == "lmm" && scene.mesh.instances) {
         const size_t instances = scene.mesh.instances->Instances().size();
-        lm::FlattenInstances(&scene.mesh);
+        lm::FlattenInstances(&scene.mesh, sceneName + "--shadows lmm: ");
         const lm::TriangleMesh& m = scene.mesh;
         lm::LogInfo(lm::StringPrintf("--shadows lmm: %s instances flattened into %s triangles (%s)",
                                      lm::FormatCount(instances).c_str(), lm::FormatCount(m.TriangleCount()).c_str(),

@@ -181,6 +181,29 @@ std::string Repeated(const std::string& item, int n) {
     return s + "]";
 }
 
+/// An OBJ of a flat n x n grid of quads in y = 0 (2n² triangles).
+std::string GridObj(int n) {
+    std::string s;
+    for (int i = 0; i <= n; ++i)
+        for (int j = 0; j <= n; ++j) s += "v " + std::to_string(i) + " 0 " + std::to_string(j) + "\n";
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+            const int a = 1 + i * (n + 1) + j;
+            s += "f " + std::to_string(a) + " " + std::to_string(a + 1) + " " + std::to_string(a + n + 2) + " " +
+                 std::to_string(a + n + 1) + "\n";
+        }
+    return s;
+}
+
+/// `n` references to `file`, each lifted by its index: a "meshes" list.
+std::string References(const std::string& file, int n) {
+    std::string s = "[";
+    for (int i = 0; i < n; ++i)
+        s += (i ? ", {\"file\": \"" : "{\"file\": \"") + file + "\", \"transform\": {\"translate\": [0, " +
+             std::to_string(i) + ", 0]}}";
+    return s + "]";
+}
+
 /// An OBJ of n objects ("o" lines) of one triangle each.
 std::string ObjObjects(int n) {
     std::string s;
@@ -1092,6 +1115,34 @@ std::vector<Case> Corpus() {
          .args = kRender + " --threads 0",
          .expected = "lightmesh: error: --threads: must be between 1 and 1024, got 0\n",
          .files = {{"scene.json", good}}},
+        // --- Issue 56: copies and flattening refused first, naming the scene and the option ----
+        {.name = "no_instancing_copies_past_the_budget",
+         .args = kRender + " --no-instancing",
+         .expected = "lightmesh: error: $D/scene.json /meshes/0: \"box.obj\" (12 triangles) is referenced 100,000 "
+                     "times and copied each time (--no-instancing): the scene's copies, 1,200,000 triangles, would "
+                     "take about 146.5 MiB (128 B a triangle through the pipeline), more than half of the 256.0 MiB "
+                     "this process may use (LIGHTMESH_MEMORY_LIMIT); with instancing on, a file referenced many "
+                     "times is placed as instances of one import\n",
+         .files = {{"scene.json", SceneJson({.meshes = References("box.obj", 100000)})}},
+         .env = "LIGHTMESH_MEMORY_LIMIT=256M"},
+        {.name = "bench_copies_past_the_budget",
+         .args = "bench --scene $D/scene.json --csv $OUT",
+         .expected = "lightmesh: error: $D/scene.json /meshes/0: \"box.obj\" (12 triangles) is referenced 100,000 "
+                     "times and copied each time (bench, which copies every reference so that every method sees the "
+                     "same triangles): the scene's copies, 1,200,000 triangles, would take about 146.5 MiB",
+         .files = {{"scene.json", SceneJson({.meshes = References("box.obj", 100000)})}},
+         .output = "$D/out/bench.csv",
+         .env = "LIGHTMESH_MEMORY_LIMIT=256M"},
+        {.name = "flattening_for_lmm_names_the_scene_and_the_option",
+         .args = kRender + " --shadows lmm",
+         .expected = "lightmesh: error: $D/scene.json: --shadows lmm: flattening 64 instances into 67,7",
+         .files = {{"grid.obj", GridObj(23)}, {"scene.json", SceneJson({.meshes = References("grid.obj", 64)})}},
+         .env = "LIGHTMESH_MEMORY_LIMIT=12M"},
+        {.name = "flattening_for_the_grid_names_the_scene_and_the_option",
+         .args = kRender + " --accel grid",
+         .expected = "lightmesh: error: $D/scene.json: --accel grid: flattening 64 instances into 67,7",
+         .files = {{"grid.obj", GridObj(23)}, {"scene.json", SceneJson({.meshes = References("grid.obj", 64)})}},
+         .env = "LIGHTMESH_MEMORY_LIMIT=12M"},
         // --- Issue 56: a memory budget outside the grammar was ignored without a word ---------
         {.name = "memory_limit_not_a_size",
          .args = kRender,

@@ -510,6 +510,12 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
     for (const MeshEntry& e : entries) ++groupRefs[groupKey(e)];
     std::unordered_map<std::string, uint32_t> prototypeOf;
     std::shared_ptr<InstancedMeshes> instances;
+    // The triangles the copied references will hold, counted at each file's first import
+    // (its triangles times its references): past the budget the scene is refused there,
+    // before the copies are made (a million references under --no-instancing ran for
+    // minutes into Embree's "out of memory" at 14.5 GB).
+    uint64_t copiedTriangles = 0;
+    std::unordered_set<std::string> copiedGroups;
     auto place = [&](const MeshEntry& e, uint32_t proto) {
         const Affine toWorld = e.hasTransform ? e.transform : Affine{};
         const size_t before = instances->Instances().size();
@@ -577,6 +583,26 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
         const bool texturesOn = options.textures && scene.render.textures && e.material < 0;
         const bool instanced = options.instancing && scene.render.instancing &&
                                InstancesSaveMemory(groupRefs[group], loaded.mesh.TriangleCount());
+        if (!instanced && copiedGroups.insert(group).second) {
+            const uint64_t refs = static_cast<uint64_t>(groupRefs[group]);
+            copiedTriangles += refs * loaded.mesh.TriangleCount();
+            if (const std::string over = CopiesOverBudget(copiedTriangles); !over.empty()) {
+                const std::string why = !options.instancing      ? " (" + options.noInstancingBy + ")"
+                                        : !scene.render.instancing ? " (\"instancing\": false at /render/instancing)"
+                                                                   : "";
+                const std::string hint = !options.instancing || !scene.render.instancing
+                                             ? "; with instancing on, a file referenced many times is placed as "
+                                               "instances of one import"
+                                             : "";
+                r.Fail(e.path, Quoted(e.file) +
+                                   StringPrintf(" (%s triangles) is referenced %s times and copied each time%s: the "
+                                                "scene's copies, %s triangles, ",
+                                                FormatCount(loaded.mesh.TriangleCount()).c_str(),
+                                                FormatCount(refs).c_str(), why.c_str(),
+                                                FormatCount(copiedTriangles).c_str()) +
+                                   over + hint);
+            }
+        }
         if (e.hasTransform && !instanced) {
             TransformMesh(&loaded.mesh, e.transform);
             for (const Vec3& p : loaded.mesh.positions)
