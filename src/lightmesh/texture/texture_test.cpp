@@ -3,7 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <chrono>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <limits>
@@ -184,6 +188,50 @@ TEST(TextureCache, AnImageTooLargeToDecodeIsAWarning) {
     EXPECT_NE(warnings[0].find("m.glb: texture \"cut.png\": cannot decode the image"), std::string::npos)
         << warnings[0];
     EXPECT_TRUE(textures.empty());
+}
+
+}  // namespace
+}  // namespace lm
+
+namespace lm {
+namespace {
+
+// Issue 56: a texture file is judged by its head before it is read whole. A 2 GB sparse
+// file named .png, and a true PNG head (16 x 16 texels) followed by 2 GB of holes, are each
+// a warning in well under a second, through the cache as a scene reads them.
+TEST(TextureCache, AHugeFileIsJudgedByItsHeadBeforeItIsRead) {
+    const std::string dir = ::testing::TempDir() + "lm_huge_textures_" + std::to_string(getpid());
+    std::filesystem::create_directories(dir);
+    const std::string zeros = dir + "/zeros.png", headed = dir + "/headed.png";
+    {
+        std::ofstream(zeros, std::ios::binary).put('\0');
+        std::ofstream(headed, std::ios::binary) << ReadBytes(DataDir + "/texels.png").substr(0, 33);
+    }
+    constexpr off_t kTwoGB = off_t(2) << 30;
+    ASSERT_EQ(truncate(zeros.c_str(), kTwoGB), 0);
+    ASSERT_EQ(truncate(headed.c_str(), kTwoGB), 0);
+    TextureCache cache;
+    std::vector<std::shared_ptr<const Texture>> textures;
+    std::vector<std::string> warnings;
+    std::vector<TextureSource> sources(2);
+    sources[0].file = sources[0].name = zeros;
+    sources[1].file = sources[1].name = headed;
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::vector<int> got =
+        cache.GetAll(sources, "m.obj", &textures, [&](const std::string& w) { warnings.push_back(w); });
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_LT(seconds, 1.0);
+    EXPECT_EQ(got, (std::vector<int>{-1, -1}));
+    ASSERT_EQ(warnings.size(), 2u);
+    EXPECT_NE(warnings[0].find("zeros.png\": its first 4096 bytes are all zero (NUL): not an image (a zeroed or "
+                               "sparse file?); not read; the material's flat colour is used"),
+              std::string::npos)
+        << warnings[0];
+    EXPECT_NE(warnings[1].find("headed.png\": the file is 2.0 GiB, more than a 2 x 2 image takes (at most 16.0 "
+                               "MiB); not read"),
+              std::string::npos)
+        << warnings[1];
+    std::filesystem::remove_all(dir);
 }
 
 }  // namespace
