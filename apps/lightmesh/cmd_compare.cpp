@@ -15,6 +15,21 @@ int RunCompare(const CompareCommand& cmd) {
     if (!(cmd.diffScale >= 0) || !std::isfinite(cmd.diffScale))
         lm::ThrowError("--diff-scale: must be a finite number >= 0, got %g", double(cmd.diffScale));
     if (cmd.diffScaleGiven && cmd.diff.empty()) lm::LogWarning("--diff-scale is used only with --diff; ignored");
+    // What the comparison will take, from the images' heads, before anything is decoded
+    // (issue 56: two 16384² PNGs reached the OOM killer at 24 GB).
+    const lm::ImageSize sa = lm::ReadImageSize(cmd.a), sb = lm::ReadImageSize(cmd.b);
+    if (sa.width != sb.width || sa.height != sb.height)
+        lm::ThrowError("%s is %dx%d and %s is %dx%d: images of different sizes cannot be compared",
+                       cmd.a.c_str(), sa.width, sa.height, cmd.b.c_str(), sb.width, sb.height);
+    const uint64_t pixels = static_cast<uint64_t>(sa.width) * static_cast<uint64_t>(sa.height);
+    const int images = cmd.mask.empty() ? 2 : 3;
+    const uint64_t need = lm::CompareBytes(pixels, images), budget = lm::PhysicalMemoryBytes();
+    if (budget && need > budget / 2)
+        lm::ThrowError("%s and %s are %dx%d (%s pixels): comparing them takes about %s (%s a pixel), more than half "
+                       "of the %s this process may use (LIGHTMESH_MEMORY_LIMIT)",
+                       cmd.a.c_str(), cmd.b.c_str(), sa.width, sa.height, Count(pixels).c_str(),
+                       lm::FormatBytes(need).c_str(), lm::FormatBytes(need / std::max<uint64_t>(pixels, 1)).c_str(),
+                       lm::FormatBytes(budget).c_str());
     // The user's images are read in a child process (a malformed EXR must not crash us).
     const lm::Image a = lm::ReadImageIsolated(cmd.a), b = lm::ReadImageIsolated(cmd.b);
     std::optional<lm::Image> mask;

@@ -204,6 +204,15 @@ std::string References(const std::string& file, int n) {
     return s + "]";
 }
 
+/// The head of a PNG of w x h RGB texels, 8 bits: the signature and the IHDR chunk, and no
+/// image data.
+std::string PngHead(uint32_t w, uint32_t h) {
+    std::string s("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR", 16);
+    for (const uint32_t v : {w, h})
+        for (int shift = 24; shift >= 0; shift -= 8) s += static_cast<char>((v >> shift) & 0xff);
+    return s + std::string("\x08\x02\0\0\0\0\0\0\0", 9);
+}
+
 /// An OBJ of n objects ("o" lines) of one triangle each.
 std::string ObjObjects(int n) {
     std::string s;
@@ -1143,6 +1152,20 @@ std::vector<Case> Corpus() {
          .expected = "lightmesh: error: $D/scene.json: --accel grid: flattening 64 instances into 67,7",
          .files = {{"grid.obj", GridObj(23)}, {"scene.json", SceneJson({.meshes = References("grid.obj", 64)})}},
          .env = "LIGHTMESH_MEMORY_LIMIT=12M"},
+        {.name = "compare_past_the_budget",
+         .args = "compare $D/a.png $D/b.png --diff $OUT",
+         .expected = "lightmesh: error: $D/a.png and $D/b.png are 16384x16384 (268,435,456 pixels): comparing them "
+                     "takes about 24.0 GiB (96 B a pixel), more than half of the 1.0 GiB this process may use "
+                     "(LIGHTMESH_MEMORY_LIMIT)\n",
+         .files = {{"a.png", PngHead(16384, 16384)}, {"b.png", PngHead(16384, 16384)}},
+         .output = "$D/out/diff.png",
+         .env = "LIGHTMESH_MEMORY_LIMIT=1G"},
+        {.name = "compare_sizes_differ_before_reading",
+         .args = "compare $D/a.png $D/b.png --diff $OUT",
+         .expected = "lightmesh: error: $D/a.png is 16384x16384 and $D/b.png is 16384x16383: images of different "
+                     "sizes cannot be compared\n",
+         .files = {{"a.png", PngHead(16384, 16384)}, {"b.png", PngHead(16384, 16383)}},
+         .output = "$D/out/diff.png"},
         // --- Issue 56: a memory budget outside the grammar was ignored without a word ---------
         {.name = "memory_limit_not_a_size",
          .args = kRender,

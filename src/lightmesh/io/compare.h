@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 
 #include "lightmesh/io/image.h"
@@ -26,6 +27,14 @@ struct ImageMetrics {
     size_t pixels = 0;      ///< pixels compared (all, or the mask's)
     int width = 0, height = 0;
 };
+
+/// The memory `lightmesh compare` takes per pixel at its peak: each image read (12 bytes of
+/// float RGB; two, three with a mask) and CompareImages's planes (seven of doubles, and the
+/// blur's two). Past half the budget a comparison is refused before an image is read.
+inline constexpr uint64_t kCompareBytesPerPixel = 72;
+inline uint64_t CompareBytes(uint64_t pixels, int images) {
+    return pixels * (kCompareBytesPerPixel + 12 * static_cast<uint64_t>(images));
+}
 
 /// Compares `a` with `b`. With a mask (same size), only the pixels where the mask is not
 /// black are compared: where one of its channels is above 0 (NaN and negative are black). SSIM uses an 11×11 Gaussian window (σ = 1.5), K1 = 0.01,
