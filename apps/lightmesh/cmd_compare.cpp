@@ -41,11 +41,22 @@ int RunCompare(const CompareCommand& cmd) {
     if (cmd.json)
         std::printf("%s\n", lm::ImageMetricsJson(q, cmd.a, cmd.b).c_str());
     else
-        std::printf("%s vs %s: %s pixels: PSNR %s, SSIM %.5f, RMSE %.5f (linear %.5f), max diff %.4f\n",
+        std::printf("%s vs %s: %s pixels: PSNR %s, SSIM %.5f, RMSE %.5f (linear %.5f), max diff %.4f%s\n",
                     cmd.a.c_str(), cmd.b.c_str(), Count(q.pixels).c_str(), psnr.c_str(), q.ssim, q.rmse,
-                    q.rmseLinear, q.maxDiff);
+                    q.rmseLinear, q.maxDiff,
+                    q.nonFiniteA || q.nonFiniteB
+                        ? lm::StringPrintf("; left out: %s pixels NaN or infinite in A, %s in B",
+                                           Count(q.nonFiniteA).c_str(), Count(q.nonFiniteB).c_str())
+                              .c_str()
+                        : "");
     if (cmd.thresholdPsnr && q.psnr < *cmd.thresholdPsnr) {
         std::fprintf(stderr, "lightmesh: PSNR %s is below the threshold %.2f dB\n", psnr.c_str(), *cmd.thresholdPsnr);
+        return 3;
+    }
+    // A judged image with NaN or infinite pixels where the reference has numbers fails.
+    if (cmd.thresholdPsnr && q.nonFiniteOnlyInB > 0) {
+        std::fprintf(stderr, "lightmesh: %s has %s NaN or infinite pixels where %s has numbers: below any threshold\n",
+                     cmd.b.c_str(), Count(q.nonFiniteOnlyInB).c_str(), cmd.a.c_str());
         return 3;
     }
     return 0;
