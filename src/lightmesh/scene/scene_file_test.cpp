@@ -640,8 +640,8 @@ TEST(SceneFile, BadInputsGiveExactMessages) {
                      "for this file format",
          .meshes = R"([{"file": "notes.xyz"}])"},
         {.name = "mesh_truncated",
-         .expected = "scene.json /meshes/0/file: cannot read \"truncated.obj\": OBJ: vertex index "
-                     "out of range",
+         .expected = "scene.json /meshes/0/file: cannot read \"truncated.obj\": OBJ: line 4: face corner \"9\" "
+                     "refers to vertex 9, but 3 vertices are defined before it",
          .meshes = R"([{"file": "truncated.obj"}])"},
         {.name = "mesh_lines",
          .expected = "scene.json /meshes/0/file: \"lines.obj\": no triangles (only points/lines)",
