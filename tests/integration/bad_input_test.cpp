@@ -462,6 +462,26 @@ std::vector<Case> Corpus() {
                      "outside solids: move it or the object)\n",
          .files = {{"scene.json",
                     WithLights(R"([{"position": [3, 6, 4]}, {"position": [0.5, 0.2, 0]}])")}}},
+        // Issue 56: an open floor under the box made the ways out below cross two surfaces
+        // (even), and the light was accepted; the closed parts alone say inside.
+        {.name = "light_inside_object_over_an_open_floor",
+         .args = kRender,
+         .expected = "lightmesh: error: $D/scene.json /lights/1/position: the light (0.5, 0.2, "
+                     "0) is inside a closed object, so it would light nothing (lights must be "
+                     "outside solids: move it or the object)\n",
+         .files = {{"floor.obj", "v -9 -1.5 -9\nv 9 -1.5 -9\nv 9 -1.5 9\nv -9 -1.5 9\nf 1 4 3 2\n"},
+                   {"scene.json", SceneJson({.lights = R"([{"position": [3, 6, 4]}, {"position": [0.5, 0.2, 0]}])",
+                                             .meshes = R"([{"file": "box.obj"}, {"file": "floor.obj"}])",
+                                             .extra = ""})}}},
+        // ... and a light over that floor, outside the box, is not inside anything.
+        {.name = "light_over_an_open_floor_beside_a_box",
+         .args = kRender,
+         .expected = "$D/out/out.png: 16x12, shadows soft",
+         .files = {{"floor.obj", "v -9 -1.5 -9\nv 9 -1.5 -9\nv 9 -1.5 9\nv -9 -1.5 9\nf 1 4 3 2\n"},
+                   {"scene.json", SceneJson({.lights = R"([{"position": [3, 0.2, 0]}])",
+                                             .meshes = R"([{"file": "box.obj"}, {"file": "floor.obj"}])",
+                                             .extra = ""})}},
+         .exitCode = 0},
         {.name = "light_inside_ground_slab",
          .args = kRender,
          .expected = "$D/scene.json /lights/0/position: the light (0, -1.05, 0) is inside a "
