@@ -213,6 +213,15 @@ std::string PngHead(uint32_t w, uint32_t h) {
     return s + std::string("\x08\x02\0\0\0\0\0\0\0", 9);
 }
 
+/// tests/data/textures/checker_mask.gltf (a quad with an 8 x 8 cut-out texture in a data:
+/// URI) with its image's payload replaced, and `from` replaced by `to` in it.
+std::string CheckerGltf(const std::string& payload, const std::string& from = "", const std::string& to = "") {
+    std::string g = FileBytes(std::string(LIGHTMESH_TEST_DATA) + "/textures/checker_mask.gltf");
+    const size_t at = g.find("data:image/png;base64,") + 22;
+    g.replace(at, g.find('"', at) - at, payload);
+    return from.empty() ? g : Replace(g, from, to);
+}
+
 /// An OBJ of n objects ("o" lines) of one triangle each.
 std::string ObjObjects(int n) {
     std::string s;
@@ -1145,6 +1154,26 @@ std::vector<Case> Corpus() {
          .args = kRender + " --threads 0",
          .expected = "lightmesh: error: --threads: must be between 1 and 1024, got 0\n",
          .files = {{"scene.json", good}}},
+        // --- Issue 56: glTF images in data: URIs, glTF JSON errors in its own words ----------
+        {.name = "gltf_data_uri_not_base64",
+         .args = "render $D/m.gltf -o $OUT",
+         .expected = "lightmesh: warning: $D/m.gltf: image 0: its data: URI is not base64 (\"!\" at character 5 of "
+                     "12); the materials using it get their flat colour\n",
+         .files = {{"m.gltf", CheckerGltf("iVBO!not b64")}},
+         .exitCode = 0},
+        {.name = "gltf_data_uri_empty",
+         .args = "render $D/m.gltf -o $OUT",
+         .expected = "lightmesh: warning: $D/m.gltf: image 0: its data: URI holds no bytes; the materials using it "
+                     "get their flat colour\n",
+         .files = {{"m.gltf", CheckerGltf("")}},
+         .exitCode = 0},
+        {.name = "gltf_bare_nan_token",
+         .args = "render $D/m.gltf -o $OUT",
+         .expected = "lightmesh: error: $D/m.gltf: its glTF JSON does not parse, at line 69, column 18: syntax error "
+                     "while parsing value - invalid literal; last read: '\"byteLength\": N'\n",
+         .files = {{"m.gltf", CheckerGltf("iVBORw0KGgoAAAANSUhEUgAAAAgAAAAICAYAAADED76LAAAAGklEQVR42mM4ceLEfyBmwEUz4"
+                                          "JME0QzDwgQA6Su14QhVneoAAAAASUVORK5CYII=",
+                                          "\"byteLength\": 92", "\"byteLength\": NaN")}}},
         // --- Issue 56: copies and flattening refused first, naming the scene and the option ----
         {.name = "no_instancing_copies_past_the_budget",
          .args = kRender + " --no-instancing",

@@ -9,6 +9,7 @@
 #include <assimp/DefaultLogger.hpp>
 #include <assimp/Importer.hpp>
 #include <assimp/LogStream.hpp>
+#include <assimp/MemoryIOWrapper.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -133,7 +134,10 @@ class AssimpAssertion : public std::runtime_error {
 /// writing.
 class RegularFilesOnly : public Assimp::DefaultIOSystem {
   public:
-    explicit RegularFilesOnly(std::vector<std::string>* refused) : refused_(refused) {}
+    /// `replacement`, if not empty, is read in place of the file `replaced` (a glTF whose
+    /// data: URIs were repaired, RepairGltfDataUris).
+    explicit RegularFilesOnly(std::vector<std::string>* refused, std::string replaced = "", std::string replacement = "")
+        : refused_(refused), replaced_(std::move(replaced)), replacement_(std::move(replacement)) {}
     bool Exists(const char* file) const override {
         return file && RegularFileProblem(file, "file").empty();
     }
@@ -143,6 +147,8 @@ class RegularFilesOnly : public Assimp::DefaultIOSystem {
             refused_->push_back(std::string(file) + ": refused to open for writing");
             return nullptr;
         }
+        if (!replacement_.empty() && replaced_ == file)
+            return new Assimp::MemoryIOStream(reinterpret_cast<const uint8_t*>(replacement_.data()), replacement_.size());
         const std::string problem = RegularFileProblem(file, "file");
         if (!problem.empty()) {
             if (problem != "no such file")
@@ -154,6 +160,7 @@ class RegularFilesOnly : public Assimp::DefaultIOSystem {
 
   private:
     std::vector<std::string>* refused_;
+    std::string replaced_, replacement_;
 };
 
 // ---------------------------------------------------------------------------------------
@@ -449,7 +456,7 @@ LoadedMesh ImportMeshInProcess(const std::string& path, const MeshLoadOptions& o
     try {
         ScopedAssimpLog scopedLog(&log);
         Assimp::Importer importer;
-        importer.SetIOHandler(new RegularFilesOnly(&refused));
+        importer.SetIOHandler(new RegularFilesOnly(&refused, path, mesh_import::RepairGltfDataUris(path, &out.warnings)));
         // Triangulate polygons; split meshes by primitive type so points and lines sit in
         // meshes of their own, which the walk skips. No normals are generated: shading
         // uses face normals where the file has none. Instances are expanded by the walk

@@ -65,6 +65,11 @@ inline constexpr const char* kObjMergeObjects = "LIGHTMESH_OBJ_MERGE_OBJECTS";
 /// A .gltf's or .glb's node graph checked for cycles, depth and expansion against the budget
 /// before Assimp sees it (MeshFileError); other files, and JSON Assimp rejects anyway, pass.
 void CheckGltfHierarchy(const std::string& path, const ImportBudget& budget);
+/// A .gltf's JSON with its images' data: URIs made what Assimp reads, or "" when none needs
+/// it: a payload that is not base64 becomes empty (no image, the flat colour; Assimp 5.2
+/// refused the whole file), an unpadded one is padded; each, and an empty payload (which
+/// Assimp drops without a word), gets a warning in *warnings naming the image.
+std::string RepairGltfDataUris(const std::string& path, std::vector<std::string>* warnings);
 
 // isolated_import.cpp
 

@@ -537,5 +537,19 @@ TEST(ObjReader, MalformedRecordsNameTheirLine) {
               "OBJ: line 7: face corner \"9\" refers to vertex 9, but 3 vertices are defined before it");
 }
 
+// Issue 56: an image's data: URI without base64's padding is read (Assimp 5.2 refused the
+// whole file), without a warning.
+TEST(MeshLoader, AnUnpaddedDataUriIsRead) {
+    const std::string folder = TempFolder();
+    std::ifstream in(std::string(LIGHTMESH_TEST_DATA) + "/textures/checker_mask.gltf");
+    std::string g((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const size_t at = g.find("ASUVORK5CYII=");
+    ASSERT_NE(at, std::string::npos);
+    g.erase(at + 12, 1);  // the one '='
+    const LoadedMesh m = LoadMeshFile(WriteFile(folder, "unpadded.gltf", g));
+    EXPECT_EQ(m.textures.size(), 1u);
+    EXPECT_TRUE(m.warnings.empty()) << m.warnings[0];
+}
+
 }  // namespace
 }  // namespace lm
