@@ -595,8 +595,8 @@ Image ReadImageIsolated(const std::string& path) {
         case ChildOutcome::End::TimedOut:
             ThrowErrorAt({path}, "the image reader did not finish within %.0f s and was stopped", child.seconds);
         case ChildOutcome::End::Signalled:
-            ThrowErrorAt({path}, "the image reader crashed on it (signal %d, %s)", child.code,
-                         SignalName(child.code).c_str());
+            ThrowErrorAt({path}, "the image reader crashed on it (signal %d, %s)%s", child.code,
+                         SignalName(child.code).c_str(), child.Said().c_str());
         case ChildOutcome::End::Exited: break;
     }
     try {
