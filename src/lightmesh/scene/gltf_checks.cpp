@@ -53,12 +53,15 @@ void CheckGltfHierarchy(const std::string& path, const ImportBudget& budget) {
     nlohmann::json j;
     try {
         j = nlohmann::json::parse(text);
-    } catch (const nlohmann::json::parse_error& e) {
+    } catch (const nlohmann::json::exception& e) {
         // Its place and the token, not Assimp's "no reader for this file format" (bare NaN or
         // Infinity tokens, which JSON does not have, made it say so).
         std::string what = e.what();
-        if (const size_t at = what.find("parse error at "); at != std::string::npos) what = what.substr(at + 15);
-        throw MeshFileError(path, "its glTF JSON does not parse, at " + what, true);
+        if (const size_t at = what.find("parse error at "); at != std::string::npos)
+            what = "at " + what.substr(at + 15);
+        else if (const size_t end = what.find("] "); what.rfind("[json.exception.", 0) == 0 && end != std::string::npos)
+            what = what.substr(end + 2);  // a number beyond double's range
+        throw MeshFileError(path, "its glTF JSON does not parse, " + Printable(what), true);
     }
     if (!j.is_object()) return;  // Assimp reports it
     const auto nodesIt = j.find("nodes");
