@@ -55,6 +55,8 @@ int main(int argc, char** argv) {
     renderCmd->add_flag(lm::RenderSettingFor("instancing").flag, render.noInstancing,
                         lm::RenderSettingFor("instancing").help);
     renderCmd->add_flag("--stats", render.stats, "Print rays by kind, time by phase, back-end figures, peak memory");
+    renderCmd->add_flag("--force", render.force,
+                        "Render even when its first tiles estimate more than an hour (refused otherwise)");
 
     CommonOptions info;
     std::string infoAccel;

@@ -379,7 +379,8 @@ TEST(Robustness, LongRenderSaysHowLongItWillTake) {
     const std::string out = scratch.path + "/long.png";
     // 4096 x 4096 at aa 16: 4.3 G camera rays, several minutes on any machine.
     const CliResult r = lm::testing::RunLightmesh(
-        "render builtin:gazebo --width 4096 --height 4096 --aa 16 --shadows rt --threads 2 -o " + out, "timeout -s INT 12");
+        "render builtin:gazebo --width 4096 --height 4096 --aa 16 --shadows rt --threads 2 --force -o " + out,
+        "timeout -s INT 12");
     EXPECT_NE(r.output.find("lightmesh: Rendering: about "), std::string::npos) << r.output;
     EXPECT_NE(r.output.find(" left (measured on 64 tiles spread over the image ("), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("; 4,294,967,296 camera rays (4096x4096 at aa 16), shadows rt; Ctrl-C stops it"),
@@ -390,6 +391,31 @@ TEST(Robustness, LongRenderSaysHowLongItWillTake) {
     const CliResult quick = Lightmesh("render builtin:gazebo --width 64 --height 48 -o " + out);
     EXPECT_EQ(quick.exitCode, 0) << quick.output;
     EXPECT_EQ(quick.output.find("Rendering: about"), std::string::npos) << quick.output;
+}
+
+// Issue 56: a render estimated past an hour is refused, from its first tiles, the output as
+// it was; --force renders it (announced, stopped here by SIGINT).
+TEST(Robustness, ARenderPastAnHourIsRefusedUnlessForced) {
+    const Scratch scratch("lm_robust");
+    const std::string out = scratch.path + "/hours.png";
+    { std::ofstream(out) << "a previous image"; }
+    const std::string render =
+        "render builtin:gazebo --width 4096 --height 4096 --aa 16 --shadows area --samples 256 --threads 2 -o " + out;
+    const auto start = std::chrono::steady_clock::now();
+    const CliResult r = lm::testing::RunLightmesh(render, "timeout -s INT 60");
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 30.0);
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("lightmesh: error: " + out + ": not rendered: about "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(" tiles spread over the image ("), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("more than the limit of 1 h 0 min; 4,294,967,296 camera rays (4096x4096 at aa 16), "
+                            "shadows area; --force renders it anyway\n"),
+              std::string::npos)
+        << r.output;
+    EXPECT_EQ(Bytes(out), "a previous image");
+    const CliResult forced = lm::testing::RunLightmesh(render + " --force", "timeout -s INT 8");
+    EXPECT_EQ(forced.output.find("not rendered"), std::string::npos) << forced.output;
+    EXPECT_NE(forced.output.find("lightmesh: Rendering: about "), std::string::npos) << forced.output;
+    EXPECT_EQ(Bytes(out), "a previous image");
 }
 
 // Issue 56: the estimate comes from tiles spread over the image, made as soon as they are

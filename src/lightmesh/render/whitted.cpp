@@ -287,7 +287,7 @@ RenderResult WhittedRenderer::Render(ProgressReporter* progress) const {
     }
     const auto start = std::chrono::steady_clock::now();
     ParallelFor(tbb::blocked_range<int>(0, static_cast<int>(sample.size()), 1), [&](const tbb::blocked_range<int>& range) {
-        for (int i = range.begin(); i != range.end(); ++i) {
+        for (int i = range.begin(); i != range.end() && !progress->Stopped(); ++i) {
             const int tile = static_cast<int>(sample[static_cast<size_t>(i)]);
             RenderTile(tile, &result.image, tileCounters[tile]);
             progress->Update(1);
@@ -295,7 +295,7 @@ RenderResult WhittedRenderer::Render(ProgressReporter* progress) const {
     });
     ParallelFor(tbb::blocked_range<int>(0, TileCount(), 1), [&](const tbb::blocked_range<int>& range) {
         for (int tile = range.begin(); tile != range.end(); ++tile) {
-            if (!sampled.empty() && sampled[static_cast<size_t>(tile)]) continue;
+            if (!sampled.empty() && (sampled[static_cast<size_t>(tile)] || progress->Stopped())) continue;
             RenderTile(tile, &result.image, tileCounters[tile]);
             if (progress) progress->Update(1);
         }

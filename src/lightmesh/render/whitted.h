@@ -46,7 +46,8 @@ class WhittedRenderer {
     /// on its own rays, so the image is the same for any number of threads (or processes:
     /// RenderTile renders any subset of the tiles into the same pixels). With `progress`,
     /// kEstimateTiles tiles spread over the image (SpreadOverGrid) are rendered first, the
-    /// reporter's sample for its estimate (ProgressReporter::BeginWork).
+    /// reporter's sample for its estimate (ProgressReporter::BeginWork); once it says
+    /// Stopped() (its RefuseIfLonger limit passed), no more tiles are rendered.
     RenderResult Render(ProgressReporter* progress = nullptr) const;
     static constexpr int kEstimateTiles = 64;
     /// Tiles of the image, row by row: tile t covers the pixels from

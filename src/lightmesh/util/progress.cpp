@@ -16,6 +16,11 @@ ProgressReporter::ProgressReporter(int64_t total, std::string title, bool enable
     : total_(total > 0 ? total : 1), title_(std::move(title)), enabled_(enabled),
       start_(std::chrono::steady_clock::now()), lastDraw_(start_), workStart_(start_) {}
 
+void ProgressReporter::RefuseIfLonger(double limitSeconds, std::string more) {
+    refuseAfter_ = limitSeconds;
+    howToForce_ = std::move(more);
+}
+
 void ProgressReporter::BeginWork(int64_t sampleUnits, std::string sampleWhat) {
     workStart_ = std::chrono::steady_clock::now();
     setupSeconds_ = std::chrono::duration<double>(workStart_ - start_).count();
@@ -80,7 +85,9 @@ void ProgressReporter::Update(int64_t units) {
     // The moment the sample is done, whichever thread gets there (the lock below may skip).
     if (sample_ > 0 && done >= sample_ && done - units < sample_)
         sampleSeconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - workStart_).count();
-    if (!enabled_ && (announced_.load(std::memory_order_relaxed) || (announceAfter_ < 0 && sample_ == 0))) return;
+    if (!enabled_ &&
+        (announced_.load(std::memory_order_relaxed) || (announceAfter_ < 0 && refuseAfter_ < 0 && sample_ == 0)))
+        return;
     std::unique_lock<std::mutex> lock(drawMutex_, std::try_to_lock);
     if (!lock.owns_lock()) return;  // another thread is drawing; skip this update
     if (!announced_.load(std::memory_order_relaxed)) {
@@ -98,16 +105,22 @@ void ProgressReporter::Update(int64_t units) {
             const double whole = (sampled ? setupSeconds_ : 0.0) + workSeconds / fraction;
             estimate_ = whole;
             estimatedAfter_ = elapsed;
-            if (announceAfter_ >= 0 && whole > announceAfter_) {
+            const std::string on =
+                sampled ? StringPrintf("%s %s (%.2g %%) in %.2g s, after %.2g s of set-up",
+                                       FormatCount(static_cast<uint64_t>(measured)).c_str(), sampleWhat_.c_str(),
+                                       100.0 * fraction, workSeconds, setupSeconds_)
+                        : StringPrintf("the first %.2g %% in %.1f s", 100.0 * fraction, elapsed);
+            if (refuseAfter_ >= 0 && whole > refuseAfter_) {
+                // Said by the caller, once the work has stopped: one line, an error.
+                stopReason_ = StringPrintf("about %s in all (measured on %s), more than the limit of %s%s",
+                                           FormatDuration(whole).c_str(), on.c_str(),
+                                           FormatDuration(refuseAfter_).c_str(), howToForce_.c_str());
+                stopped_ = true;
+            } else if (announceAfter_ >= 0 && whole > announceAfter_) {
                 if (enabled_) {
                     std::fprintf(stderr, "\r%70s\r", "");  // the bar's line
                     SetInterruptLineOpen(false);
                 }
-                const std::string on =
-                    sampled ? StringPrintf("%s %s (%.2g %%) in %.2g s, after %.2g s of set-up",
-                                           FormatCount(static_cast<uint64_t>(measured)).c_str(), sampleWhat_.c_str(),
-                                           100.0 * fraction, workSeconds, setupSeconds_)
-                            : StringPrintf("the first %.2g %% in %.1f s", 100.0 * fraction, elapsed);
                 LogInfo(StringPrintf("%s: about %s in all, %s left (measured on %s%s%s)", title_.c_str(),
                                      FormatDuration(whole).c_str(), FormatDuration(std::max(0.0, whole - elapsed)).c_str(),
                                      on.c_str(), announceWhat_.empty() ? "" : "; ", announceWhat_.c_str()));
@@ -124,6 +137,11 @@ void ProgressReporter::Update(int64_t units) {
 void ProgressReporter::Done() {
     if (finished_.exchange(true) || !enabled_) return;
     std::lock_guard<std::mutex> lock(drawMutex_);
+    if (stopped_) {  // no finished bar: the work was refused; the bar's line is cleared
+        std::fprintf(stderr, "\r%70s\r", "");
+        SetInterruptLineOpen(false);
+        return;
+    }
     Draw(total_, true);
 }
 

@@ -32,6 +32,13 @@ class ProgressReporter {
     /// times, gave 72 days for 6 minutes). Without it the estimate is the share done after
     /// kMeasureSeconds, set-up included.
     void BeginWork(int64_t sampleUnits, std::string sampleWhat);
+    /// When the estimate passes `limitSeconds`, the work is to stop (Stopped()), and
+    /// StopReason() says why: "about 3 h 12 min in all (measured on ...), more than the limit
+    /// of 1 h 0 min<more>". Call before the first Update.
+    void RefuseIfLonger(double limitSeconds, std::string more);
+    /// Whether the work should stop (RefuseIfLonger's limit passed); cheap, thread-safe.
+    bool Stopped() const { return stopped_.load(std::memory_order_relaxed); }
+    const std::string& StopReason() const { return stopReason_; }
     /// The whole work's estimated seconds (set-up included), once made; -1 before.
     double EstimatedSeconds() const { return estimate_.load(); }
     /// Seconds after the start at which the estimate was made; -1 before.
@@ -50,6 +57,9 @@ class ProgressReporter {
     const std::string title_;
     const bool enabled_;
     double announceAfter_ = -1;  ///< seconds; < 0: no announcement
+    double refuseAfter_ = -1;    ///< seconds; < 0: no limit
+    std::string howToForce_, stopReason_;
+    std::atomic<bool> stopped_{false};
     std::string announceWhat_;
     int64_t sample_ = 0;  ///< BeginWork's sample (0: none)
     std::string sampleWhat_;
