@@ -234,5 +234,39 @@ TEST(TextureCache, AHugeFileIsJudgedByItsHeadBeforeItIsRead) {
     std::filesystem::remove_all(dir);
 }
 
+// A head that tells no size (a JPEG's can follow more than a MiB of metadata) is read whole
+// up to 64 MiB, for the decoder to judge; past that it is refused at once. An EXR is judged
+// by its header's dataWindow before it is decoded.
+TEST(TextureCache, AHeadThatTellsNoSizeAndAnExrPastTheLimit) {
+    const std::string dir = ::testing::TempDir() + "lm_texture_heads_" + std::to_string(getpid());
+    std::filesystem::create_directories(dir);
+    const std::string small = dir + "/small.jpg", big = dir + "/big.jpg", exr = dir + "/huge.exr";
+    std::ofstream(small, std::ios::binary) << std::string(2 << 20, 'x');
+    std::ofstream(big, std::ios::binary) << std::string(4096, 'x');
+    ASSERT_EQ(truncate(big.c_str(), off_t(100) << 20), 0);
+    std::string head("\x76\x2f\x31\x01\x02\0\0\0dataWindow\0box2i\0\x10\0\0\0", 29);
+    for (const int32_t v : {0, 0, 16383, 16383}) head.append(reinterpret_cast<const char*>(&v), 4);
+    std::ofstream(exr, std::ios::binary) << head << '\0';
+    TextureCache cache;
+    std::vector<std::shared_ptr<const Texture>> textures;
+    std::vector<std::string> warnings;
+    std::vector<TextureSource> sources(3);
+    sources[0].file = sources[0].name = small;
+    sources[1].file = sources[1].name = big;
+    sources[2].file = sources[2].name = exr;
+    cache.GetAll(sources, "m.obj", &textures, [&](const std::string& w) { warnings.push_back(w); });
+    ASSERT_EQ(warnings.size(), 3u);
+    EXPECT_NE(warnings[0].find("small.jpg\": cannot decode the image"), std::string::npos) << warnings[0];
+    EXPECT_NE(warnings[1].find("big.jpg\": its first 1.0 MiB (of 100.0 MiB) are not the head of a PNG, JPEG, TGA "
+                               "or BMP image"),
+              std::string::npos)
+        << warnings[1];
+    EXPECT_NE(warnings[2].find("huge.exr\": the image is 16384 x 16384, beyond the 8192 x 8192 textures may have; "
+                               "not read"),
+              std::string::npos)
+        << warnings[2];
+    std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace lm
