@@ -382,7 +382,7 @@ TEST(Robustness, LongRenderSaysHowLongItWillTake) {
         "render builtin:gazebo --width 4096 --height 4096 --aa 16 --shadows rt --threads 2 --force -o " + out,
         "timeout -s INT 12");
     EXPECT_NE(r.output.find("lightmesh: Rendering: about "), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find(" left (measured on 64 tiles spread over the image ("), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(" tiles spread over the image ("), std::string::npos) << r.output;  // (64 unless slow)
     EXPECT_NE(r.output.find("; 4,294,967,296 camera rays (4096x4096 at aa 16), shadows rt; Ctrl-C stops it"),
               std::string::npos)
         << r.output;
