@@ -18,6 +18,8 @@ find_package(OpenEXR 3 QUIET)
 lightmesh_require(OpenEXR_FOUND libopenexr-dev "OpenEXR (EXR images)")
 find_package(assimp QUIET)
 lightmesh_require(assimp_FOUND libassimp-dev "Assimp (mesh import)")
+find_package(tinyobjloader QUIET)
+lightmesh_require(tinyobjloader_FOUND libtinyobjloader-dev "tinyobjloader (OBJ files)")
 find_package(ZLIB QUIET)
 lightmesh_require(ZLIB_FOUND zlib1g-dev "zlib (PNG compression)")
 

@@ -142,10 +142,13 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
                        options.width, options.height, lm::FormatBytes(imageBytes).c_str(),
                        lm::FormatBytes(physical).c_str());
 
-    // The light mesh reads triangles as one array: instances are flattened for it.
+    // The light mesh, brute force and the grid read triangles as one array: instances are
+    // flattened for them, refused first past the budget, naming the scene and the option.
+    const std::string sceneName = lm::Printable(cmd.common.scene) + ": ";
+    if (options.accel != "embree") lm::CheckFlatteningFits(scene.mesh, sceneName + "--accel " + options.accel + ": ");
     if (options.shadows == "lmm" && scene.mesh.instances) {
         const size_t instances = scene.mesh.instances->Instances().size();
-        lm::FlattenInstances(&scene.mesh);
+        lm::FlattenInstances(&scene.mesh, sceneName + "--shadows lmm: ");
         const lm::TriangleMesh& m = scene.mesh;
         lm::LogInfo(lm::StringPrintf("--shadows lmm: %s instances flattened into %s triangles (%s)",
                                      lm::FormatCount(instances).c_str(), lm::FormatCount(m.TriangleCount()).c_str(),
@@ -157,18 +160,20 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
     return prepared;
 }
 
-// A render whose first tiles say it will take longer than this says so (issue 45: 16384 x
-// 16384 at aa 16, 68.7 G camera rays, ran for hours without a word).
-constexpr double kAnnouncedRenderSeconds = 60;
+// A render whose sample of tiles spread over the image says it will take longer than this
+// says so (issue 45: 16384 x 16384 at aa 16, 68.7 G camera rays, ran for hours without a
+// word; issue 56: the rule's 30 s, from tiles spread over the image, set-up apart).
+constexpr double kAnnouncedRenderSeconds = 30;
+// A render whose estimate passes this is stopped unless --force (the rule: past an hour).
+constexpr double kRefusedRenderSeconds = 3600;
 
 // What a render has to do, for that line: "68,719,476,736 camera rays (16384x16384 at aa
 // 16), shadows lmm".
-std::string RenderWork(const lm::RenderOptions& o) {
+std::string RenderWork(const lm::RenderOptions& o, bool ctrlC = true) {
     const uint64_t rays = static_cast<uint64_t>(o.width) * static_cast<uint64_t>(o.height) *
                           static_cast<uint64_t>(o.aa) * static_cast<uint64_t>(o.aa);
-    return lm::StringPrintf("%s camera rays (%dx%d at aa %d), shadows %s; Ctrl-C stops it and leaves the output as "
-                            "it was",
-                            Count(rays).c_str(), o.width, o.height, o.aa, o.shadows.c_str());
+    return lm::StringPrintf("%s camera rays (%dx%d at aa %d), shadows %s%s", Count(rays).c_str(), o.width, o.height,
+                            o.aa, o.shadows.c_str(), ctrlC ? "; Ctrl-C stops it and leaves the output as it was" : "");
 }
 
 // The summary line, and with --stats the figures (per rank under MPI).
@@ -229,7 +234,12 @@ int RunRender(const RenderCommand& cmd) {
         lm::ProgressReporter progress(p->job->Renderer().TileCount(), "Rendering",
                                       !cmd.common.quiet && lm::ProgressReporter::StderrIsTerminal());
         if (!cmd.common.quiet) progress.AnnounceIfLong(kAnnouncedRenderSeconds, RenderWork(p->job->Options()));
+        // (The denoiser renders by bands, its own schedule: it is announced, not stopped.)
+        if (!cmd.force && !p->job->Denoiser())
+            progress.RefuseIfLonger(kRefusedRenderSeconds,
+                                    "; " + RenderWork(p->job->Options(), false) + "; --force renders it anyway");
         result = p->job->Render(&progress);
+        if (progress.Stopped()) lm::ThrowErrorAt({p->output}, "not rendered: %s", progress.StopReason().c_str());
     }
     const auto t3 = Clock::now();
     lm::WriteImage(p->output, result.image);

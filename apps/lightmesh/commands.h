@@ -103,6 +103,7 @@ struct RenderCommand {
     bool stats = false;
     bool noTextures = false;
     bool noInstancing = false;
+    bool force = false;  ///< render one estimated past an hour
 };
 int RunRender(const RenderCommand& cmd);
 /// `mpirun -np N lightmesh render …` (built with MPI only).

@@ -55,6 +55,8 @@ int main(int argc, char** argv) {
     renderCmd->add_flag(lm::RenderSettingFor("instancing").flag, render.noInstancing,
                         lm::RenderSettingFor("instancing").help);
     renderCmd->add_flag("--stats", render.stats, "Print rays by kind, time by phase, back-end figures, peak memory");
+    renderCmd->add_flag("--force", render.force,
+                        "Render even when its first tiles estimate more than an hour (refused otherwise)");
 
     CommonOptions info;
     std::string infoAccel;
@@ -218,9 +220,18 @@ int main(int argc, char** argv) {
         return app.exit(e) == 0 ? 0 : 1;
     }
 
+    const int worldSize = lm::LauncherWorldSize(), worldRank = lm::LauncherWorldRank();
+    // A memory budget that is not a size is refused before any work (it was ignored, and
+    // the process ran without a budget); under mpirun rank 0 says so, every rank exits 1.
+    try {
+        lm::MemoryLimitFromEnvironment();
+    } catch (...) {
+        if (worldRank == 0) std::fprintf(stderr, "lightmesh: error: %s\n", lm::CurrentExceptionLine().c_str());
+        return 1;
+    }
+
     // Under mpirun: render spreads its tiles over the ranks; the other commands run once,
     // on rank 0, and the other ranks leave at once.
-    const int worldSize = lm::LauncherWorldSize(), worldRank = lm::LauncherWorldRank();
     if (lm::LaunchedByMpi() && renderCmd->parsed()) {
 #ifdef LIGHTMESH_HAS_MPI
         std::unique_ptr<lm::MpiSession> session;

@@ -19,7 +19,14 @@
 #include <thread>
 #include <vector>
 
+#include <tbb/global_control.h>
+
+#include <algorithm>
+
+#include "support/floor_scenes.h"
+#include "lightmesh/render/render_job.h"
 #include "lightmesh/shadow/light_mesh.h"
+#include "lightmesh/util/progress.h"
 #include "lightmesh/shadow/shadow.h"
 #include "lightmesh/shadow/sphere_templates.h"
 #include "lightmesh/util/error.h"
@@ -276,14 +283,35 @@ TEST(Robustness, MemoryLimitComesFromTheEnvironment) {
     EXPECT_EQ(lm::ParseByteCount("64M"), 64u << 20);
     EXPECT_EQ(lm::ParseByteCount("1.5G"), 3ull << 29);
     EXPECT_EQ(lm::ParseByteCount("2T"), 2ull << 40);
-    for (const char* bad : {"", "-1", "0", "M", "12Q", "1e300", "nan", "inf"})
+    // Issue 56: the spellings people write, all powers of 1024.
+    for (const char* eight : {"8G", "8g", "8GB", "8gb", "8GiB", "8gib", "8 GB", " 8G ", "8589934592", "8589934592B",
+                              "8192M", "8192MiB", "0.0078125T", "8.0G"})
+        EXPECT_EQ(lm::ParseByteCount(eight), 8ull << 30) << eight;
+    EXPECT_EQ(lm::ParseByteCount("1B"), 1u);
+    EXPECT_EQ(lm::ParseByteCount("18446744073709551615"), UINT64_MAX);
+    for (const char* bad : {"", "-1", "0", "0G", "M", "12Q", "1e300", "1e3G", "-5G", "+5G", "abc", "nan", "inf",
+                            "8GBB", "8Gi", "8 G B", "1.5", "1.", ".", "8G8", "18446744073709551616",
+                            "99999999999999999999", "16777216T", "1..5G", "0x10M"})
         EXPECT_EQ(lm::ParseByteCount(bad), 0u) << bad;
+    uint64_t bytes = 0;
+    EXPECT_EQ(lm::ByteCountProblem("abc", &bytes), "not a size");
+    EXPECT_EQ(lm::ByteCountProblem("-5G", &bytes), "not a size: no sign is allowed");
+    EXPECT_EQ(lm::ByteCountProblem("1e3G", &bytes), "not a size: unknown unit \"e3G\"");
+    EXPECT_EQ(lm::ByteCountProblem("99999999999999999999", &bytes), "too large (more than 16 EiB)");
+    EXPECT_EQ(lm::ByteCountProblem("0", &bytes), "must be at least 1 byte");
+    EXPECT_EQ(lm::ByteCountProblem("1.5", &bytes), "not a size: a fraction of a byte");
     const uint64_t machine = lm::PhysicalMemoryBytes();
     ASSERT_GT(machine, 0u);
     setenv("LIGHTMESH_MEMORY_LIMIT", "64M", 1);
     EXPECT_EQ(lm::PhysicalMemoryBytes(), std::min<uint64_t>(machine, 64u << 20));
-    setenv("LIGHTMESH_MEMORY_LIMIT", "not a size", 1);
+    setenv("LIGHTMESH_MEMORY_LIMIT", "64MiB", 1);
+    EXPECT_EQ(lm::PhysicalMemoryBytes(), std::min<uint64_t>(machine, 64u << 20));
+    setenv("LIGHTMESH_MEMORY_LIMIT", "", 1);  // empty: as unset
     EXPECT_EQ(lm::PhysicalMemoryBytes(), machine);
+    // Not a size: an error, no longer a process without a budget.
+    setenv("LIGHTMESH_MEMORY_LIMIT", "not a size", 1);
+    EXPECT_THROW(lm::PhysicalMemoryBytes(), lm::Error);
+    EXPECT_THROW(lm::MemoryLimitFromEnvironment(), lm::Error);
     unsetenv("LIGHTMESH_MEMORY_LIMIT");
 }
 
@@ -351,9 +379,10 @@ TEST(Robustness, LongRenderSaysHowLongItWillTake) {
     const std::string out = scratch.path + "/long.png";
     // 4096 x 4096 at aa 16: 4.3 G camera rays, several minutes on any machine.
     const CliResult r = lm::testing::RunLightmesh(
-        "render builtin:gazebo --width 4096 --height 4096 --aa 16 --shadows rt --threads 2 -o " + out, "timeout -s INT 12");
+        "render builtin:gazebo --width 4096 --height 4096 --aa 16 --shadows rt --threads 2 --force -o " + out,
+        "timeout -s INT 12");
     EXPECT_NE(r.output.find("lightmesh: Rendering: about "), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find(" left (measured on the first "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(" tiles spread over the image ("), std::string::npos) << r.output;  // (64 unless slow)
     EXPECT_NE(r.output.find("; 4,294,967,296 camera rays (4096x4096 at aa 16), shadows rt; Ctrl-C stops it"),
               std::string::npos)
         << r.output;
@@ -362,6 +391,84 @@ TEST(Robustness, LongRenderSaysHowLongItWillTake) {
     const CliResult quick = Lightmesh("render builtin:gazebo --width 64 --height 48 -o " + out);
     EXPECT_EQ(quick.exitCode, 0) << quick.output;
     EXPECT_EQ(quick.output.find("Rendering: about"), std::string::npos) << quick.output;
+}
+
+// Issue 56: a render estimated past an hour is refused, from its first tiles, the output as
+// it was; --force renders it (announced, stopped here by SIGINT).
+TEST(Robustness, ARenderPastAnHourIsRefusedUnlessForced) {
+    const Scratch scratch("lm_robust");
+    const std::string out = scratch.path + "/hours.png";
+    { std::ofstream(out) << "a previous image"; }
+    const std::string render =
+        "render builtin:gazebo --width 4096 --height 4096 --aa 16 --shadows area --samples 256 --threads 2 -o " + out;
+    const auto start = std::chrono::steady_clock::now();
+    const CliResult r = lm::testing::RunLightmesh(render, "timeout -s INT 60");
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 30.0);
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("lightmesh: error: " + out + ": not rendered: about "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(" tiles spread over the image ("), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("more than the limit of 1 h 0 min; 4,294,967,296 camera rays (4096x4096 at aa 16), "
+                            "shadows area; --force renders it anyway\n"),
+              std::string::npos)
+        << r.output;
+    EXPECT_EQ(Bytes(out), "a previous image");
+    // (Forced, a cheaper one: still hours here, announced within seconds even on a busy machine.)
+    std::string cheaper = render;
+    cheaper.replace(cheaper.find("--samples 256"), 13, "--samples 16");
+    const CliResult forced = lm::testing::RunLightmesh(cheaper + " --force", "timeout -s INT 15");
+    EXPECT_EQ(forced.output.find("not rendered"), std::string::npos) << forced.output;
+    EXPECT_NE(forced.output.find("lightmesh: Rendering: about "), std::string::npos) << forced.output;
+    EXPECT_EQ(Bytes(out), "a previous image");
+}
+
+// Issue 56: the estimate comes from tiles spread over the image, made as soon as they are
+// done, the set-up apart. A frame whose upper two thirds are sky and whose floor is costly
+// (area shadows) is estimated within 3x of its time, early on; the first tiles (sky) alone
+// said a fraction of it, and it was said only after 2 s (or at the end).
+TEST(Robustness, ASkyFirstFrameIsEstimatedFromTilesSpreadOverIt) {
+    lm::Scene s = lm::testing::FloorScene(10);
+    lm::testing::AddBox(&s, {-1, 0, -1}, {1, 1.5f, 1});
+    s.camera = lm::Camera{{0, 0.6f, 9}, {0, 2.4f, 0}, {0, 1, 0}, 50.0f};
+    lm::RenderOptions o = s.render;
+    o.width = 480;
+    o.height = 360;
+    o.shadows = "area";
+    o.areaLight.samples = 256;
+    o.areaLight.radius = 0.5f;
+    const tbb::global_control oneThread(tbb::global_control::max_allowed_parallelism, 1);
+    const lm::RenderJob job(s, o);
+    lm::ProgressReporter progress(job.Renderer().TileCount(), "Rendering", false);
+    const auto t0 = std::chrono::steady_clock::now();
+    const lm::RenderResult r = job.Render(&progress);
+    const double truth = lm::SecondsSince(t0);
+    ASSERT_GT(truth, 0.3) << "too fast to judge";
+    EXPECT_GT(progress.EstimatedSeconds(), truth / 3) << truth << " s, estimated after " << progress.EstimatedAfterSeconds();
+    EXPECT_LT(progress.EstimatedSeconds(), truth * 3) << truth;
+    EXPECT_LT(progress.EstimatedAfterSeconds(), truth / 2) << truth;
+    // The image is the one the plain order renders.
+    const lm::RenderResult plain = job.Render();
+    EXPECT_EQ(std::memcmp(plain.image.pixels.data(), r.image.pixels.data(), r.image.pixels.size() * sizeof(lm::Color)), 0);
+}
+
+TEST(Robustness, SpreadSamplesCoverTheGridInEveryPrefix) {
+    const std::vector<int64_t> cells = lm::SpreadOverGrid(40, 30, 64);
+    EXPECT_GE(cells.size(), 48u);
+    EXPECT_LE(cells.size(), 64u);
+    std::vector<int64_t> sorted = cells;
+    std::sort(sorted.begin(), sorted.end());
+    EXPECT_EQ(std::unique(sorted.begin(), sorted.end()), sorted.end());
+    // Each quadrant of the grid holds one of the first four, and a quarter of them all.
+    int quadrant[4] = {};
+    for (size_t i = 0; i < cells.size(); ++i) {
+        const int q = (cells[i] % 40 >= 20) + 2 * (cells[i] / 40 >= 15);
+        if (i < 4) EXPECT_EQ(quadrant[q], 0) << i;
+        ++quadrant[q];
+    }
+    for (const int n : quadrant) EXPECT_NEAR(n, static_cast<double>(cells.size()) / 4, cells.size() / 12.0);
+    // A grid of one row (not one column), and more samples than cells: all of them.
+    const std::vector<int64_t> row = lm::SpreadOverGrid(1024, 1, 8);
+    EXPECT_EQ(row.size(), 8u);
+    EXPECT_EQ(lm::SpreadOverGrid(3, 2, 64), (std::vector<int64_t>{0, 1, 2, 3, 4, 5}));
 }
 
 TEST(Robustness, DurationsReadAsAPersonWritesThem) {

@@ -321,6 +321,7 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
         auto ls = std::make_unique<LoadedScene>();
         SceneLoadOptions load;
         load.instancing = false;  // every method and back-end on the same flat triangles
+        load.noInstancingBy = "bench, which copies every reference so that every method sees the same triangles";
         std::vector<std::string> warnings;
         ls->scene = LoadScene(spec, load, &warnings);
         for (const std::string& a : m.accels)

@@ -112,20 +112,29 @@ uint64_t InstancedMeshes::FlattenedBytes() const {
     return bytes;
 }
 
-void FlattenInstances(TriangleMesh* mesh) {
-    if (!mesh->instances) return;
-    // The flattened triangles at the pipeline's cost per triangle (the import's rule), or
-    // their own bytes if more, against half the budget (the import's share).
-    const uint64_t triangles = mesh->TriangleCount() + mesh->instances->TriangleCount();
-    const uint64_t need = std::max<uint64_t>(mesh->instances->FlattenedBytes(), triangles * kPipelineBytesPerTriangle);
+std::string CopiesOverBudget(uint64_t triangles, uint64_t bytes) {
+    const uint64_t perTriangle = kPipelineBytesPerTriangle;
+    const uint64_t need = std::max(bytes, triangles > UINT64_MAX / perTriangle ? UINT64_MAX : triangles * perTriangle);
     const uint64_t budget = PhysicalMemoryBytes();
-    if (budget && need > budget / 2)
-        ThrowError("flattening %s instances into %s triangles would take about %s (%s a triangle through the "
-                   "pipeline), more than half of the %s this process may use (LIGHTMESH_MEMORY_LIMIT); the default "
-                   "soft shadows and rt, area and denoised on embree trace instances as they are",
-                   FormatCount(mesh->instances->Instances().size()).c_str(),
-                   FormatCount(triangles).c_str(), FormatBytes(need).c_str(),
-                   FormatBytes(kPipelineBytesPerTriangle).c_str(), FormatBytes(budget).c_str());
+    if (!budget || need <= budget / 2) return {};
+    return StringPrintf("would take about %s (%s a triangle through the pipeline), more than half of the %s this "
+                        "process may use (LIGHTMESH_MEMORY_LIMIT)",
+                        FormatBytes(need).c_str(), FormatBytes(perTriangle).c_str(), FormatBytes(budget).c_str());
+}
+
+void CheckFlatteningFits(const TriangleMesh& mesh, const std::string& who) {
+    if (!mesh.instances) return;
+    const uint64_t triangles = mesh.TriangleCount() + mesh.instances->TriangleCount();
+    if (const std::string over = CopiesOverBudget(triangles, mesh.instances->FlattenedBytes()); !over.empty())
+        ThrowError("%sflattening %s instances into %s triangles %s; the default soft shadows and rt, area and "
+                   "denoised on embree trace instances as they are",
+                   who.c_str(), FormatCount(mesh.instances->Instances().size()).c_str(),
+                   FormatCount(triangles).c_str(), over.c_str());
+}
+
+void FlattenInstances(TriangleMesh* mesh, const std::string& who) {
+    if (!mesh->instances) return;
+    CheckFlatteningFits(*mesh, who);
     const std::shared_ptr<const InstancedMeshes> inst = std::move(mesh->instances);
     mesh->instances.reset();
     for (const MeshInstance& in : inst->Instances()) {

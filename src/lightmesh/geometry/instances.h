@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "lightmesh/geometry/affine.h"
@@ -73,11 +74,24 @@ class InstancedMeshes {
     Bounds3 bounds_;
 };
 
+/// Why `triangles` copied triangles (flattened instances, a file's references copied) do
+/// not fit, or "" when they do: at the pipeline's kPipelineBytesPerTriangle each (or their
+/// own `bytes`, if more) against half the memory this process may use (PhysicalMemoryBytes):
+/// "would take about 23.8 GiB (128 B a triangle through the pipeline), more than half of
+/// the 256.0 MiB this process may use (LIGHTMESH_MEMORY_LIMIT)".
+std::string CopiesOverBudget(uint64_t triangles, uint64_t bytes = 0);
+
 /// Replaces mesh->instances by their triangles in world space, appended in id order (so
 /// every id keeps its triangle): what the back-ends and shadow methods that read triangles
 /// as one array get. Throws Error, before allocating, when the flattened triangles would
-/// take more than half the memory this process may use (PhysicalMemoryBytes).
-void FlattenInstances(TriangleMesh* mesh);
+/// take more than half the memory this process may use (CopiesOverBudget); the message
+/// starts with `who` ("scene.json: --shadows lmm: ") when given.
+void FlattenInstances(TriangleMesh* mesh, const std::string& who = "");
+
+/// FlattenInstances's check alone: throws its Error if `mesh`'s instances would not fit
+/// flattened, without flattening them (a caller that knows the scene and the option checks
+/// before a back-end flattens them out of its sight).
+void CheckFlatteningFits(const TriangleMesh& mesh, const std::string& who);
 
 /// A copy of `mesh` with its instances flattened.
 TriangleMesh Flattened(const TriangleMesh& mesh);

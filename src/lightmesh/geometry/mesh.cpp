@@ -191,12 +191,50 @@ EdgeReport AnalyzeEdges(const TriangleMesh& mesh) {
     return r;
 }
 
-int CountCrossings(const TriangleMesh& mesh, const Ray& ray) {
+namespace {
+
+/// ClosedParts' flags for one triangle list: a union of the triangles that share an edge,
+/// and the parts with an edge not shared by exactly two of them marked open.
+std::vector<uint8_t> ClosedTriangles(const std::vector<Vec3>& positions,
+                                     const std::vector<std::array<uint32_t, 3>>& triangles) {
+    const std::vector<uint32_t> weld = WeldIds(positions);
+    std::vector<uint32_t> parent(triangles.size());
+    for (uint32_t t = 0; t < parent.size(); ++t) parent[t] = t;
+    auto find = [&](uint32_t t) {
+        while (parent[t] != t) t = parent[t] = parent[parent[t]];
+        return t;
+    };
+    std::vector<std::pair<uint64_t, uint32_t>> edges;  // (welded edge, triangle), sorted
+    edges.reserve(3 * triangles.size());
+    for (uint32_t t = 0; t < triangles.size(); ++t)
+        for (int k = 0; k < 3; ++k) {
+            uint32_t a = weld[triangles[t][k]], b = weld[triangles[t][(k + 1) % 3]];
+            if (a == b) continue;
+            if (a > b) std::swap(a, b);
+            edges.push_back({uint64_t(a) << 32 | b, t});
+        }
+    std::sort(edges.begin(), edges.end());
+    std::vector<uint32_t> openAt;  // a triangle of each part with an open or non-manifold edge
+    for (size_t i = 0; i < edges.size();) {
+        size_t j = i + 1;
+        for (; j < edges.size() && edges[j].first == edges[i].first; ++j) parent[find(edges[j].second)] = find(edges[i].second);
+        if (j - i != 2) openAt.push_back(edges[i].second);
+        i = j;
+    }
+    std::vector<uint8_t> open(triangles.size(), 0), closed(triangles.size(), 0);
+    for (const uint32_t t : openAt) open[find(t)] = 1;
+    for (uint32_t t = 0; t < triangles.size(); ++t) closed[t] = !open[find(t)];
+    return closed;
+}
+
+/// CountCrossings, counting the triangles `counts` (id, prototype's triangle or -1) takes.
+template <typename Counts>
+int Crossings(const TriangleMesh& mesh, const Ray& ray, Counts&& counts) {
     TriangleHit th;
     int n = 0;
     const CutoutMask* cut = mesh.cutouts.get();
     for (uint32_t i = 0; i < mesh.triangles.size(); ++i)
-        n += IntersectTriangle(ray, mesh.Vertex(i, 0), mesh.Vertex(i, 1), mesh.Vertex(i, 2), &th) &&
+        n += counts(i, -1) && IntersectTriangle(ray, mesh.Vertex(i, 0), mesh.Vertex(i, 1), mesh.Vertex(i, 2), &th) &&
              (!cut || cut->Solid(mesh, i, th.b1, th.b2));
     if (!mesh.instances) return n;
     // Instanced triangles: those of instances whose box the ray meets.
@@ -222,12 +260,34 @@ int CountCrossings(const TriangleMesh& mesh, const Ray& ray) {
         const size_t count = inst.Prototypes()[in.prototype].TriangleCount();
         for (size_t k = 0; k < count; ++k) {
             const uint32_t id = flat + in.first + static_cast<uint32_t>(k);
+            if (!counts(in.prototype, static_cast<int64_t>(k))) continue;
             Vec3 p[3];
             mesh.Corners(id, p);
             n += IntersectTriangle(ray, p[0], p[1], p[2], &th) && (!cut || cut->Solid(mesh, id, th.b1, th.b2));
         }
     }
     return n;
+}
+
+}  // namespace
+
+ClosedParts FindClosedParts(const TriangleMesh& mesh) {
+    ClosedParts parts;
+    parts.flat = ClosedTriangles(mesh.positions, mesh.triangles);
+    if (mesh.instances)
+        for (const TriangleMesh& p : mesh.instances->Prototypes())
+            parts.prototypes.push_back(ClosedTriangles(p.positions, p.triangles));
+    return parts;
+}
+
+int CountCrossings(const TriangleMesh& mesh, const Ray& ray) {
+    return Crossings(mesh, ray, [](uint32_t, int64_t) { return true; });
+}
+
+int CountCrossings(const TriangleMesh& mesh, const Ray& ray, const ClosedParts& only) {
+    return Crossings(mesh, ray, [&](uint32_t i, int64_t k) {
+        return k < 0 ? only.flat[i] != 0 : only.prototypes[i][static_cast<size_t>(k)] != 0;
+    });
 }
 
 }  // namespace lm

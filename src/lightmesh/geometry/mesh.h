@@ -119,10 +119,22 @@ struct EdgeReport {
 /// closed objects and is unreliable where these exist.
 EdgeReport AnalyzeEdges(const TriangleMesh& mesh);
 
+/// The triangles that belong to closed parts: edge-connected sets of triangles (vertices
+/// welded by exact position) in which every edge is shared by exactly two of them. An open
+/// surface (a floor, a sheet, a shape with a hole) is no part of one. Per triangle of the
+/// mesh's own (`flat`) and of each instance prototype (`prototypes`), 1 or 0.
+struct ClosedParts {
+    std::vector<uint8_t> flat;
+    std::vector<std::vector<uint8_t>> prototypes;
+};
+ClosedParts FindClosedParts(const TriangleMesh& mesh);
+
 /// The surfaces the ray crosses, every triangle tested (IntersectTriangle's watertight test
 /// and tie-breaks: a closed mesh gives exact inside/outside parity, paper §4). The brute-force
 /// back-end's CountCrossings, and the scene checks' light-inside-a-solid test, which needs no
 /// back-end for the few rays it traces.
 int CountCrossings(const TriangleMesh& mesh, const Ray& ray);
+/// The same, counting only the triangles of closed parts (`only`).
+int CountCrossings(const TriangleMesh& mesh, const Ray& ray, const ClosedParts& only);
 
 }  // namespace lm

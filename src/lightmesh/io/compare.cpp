@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "lightmesh/util/error.h"
+#include "lightmesh/util/system.h"
 
 namespace lm {
 
@@ -40,6 +41,9 @@ bool Included(const Image* mask, size_t i) {
     const Color& c = mask->pixels[i];
     return c.r > 0 || c.g > 0 || c.b > 0;
 }
+
+/// Whether every channel of `c` is a number (not NaN, not infinite).
+bool Finite(const Color& c) { return std::isfinite(c.r) && std::isfinite(c.g) && std::isfinite(c.b); }
 
 struct Display {
     double r, g, b;
@@ -87,13 +91,19 @@ ImageMetrics CompareImages(const Image& a, const Image& b, const Image* mask) {
     m.height = h;
 
     double sq = 0, sqLinear = 0, maxDiff = 0;
-    size_t count = 0;
+    size_t count = 0, selected = 0;
     std::vector<double> ya(n), yb(n);
     for (size_t i = 0; i < n; ++i) {
         const Display da = Encode(a.pixels[i]), db = Encode(b.pixels[i]);
         ya[i] = Luma(da);
         yb[i] = Luma(db);
         if (!Included(mask, i)) continue;
+        ++selected;
+        const bool finiteA = Finite(a.pixels[i]), finiteB = Finite(b.pixels[i]);
+        m.nonFiniteA += !finiteA;
+        m.nonFiniteB += !finiteB;
+        m.nonFiniteOnlyInB += finiteA && !finiteB;
+        if (!finiteA || !finiteB) continue;
         ++count;
         for (const double d : {da.r - db.r, da.g - db.g, da.b - db.b}) {
             sq += d * d;
@@ -102,9 +112,12 @@ ImageMetrics CompareImages(const Image& a, const Image& b, const Image* mask) {
         const Color &ca = a.pixels[i], &cb = b.pixels[i];
         for (const double d : {double(ca.r) - cb.r, double(ca.g) - cb.g, double(ca.b) - cb.b}) sqLinear += d * d;
     }
-    if (count == 0)
+    if (selected == 0)
         ThrowError("the mask selects no pixel (only mask pixels with a channel above 0 are compared; black, "
                    "negative and NaN pixels are not)");
+    if (count == 0)
+        ThrowError("no pixel%s is finite in both images: %s of A's and %s of B's have a NaN or infinite channel",
+                   mask ? " the mask selects" : "", FormatCount(m.nonFiniteA).c_str(), FormatCount(m.nonFiniteB).c_str());
     const double mse = sq / (3.0 * static_cast<double>(count));
     m.pixels = count;
     m.rmse = std::sqrt(mse);
@@ -114,20 +127,35 @@ ImageMetrics CompareImages(const Image& a, const Image& b, const Image* mask) {
 
     // SSIM (Wang, Bovik, Sheikh & Simoncelli 2004, eq. 13) with Gaussian-weighted local
     // statistics; dynamic range L = 1.
+    // Pixels non-finite in either image are left out of the windows too: their weight is
+    // 0 and each window's weights are renormalised (a blur of the values over a blur of
+    // the weights; with no such pixel the weights' blur is exactly 1 and is skipped).
     constexpr double C1 = 0.01 * 0.01, C2 = 0.03 * 0.03;
+    std::vector<double> weight;
+    if (m.nonFiniteA + m.nonFiniteB > 0) {
+        weight.assign(n, 1.0);
+        for (size_t i = 0; i < n; ++i)
+            if (!Finite(a.pixels[i]) || !Finite(b.pixels[i])) weight[i] = ya[i] = yb[i] = 0;
+        if (std::find(weight.begin(), weight.end(), 0.0) == weight.end()) weight.clear();
+    }
     std::vector<double> aa(n), bb(n), ab(n);
     for (size_t i = 0; i < n; ++i) {
         aa[i] = ya[i] * ya[i];
         bb[i] = yb[i] * yb[i];
         ab[i] = ya[i] * yb[i];
     }
-    const std::vector<double> muA = Blur(ya, w, h), muB = Blur(yb, w, h);
+    std::vector<double> muA = Blur(ya, w, h), muB = Blur(yb, w, h);
     aa = Blur(aa, w, h);
     bb = Blur(bb, w, h);
     ab = Blur(ab, w, h);
+    if (!weight.empty()) {
+        const std::vector<double> sum = Blur(weight, w, h);
+        for (std::vector<double>* plane : {&muA, &muB, &aa, &bb, &ab})
+            for (size_t i = 0; i < n; ++i) (*plane)[i] = sum[i] > 0 ? (*plane)[i] / sum[i] : 0.0;
+    }
     double ssimSum = 0;
     for (size_t i = 0; i < n; ++i) {
-        if (!Included(mask, i)) continue;
+        if (!Included(mask, i) || !Finite(a.pixels[i]) || !Finite(b.pixels[i])) continue;
         const double varA = aa[i] - muA[i] * muA[i], varB = bb[i] - muB[i] * muB[i];
         const double cov = ab[i] - muA[i] * muB[i];
         ssimSum += ((2 * muA[i] * muB[i] + C1) * (2 * cov + C2)) /
@@ -196,8 +224,9 @@ double ShadowTotal(const Image& none, const Image& img) {
     double sum = 0;
     for (size_t i = 0; i < img.pixels.size(); ++i) {
         const Color &n = none.pixels[i], &c = img.pixels[i];
-        sum += static_cast<double>(0.2126f * n.r + 0.7152f * n.g + 0.0722f * n.b) -
-               static_cast<double>(0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b);
+        const double d = static_cast<double>(0.2126f * n.r + 0.7152f * n.g + 0.0722f * n.b) -
+                         static_cast<double>(0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b);
+        if (std::isfinite(d)) sum += d;  // NaN and infinite pixels are left out, as in CompareImages
     }
     return sum;
 }
@@ -206,7 +235,9 @@ std::string ImageMetricsJson(const ImageMetrics& m, const std::string& a, const 
     return "{\"a\":" + JsonString(a) + ",\"b\":" + JsonString(b) + ",\"psnr\":" + JsonNumber(m.psnr) +
            ",\"ssim\":" + JsonNumber(m.ssim) + ",\"rmse\":" + JsonNumber(m.rmse) +
            ",\"rmse_linear\":" + JsonNumber(m.rmseLinear) + ",\"max_diff\":" + JsonNumber(m.maxDiff) +
-           ",\"pixels\":" + std::to_string(m.pixels) + ",\"identical\":" + (m.rmse == 0 ? "true" : "false") + "}";
+           ",\"pixels\":" + std::to_string(m.pixels) + ",\"nonfinite_a\":" + std::to_string(m.nonFiniteA) +
+           ",\"nonfinite_b\":" + std::to_string(m.nonFiniteB) + ",\"identical\":" + (m.Identical() ? "true" : "false") +
+           "}";
 }
 
 }  // namespace lm

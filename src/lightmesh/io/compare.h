@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 
 #include "lightmesh/io/image.h"
@@ -23,16 +24,33 @@ struct ImageMetrics {
     double rmse = 0;        ///< root mean squared difference of display values
     double rmseLinear = 0;  ///< the same on unclamped linear values
     double maxDiff = 0;     ///< largest |difference| of one channel's display value
-    size_t pixels = 0;      ///< pixels compared (all, or the mask's)
+    size_t pixels = 0;      ///< pixels compared (all, or the mask's, finite in both)
     int width = 0, height = 0;
+    /// Pixels (of the mask's) with a NaN or infinite channel in A, in B, and in B where A's
+    /// is finite. They are left out of every figure: a NaN is no colour to measure (it was
+    /// compared as 0, and an all-NaN image judged as black).
+    size_t nonFiniteA = 0, nonFiniteB = 0, nonFiniteOnlyInB = 0;
+    /// Equal on display, with no non-finite pixel in either.
+    bool Identical() const { return rmse == 0 && nonFiniteA == 0 && nonFiniteB == 0; }
 };
+
+/// The memory `lightmesh compare` takes per pixel at its peak: each image read (12 bytes of
+/// float RGB; two, and one each for a mask and --no-shadows) and CompareImages's planes (seven of doubles, and the
+/// blur's two). Past half the budget a comparison is refused before an image is read.
+inline constexpr uint64_t kCompareBytesPerPixel = 72;
+inline uint64_t CompareBytes(uint64_t pixels, int images) {
+    return pixels * (kCompareBytesPerPixel + 12 * static_cast<uint64_t>(images));
+}
 
 /// Compares `a` with `b`. With a mask (same size), only the pixels where the mask is not
 /// black are compared: where one of its channels is above 0 (NaN and negative are black). SSIM uses an 11×11 Gaussian window (σ = 1.5), K1 = 0.01,
 /// K2 = 0.03, on the luma Y' = 0.2126 R' + 0.7152 G' + 0.0722 B' of the display values;
 /// the window is cut at the image's border and its weights renormalised (so any size
-/// works), and the SSIM map is averaged over the compared pixels. Throws Error if the
-/// sizes differ (naming both), an image is empty, or the mask selects no pixel.
+/// works), and the SSIM map is averaged over the compared pixels. Pixels with a NaN or
+/// infinite channel in either image are counted (nonFiniteA, nonFiniteB) and left out of
+/// every figure (in the SSIM windows of their neighbours they count as their display values,
+/// clamped: NaN as 0). Throws Error if the sizes differ (naming both), an image is empty,
+/// the mask selects no pixel, or no selected pixel is finite in both images.
 ImageMetrics CompareImages(const Image& a, const Image& b, const Image* mask = nullptr);
 
 /// Writes a false-colour image of where `a` and `b` differ: per pixel the largest
@@ -45,14 +63,15 @@ void WriteDiffImage(const std::string& path, const Image& a, const Image& b, flo
 
 /// One JSON line (no newline) of the metrics, for scripts:
 /// {"a":"x.png","b":"y.png","psnr":41.2,"ssim":0.987,"rmse":0.0031,"rmse_linear":0.001,
-///  "max_diff":0.2,"pixels":480000,"identical":false}. Equal images have "psnr":null and
-/// "identical":true (JSON has no infinity).
+///  "max_diff":0.2,"pixels":480000,"nonfinite_a":0,"nonfinite_b":0,"identical":false}.
+/// Equal images have "psnr":null and "identical":true (JSON has no infinity).
 std::string ImageMetricsJson(const ImageMetrics& m, const std::string& a, const std::string& b);
 
 /// Σ over the image of (none − img) in linear luminance (Rec. 709 weights): the light the
 /// image's shadows take away from the same render without shadows. The ratio of two
 /// images' totals says whether one has too little shadow (below 1) or too much; a hard
-/// shadow moves light around its edges but keeps the total. Throws Error if the sizes differ.
+/// shadow moves light around its edges but keeps the total. Pixels where the difference is
+/// NaN or infinite are left out. Throws Error if the sizes differ.
 double ShadowTotal(const Image& none, const Image& img);
 
 /// Turbo (Mikhailov 2019), Ruofei Du's polynomial fit: x in [0, 1] → sRGB in [0, 1].

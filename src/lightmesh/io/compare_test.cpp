@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -78,7 +79,7 @@ TEST(Compare, ImageWithItselfHasInfinitePsnr) {
     const std::string json = ImageMetricsJson(m, "a.png", "b \"2\".png");
     EXPECT_EQ(json,
               "{\"a\":\"a.png\",\"b\":\"b \\\"2\\\".png\",\"psnr\":null,\"ssim\":1,\"rmse\":0,"
-              "\"rmse_linear\":0,\"max_diff\":0,\"pixels\":1200,\"identical\":true}");
+              "\"rmse_linear\":0,\"max_diff\":0,\"pixels\":1200,\"nonfinite_a\":0,\"nonfinite_b\":0,\"identical\":true}");
 }
 
 // Noise of standard deviation σ in display units gives MSE = σ², PSNR = 20·log10(1/σ).
@@ -335,7 +336,7 @@ TEST(CompareCli, ExitCodesJsonAndDiff) {
     EXPECT_EQ(r.exitCode, 0) << r.output;
     EXPECT_EQ(r.output, "{\"a\":\"" + pa + "\",\"b\":\"" + pa +
                             "\",\"psnr\":null,\"ssim\":1,\"rmse\":0,\"rmse_linear\":0,\"max_diff\":0,"
-                            "\"pixels\":2400,\"identical\":true}\n");
+                            "\"pixels\":2400,\"nonfinite_a\":0,\"nonfinite_b\":0,\"identical\":true}\n");
 
     fs::remove(diff);
     r = Lightmesh("compare " + pa + " " + pb + " --json --diff " + diff + " --threshold-psnr 30");
@@ -352,11 +353,32 @@ TEST(CompareCli, ExitCodesJsonAndDiff) {
 
     r = Lightmesh("compare " + pa + " " + pc);
     EXPECT_EQ(r.exitCode, 1) << r.output;
-    EXPECT_NE(r.output.find("image sizes differ: 60x40 and 30x20"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("lightmesh: error: " + pa + " is 60x40 and " + pc +
+                            " is 30x20: images of different sizes cannot be compared\n"),
+              std::string::npos)
+        << r.output;
 
     r = Lightmesh("compare " + pa + " " + Temp("missing.png"));
     EXPECT_EQ(r.exitCode, 1) << r.output;
     EXPECT_NE(r.output.find("missing.png"), std::string::npos) << r.output;
+
+    // NaN in the judged image: counted, left out, and below any threshold (issue 56).
+    const std::string pn = Temp("cli_nan.exr");
+    Image withNan = a;
+    withNan.At(5, 5) = Color(std::numeric_limits<float>::quiet_NaN());
+    WriteImage(pn, withNan);
+    r = Lightmesh("compare " + pa + " " + pn + " --json --threshold-psnr 10");
+    EXPECT_EQ(r.exitCode, 3) << r.output;
+    EXPECT_NE(r.output.find("\"pixels\":2399,\"nonfinite_a\":0,\"nonfinite_b\":1,\"identical\":false"),
+              std::string::npos)
+        << r.output;
+    EXPECT_EQ(r.output.find("null"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("has 1 NaN or infinite pixels where " + pa + " has numbers: below any threshold"),
+              std::string::npos)
+        << r.output;
+    r = Lightmesh("compare " + pa + " " + pn);
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("; left out: 0 pixels NaN or infinite in A, 1 in B\n"), std::string::npos) << r.output;
 
     Image m(60, 40);
     for (int x = 0; x < 10; ++x) m.At(x, 0) = Color(1.0f);
@@ -364,6 +386,51 @@ TEST(CompareCli, ExitCodesJsonAndDiff) {
     r = Lightmesh("compare --json --mask " + mask + " " + pa + " " + pb);
     EXPECT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("\"pixels\":10,"), std::string::npos) << r.output;
+}
+
+// Issue 56: NaN and infinite pixels are counted and left out of every figure (they were
+// compared as 0: an all-NaN image was judged as black, and --json said "rmse_linear": null).
+TEST(Compare, NonFinitePixelsAreCountedAndLeftOut) {
+    const Image a = Gradient(40, 30), b = WithNoise(a, 0.02f);
+    Image bad = b, refA = a, refB = b;
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    bad.At(3, 4).g = nan;
+    bad.At(20, 10).r = inf;
+    bad.At(39, 29) = Color(nan);
+    // The same figures as comparing the finite pixels alone (through a mask leaving them out).
+    Image finite(40, 30);
+    for (Color& c : finite.pixels) c = Color(1.0f);
+    for (auto [x, y] : {std::pair{3, 4}, {20, 10}, {39, 29}}) finite.At(x, y) = Color(0.0f);
+    const ImageMetrics q = CompareImages(a, bad), want = CompareImages(a, b, &finite);
+    EXPECT_EQ(q.pixels, 40u * 30u - 3u);
+    EXPECT_EQ(q.nonFiniteA, 0u);
+    EXPECT_EQ(q.nonFiniteB, 3u);
+    EXPECT_EQ(q.nonFiniteOnlyInB, 3u);
+    EXPECT_TRUE(std::isfinite(q.rmseLinear));
+    EXPECT_DOUBLE_EQ(q.rmseLinear, want.rmseLinear);
+    EXPECT_DOUBLE_EQ(q.rmse, want.rmse);
+    EXPECT_DOUBLE_EQ(q.maxDiff, want.maxDiff);
+    EXPECT_NEAR(q.ssim, want.ssim, 2e-3);  // (the neighbours' windows leave the bad pixels out too)
+    EXPECT_FALSE(q.Identical());
+    EXPECT_NE(ImageMetricsJson(q, "a", "b").find("\"nonfinite_a\":0,\"nonfinite_b\":3,\"identical\":false"),
+              std::string::npos);
+    // The same NaN in both: not counted against B, and not identical either.
+    Image badA = a;
+    badA.At(39, 29) = Color(nan);
+    const ImageMetrics both = CompareImages(badA, badA);
+    EXPECT_EQ(both.nonFiniteOnlyInB, 0u);
+    EXPECT_EQ(both.rmse, 0.0);
+    EXPECT_FALSE(both.Identical());
+    // An all-NaN image is not black: there is nothing to compare.
+    Image allNan(40, 30);
+    for (Color& c : allNan.pixels) c = Color(nan);
+    try {
+        CompareImages(a, allNan);
+        ADD_FAILURE() << "an all-NaN image was compared";
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(), "no pixel is finite in both images: 0 of A's and 1,200 of B's have a NaN or infinite "
+                               "channel");
+    }
 }
 
 // End to end: area shadows give the same image for 1 and 3 threads, and `compare` says so.

@@ -31,6 +31,14 @@ ImageFormat ImageFormatFor(const std::string& path);
 /// atomically: a failure or an interruption leaves an existing file untouched.
 void WriteImage(const std::string& path, const Image& image);
 
+/// An image file's width and height from its head alone (a PNG's IHDR, an EXR's
+/// dataWindow), before anything is decoded: what reading it will cost can be judged first.
+/// Throws Error naming the file when the head is not one of these formats' or is cut short.
+struct ImageSize {
+    int width = 0, height = 0;
+};
+ImageSize ReadImageSize(const std::string& path);
+
 /// Reads a PNG (decoded from sRGB to linear) or an EXR. Throws Error naming the file.
 Image ReadImage(const std::string& path);
 /// ReadImage in a child process (util/isolated_child.h), for images a user hands over

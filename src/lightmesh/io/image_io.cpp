@@ -490,6 +490,59 @@ void WriteImage(const std::string& path, const Image& image) {
     });
 }
 
+ImageSize ReadImageSize(const std::string& path) {
+    const ImageFormat format = ImageFormatFor(path);
+    CheckRegularFile(path, "image");  // never blocks on a FIFO
+    std::ifstream in(path, std::ios::binary);
+    if (!in) ThrowErrorAt({path}, "cannot open: %s", std::strerror(errno));
+    auto u32 = [](const unsigned char* p, bool bigEndian) {
+        return bigEndian ? uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3]
+                         : uint32_t(p[3]) << 24 | uint32_t(p[2]) << 16 | uint32_t(p[1]) << 8 | p[0];
+    };
+    unsigned char head[24] = {};
+    in.read(reinterpret_cast<char*>(head), sizeof head);
+    if (format == ImageFormat::Png) {
+        // Signature, then the IHDR chunk: length, "IHDR", width, height (big-endian).
+        static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+        if (in.gcount() < 24 || std::memcmp(head, kSignature, 8) != 0 || std::memcmp(head + 12, "IHDR", 4) != 0)
+            ThrowErrorAt({path}, "not a PNG file (no PNG signature and IHDR chunk at its start)");
+        const uint32_t w = u32(head + 16, true), h = u32(head + 20, true);
+        if (w < 1 || h < 1 || w > INT32_MAX || h > INT32_MAX) ThrowErrorAt({path}, "PNG of size %ux%u", w, h);
+        return {static_cast<int>(w), static_cast<int>(h)};
+    }
+    // EXR: magic, version, then attributes (name, type, size, value) up to an empty name.
+    if (in.gcount() < 8 || u32(head, false) != 20000630u) ThrowErrorAt({path}, "not an OpenEXR file (no EXR magic number)");
+    in.seekg(8);
+    auto text = [&](std::string* out) {
+        out->clear();
+        for (int c; (c = in.get()) != EOF;) {
+            if (c == 0) return true;
+            if (out->size() >= 255) return false;
+            *out += static_cast<char>(c);
+        }
+        return false;
+    };
+    for (int attributes = 0; attributes < 4096; ++attributes) {
+        std::string name, type;
+        if (!text(&name)) break;
+        if (name.empty()) break;  // the header's end: no dataWindow
+        unsigned char size[4];
+        if (!text(&type) || !in.read(reinterpret_cast<char*>(size), 4)) break;
+        const uint32_t bytes = u32(size, false);
+        if (name == "dataWindow" && type == "box2i" && bytes == 16) {
+            unsigned char box[16];
+            if (!in.read(reinterpret_cast<char*>(box), 16)) break;
+            const int64_t w = int64_t(int32_t(u32(box + 8, false))) - int32_t(u32(box, false)) + 1;
+            const int64_t h = int64_t(int32_t(u32(box + 12, false))) - int32_t(u32(box + 4, false)) + 1;
+            if (w < 1 || h < 1 || w > INT32_MAX || h > INT32_MAX)
+                ThrowErrorAt({path}, "EXR of size %lldx%lld", static_cast<long long>(w), static_cast<long long>(h));
+            return {static_cast<int>(w), static_cast<int>(h)};
+        }
+        in.seekg(bytes, std::ios::cur);
+    }
+    ThrowErrorAt({path}, "cannot read EXR: its header has no dataWindow or is cut short");
+}
+
 Image ReadImage(const std::string& path) {
     const ImageFormat format = ImageFormatFor(path);
     CheckRegularFile(path, "image");  // never blocks on a FIFO
@@ -500,8 +553,11 @@ Image ReadImage(const std::string& path) {
         return format == ImageFormat::Png ? ReadPng(path) : ReadExr(path);
     } catch (const Error&) {
         throw;
+    } catch (const std::bad_alloc&) {
+        ThrowErrorAt({path}, "reading it needs more memory than this process may use");
     } catch (const std::exception& e) {
-        ThrowErrorAt({path}, "cannot read EXR: %s", e.what());
+        // (A PNG's failure was worded "cannot read EXR: std::bad_alloc".)
+        ThrowErrorAt({path}, "cannot read %s: %s", format == ImageFormat::Png ? "PNG" : "EXR", e.what());
     }
 }
 
@@ -539,8 +595,8 @@ Image ReadImageIsolated(const std::string& path) {
         case ChildOutcome::End::TimedOut:
             ThrowErrorAt({path}, "the image reader did not finish within %.0f s and was stopped", child.seconds);
         case ChildOutcome::End::Signalled:
-            ThrowErrorAt({path}, "the image reader crashed on it (signal %d, %s)", child.code,
-                         SignalName(child.code).c_str());
+            ThrowErrorAt({path}, "the image reader crashed on it (signal %d, %s)%s", child.code,
+                         SignalName(child.code).c_str(), child.Said().c_str());
         case ChildOutcome::End::Exited: break;
     }
     try {

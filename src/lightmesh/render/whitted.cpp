@@ -9,6 +9,7 @@
 #include "lightmesh/render/texturing.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/parallel.h"
+#include "lightmesh/util/progress.h"
 
 namespace lm {
 
@@ -248,10 +249,8 @@ void WhittedRenderer::RenderTile(int tile, Image* image, RenderCounters& counter
 
 double WhittedRenderer::EstimateSeconds(int samples) const {
     const int tiles = TileCount();
-    const int n = std::clamp(samples, 1, tiles);
-    std::vector<int> picked(static_cast<size_t>(n));
-    for (int i = 0; i < n; ++i)
-        picked[static_cast<size_t>(i)] = static_cast<int>((static_cast<int64_t>(i) * 2 + 1) * tiles / (2 * static_cast<int64_t>(n)));
+    const std::vector<int64_t> picked = SpreadOverGrid(TilesX(), tiles / TilesX(), std::max(samples, 1));
+    const int n = static_cast<int>(picked.size());
     // Two interleaved halves timed apart, the faster one counted: a machine shared with
     // other work (a build beside the bench) spoils one half more often than both.
     auto time = [&](int parity) {
@@ -261,7 +260,7 @@ double WhittedRenderer::EstimateSeconds(int samples) const {
             Image scratch(kTileSize, kTileSize);
             RenderCounters counters;
             for (int i = range.begin(); i != range.end(); ++i) {
-                const int tile = picked[static_cast<size_t>(2 * i + parity)];
+                const int tile = static_cast<int>(picked[static_cast<size_t>(2 * i + parity)]);
                 RenderTile(tile, &scratch, counters, (tile % TilesX()) * kTileSize, (tile / TilesX()) * kTileSize);
             }
         });
@@ -275,9 +274,28 @@ RenderResult WhittedRenderer::Render(ProgressReporter* progress) const {
     RenderResult result;
     result.image = Image(options_.width, options_.height);
     std::vector<RenderCounters> tileCounters(static_cast<size_t>(TileCount()));
+    // With a progress reporter, a sample of tiles spread over the image goes first, so the
+    // time estimate comes from the whole image and not from its first rows (issue 56); each
+    // tile is rendered once, wherever it comes, so the image is the same.
+    std::vector<int64_t> sample;
+    std::vector<char> sampled;
+    if (progress) {
+        sample = SpreadOverGrid(TilesX(), TileCount() / TilesX(), kEstimateTiles);
+        sampled.assign(static_cast<size_t>(TileCount()), 0);
+        for (const int64_t tile : sample) sampled[static_cast<size_t>(tile)] = 1;
+        progress->BeginWork(static_cast<int64_t>(sample.size()), "tiles spread over the image");
+    }
     const auto start = std::chrono::steady_clock::now();
+    ParallelFor(tbb::blocked_range<int>(0, static_cast<int>(sample.size()), 1), [&](const tbb::blocked_range<int>& range) {
+        for (int i = range.begin(); i != range.end() && !progress->Stopped(); ++i) {
+            const int tile = static_cast<int>(sample[static_cast<size_t>(i)]);
+            RenderTile(tile, &result.image, tileCounters[tile]);
+            progress->Update(1);
+        }
+    });
     ParallelFor(tbb::blocked_range<int>(0, TileCount(), 1), [&](const tbb::blocked_range<int>& range) {
         for (int tile = range.begin(); tile != range.end(); ++tile) {
+            if (!sampled.empty() && (sampled[static_cast<size_t>(tile)] || progress->Stopped())) continue;
             RenderTile(tile, &result.image, tileCounters[tile]);
             if (progress) progress->Update(1);
         }

@@ -44,8 +44,12 @@ class WhittedRenderer {
 
     /// Renders the whole image in parallel over kTileSize² tiles. Every pixel depends only
     /// on its own rays, so the image is the same for any number of threads (or processes:
-    /// RenderTile renders any subset of the tiles into the same pixels).
+    /// RenderTile renders any subset of the tiles into the same pixels). With `progress`,
+    /// kEstimateTiles tiles spread over the image (SpreadOverGrid) are rendered first, the
+    /// reporter's sample for its estimate (ProgressReporter::BeginWork); once it says
+    /// Stopped() (its RefuseIfLonger limit passed), no more tiles are rendered.
     RenderResult Render(ProgressReporter* progress = nullptr) const;
+    static constexpr int kEstimateTiles = 64;
     /// Tiles of the image, row by row: tile t covers the pixels from
     /// ((t % tilesX)·kTileSize, (t / tilesX)·kTileSize), clipped to the image.
     static constexpr int kTileSize = 16;
@@ -61,7 +65,7 @@ class WhittedRenderer {
     /// (a tile-sized scratch image).
     void RenderTile(int tile, Image* image, RenderCounters& counters, int originX = 0, int originY = 0) const;
     /// The seconds the whole render would take, from `samples` of its tiles spread evenly
-    /// over the image (all of them if it has no more), rendered in parallel into scratch
+    /// over the image (SpreadOverGrid; all of them if it has no more), rendered in parallel into scratch
     /// images in two interleaved halves: the faster half's wall time per tile × tiles.
     /// `bench` estimates its matrix so (issue 45); the lazily evaluated work a render shares
     /// between neighbouring tiles (the light mesh's nodes) is shared less among spread

@@ -9,6 +9,7 @@
 #include <assimp/DefaultLogger.hpp>
 #include <assimp/Importer.hpp>
 #include <assimp/LogStream.hpp>
+#include <assimp/MemoryIOWrapper.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -133,7 +134,10 @@ class AssimpAssertion : public std::runtime_error {
 /// writing.
 class RegularFilesOnly : public Assimp::DefaultIOSystem {
   public:
-    explicit RegularFilesOnly(std::vector<std::string>* refused) : refused_(refused) {}
+    /// `replacement`, if not empty, is read in place of the file `replaced` (a glTF whose
+    /// data: URIs were repaired, RepairGltfDataUris).
+    explicit RegularFilesOnly(std::vector<std::string>* refused, std::string replaced = "", std::string replacement = "")
+        : refused_(refused), replaced_(std::move(replaced)), replacement_(std::move(replacement)) {}
     bool Exists(const char* file) const override {
         return file && RegularFileProblem(file, "file").empty();
     }
@@ -143,6 +147,8 @@ class RegularFilesOnly : public Assimp::DefaultIOSystem {
             refused_->push_back(std::string(file) + ": refused to open for writing");
             return nullptr;
         }
+        if (!replacement_.empty() && replaced_ == file)
+            return new Assimp::MemoryIOStream(reinterpret_cast<const uint8_t*>(replacement_.data()), replacement_.size());
         const std::string problem = RegularFileProblem(file, "file");
         if (!problem.empty()) {
             if (problem != "no such file")
@@ -154,6 +160,7 @@ class RegularFilesOnly : public Assimp::DefaultIOSystem {
 
   private:
     std::vector<std::string>* refused_;
+    std::string replaced_, replacement_;
 };
 
 // ---------------------------------------------------------------------------------------
@@ -417,56 +424,6 @@ void CheckReadable(const std::string& path) {
                             true);
 }
 
-/// Assimp 5.2's OBJ reader looks each `o` name up among the objects so far, one by one:
-/// its time grows with the square of their number (200,000 objects: 41 s), inside Assimp,
-/// where lightmesh cannot change it. The `o` lines are counted first (a pass over the file
-/// at memory speed) and the time estimated at kObjSecondsPerObjectPair (measured here:
-/// 50,000 objects 2.1 s, 200,000 about 40 s): past the import deadline the file is refused
-/// at once; past kAnnouncedObjSeconds a warning says what is coming.
-void CheckObjObjectCount(const std::string& path) {
-    std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : "";
-    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (ext != ".obj") return;
-    const int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-    if (fd < 0) return;
-    uint64_t objects = 0;
-    enum { kLineStart, kSawO, kRest } state = kLineStart;  // "o NAME", blanks allowed before
-    std::vector<char> buf(1 << 20);
-    for (;;) {
-        const ssize_t n = read(fd, buf.data(), buf.size());
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) break;
-        for (ssize_t i = 0; i < n; ++i) {
-            const char c = buf[static_cast<size_t>(i)];
-            if (c == '\n') {
-                state = kLineStart;
-            } else if (state == kLineStart) {
-                if (c == 'o') state = kSawO;
-                else if (c != ' ' && c != '\t' && c != '\r') state = kRest;
-            } else if (state == kSawO) {
-                objects += c == ' ' || c == '\t';
-                state = kRest;
-            }
-        }
-    }
-    close(fd);
-    const double seconds = kObjSecondsPerObjectPair * static_cast<double>(objects) * static_cast<double>(objects);
-    const double deadline = ImportTimeoutSeconds(path);
-    if (seconds > deadline)
-        throw MeshFileError(
-            path,
-            StringPrintf("%s objects (`o` lines): Assimp's OBJ reader takes time growing with the square of their "
-                         "number, about %s here, more than the import deadline of %s (LIGHTMESH_IMPORT_TIMEOUT "
-                         "raises it); merge the objects, or convert the file to glTF",
-                         Thousands(objects).c_str(), FormatDuration(seconds).c_str(), FormatDuration(deadline).c_str()),
-            true);
-    if (seconds > kAnnouncedObjSeconds)
-        LogWarning(path + StringPrintf(": %s objects (`o` lines): Assimp's OBJ reader takes time growing with the "
-                                       "square of their number, about %s here (merge the objects, or convert the "
-                                       "file to glTF)",
-                                       Thousands(objects).c_str(), FormatDuration(seconds).c_str()));
-}
-
 /// Assimp's error string as a reason.
 std::string ImportErrorReason(std::string err, const ImportBudget& budget) {
     if (err.rfind("No suitable reader found", 0) == 0)
@@ -494,21 +451,24 @@ LoadedMesh ImportMeshInProcess(const std::string& path, const MeshLoadOptions& o
                                const ImportBudget& budget) {
     CheckReadable(path);
     CheckGltfHierarchy(path, budget);
-    mesh_import::CheckObjObjectCount(path);
     LoadedMesh out;
     std::vector<std::string> log, refused;
     try {
         ScopedAssimpLog scopedLog(&log);
         Assimp::Importer importer;
-        importer.SetIOHandler(new RegularFilesOnly(&refused));
+        importer.SetIOHandler(new RegularFilesOnly(&refused, path, mesh_import::RepairGltfDataUris(path, &out.warnings)));
         // Triangulate polygons; split meshes by primitive type so points and lines sit in
         // meshes of their own, which the walk skips. No normals are generated: shading
         // uses face normals where the file has none. Instances are expanded by the walk
         // (not aiProcess_PreTransformVertices) so node names stay available to excludes.
         // A material's texture-coordinate transform (glTF's KHR_texture_transform, 3DS and
         // ASE tiling and offsets) is applied to the coordinates themselves.
+        // OBJ files come through tinyobjloader (UseTinyObjReader), their vertices welded.
+        const bool tinyObj = mesh_import::UseTinyObjReader(&importer);
+        importer.SetPropertyBool(mesh_import::kObjMergeObjects, options.excludeNames.empty());
         const unsigned flags = aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_TransformUVCoords |
-                               aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure;
+                               (tinyObj && mesh_import::HasObjExtension(path) ? 0u : aiProcess_JoinIdenticalVertices) |
+                               aiProcess_ValidateDataStructure;
         const aiScene* scene = importer.ReadFile(path, flags);
         if (!scene) {
             std::string err = ImportErrorReason(importer.GetErrorString(), budget);

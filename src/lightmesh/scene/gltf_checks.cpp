@@ -50,8 +50,20 @@ void CheckGltfHierarchy(const std::string& path, const ImportBudget& budget) {
     if (ext != ".gltf" && ext != ".glb") return;
     const std::string text = GltfJson(path, ext);
     if (text.empty()) return;
-    const nlohmann::json j = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
-    if (j.is_discarded() || !j.is_object()) return;  // Assimp reports it
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(text);
+    } catch (const nlohmann::json::exception& e) {
+        // Its place and the token, not Assimp's "no reader for this file format" (bare NaN or
+        // Infinity tokens, which JSON does not have, made it say so).
+        std::string what = e.what();
+        if (const size_t at = what.find("parse error at "); at != std::string::npos)
+            what = "at " + what.substr(at + 15);
+        else if (const size_t end = what.find("] "); what.rfind("[json.exception.", 0) == 0 && end != std::string::npos)
+            what = what.substr(end + 2);  // a number beyond double's range
+        throw MeshFileError(path, "its glTF JSON does not parse, " + Printable(what), true);
+    }
+    if (!j.is_object()) return;  // Assimp reports it
     const auto nodesIt = j.find("nodes");
     if (nodesIt == j.end() || !nodesIt->is_array()) return;
     const nlohmann::json& nodes = *nodesIt;
@@ -125,6 +137,51 @@ void CheckGltfHierarchy(const std::string& path, const ImportBudget& budget) {
                                                  : Thousands(instances).c_str(),
                          Thousands(budget.nodes).c_str()),
             true);
+}
+
+std::string RepairGltfDataUris(const std::string& path, std::vector<std::string>* warnings) {
+    if (LowerExtension(path) != ".gltf") return "";
+    const std::string text = GltfJson(path, ".gltf");
+    nlohmann::json j = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
+    if (j.is_discarded() || !j.is_object() || !j.contains("images") || !j["images"].is_array()) return "";
+    bool changed = false;
+    nlohmann::json& images = j["images"];
+    for (size_t i = 0; i < images.size(); ++i) {
+        if (!images[i].is_object() || !images[i].contains("uri") || !images[i]["uri"].is_string()) continue;
+        const std::string uri = images[i]["uri"].get<std::string>();
+        const size_t comma = uri.find(',');
+        if (uri.rfind("data:", 0) != 0 || comma == std::string::npos || comma < 12 ||
+            uri.compare(comma - 7, 7, ";base64") != 0)
+            continue;
+        std::string payload = uri.substr(comma + 1);
+        std::string which = "image " + std::to_string(i);
+        if (images[i].contains("name") && images[i]["name"].is_string())
+            which += " (\"" + images[i]["name"].get<std::string>() + "\")";
+        const std::string rest = "; the materials using it get their flat colour";
+        if (payload.empty()) {
+            warnings->push_back(path + ": " + which + ": its data: URI holds no bytes" + rest);
+            continue;
+        }
+        const size_t bad = payload.find_first_not_of(
+            "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/=");
+        const size_t pad = payload.find('=');
+        const bool padded = pad == std::string::npos || payload.find_first_not_of('=', pad) == std::string::npos;
+        if (bad != std::string::npos || !padded || payload.size() % 4 == 1) {
+            warnings->push_back(
+                path + ": " + which + ": its data: URI is not base64 (" +
+                (bad != std::string::npos ? "\"" + Printable(payload.substr(bad, 1)) + "\" at character " +
+                                                std::to_string(bad + 1) + " of " + std::to_string(payload.size())
+                                          : std::string("cut short or padded inside")) +
+                ")" + rest);
+            images[i]["uri"] = uri.substr(0, comma + 1);  // as an empty payload: no image
+            changed = true;
+        } else if (payload.size() % 4 != 0) {
+            payload.append(4 - payload.size() % 4, '=');  // unpadded: Assimp 5.2 refused the whole file
+            images[i]["uri"] = uri.substr(0, comma + 1) + payload;
+            changed = true;
+        }
+    }
+    return changed ? j.dump() : "";
 }
 
 }  // namespace mesh_import

@@ -224,14 +224,15 @@ LoadedMesh ImportIsolated(const std::string& path, const MeshLoadOptions& option
         }
         case ChildOutcome::End::Signalled:
             throw MeshFileError(path,
-                                StringPrintf("the importer crashed (signal %d%s%s)", child.code,
+                                StringPrintf("the importer crashed (signal %d%s%s)%s", child.code,
                                              ImporterSignal(child.code).empty() ? "" : ", ",
-                                             ImporterSignal(child.code).c_str()),
+                                             ImporterSignal(child.code).c_str(), child.Said().c_str()),
                                 true);
         case ChildOutcome::End::Exited: break;
     }
     if (child.code != 0 || child.Bytes().empty())
-        throw MeshFileError(path, StringPrintf("the importer crashed (exit status %d)", child.code), true);
+        throw MeshFileError(path, StringPrintf("the importer crashed (exit status %d)%s", child.code, child.Said().c_str()),
+                            true);
     try {
         return ReadResult(path, child.Bytes());
     } catch (const MeshFileError&) {

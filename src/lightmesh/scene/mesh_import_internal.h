@@ -1,7 +1,8 @@
 // mesh_import_internal.h -- what the parts of the mesh import share; not part of
 // mesh_loader.h's interface. The parts: mesh_loader.cpp (the entry points), assimp_import.cpp
-// (the import itself, ImportMeshInProcess), assimp_material.cpp (materials), gltf_checks.cpp
-// (glTF node graphs) and isolated_import.cpp (the child process).
+// (the import itself, ImportMeshInProcess), assimp_material.cpp (materials), obj_import.cpp
+// (OBJ files, in Assimp's OBJ importer's place), gltf_checks.cpp (glTF node graphs) and
+// isolated_import.cpp (the child process).
 #pragma once
 
 #include <cstdint>
@@ -12,6 +13,9 @@
 #include "lightmesh/util/isolated_child.h"
 
 struct aiMaterial;
+namespace Assimp {
+class Importer;
+}
 struct aiScene;
 
 namespace lm {
@@ -28,13 +32,6 @@ bool KnownImporterNoise(const std::string& message);
 /// Checks what Assimp would report less clearly: a missing file, a directory, a FIFO, an
 /// empty or unreadable file, one whose first 4 KiB are all NUL bytes.
 void CheckReadable(const std::string& path);
-/// Assimp's OBJ reader is quadratic in the number of `o` objects: an .obj file's are
-/// counted and the time estimated; past the import deadline it is refused (MeshFileError),
-/// past kAnnouncedObjSeconds a warning says how long it will take.
-void CheckObjObjectCount(const std::string& path);
-/// Seconds per pair of `o` objects in Assimp 5.2's OBJ reader (200,000 objects: 40 s).
-inline constexpr double kObjSecondsPerObjectPair = 1e-9;
-inline constexpr double kAnnouncedObjSeconds = 10;
 /// Assimp's error string as a reason.
 std::string ImportErrorReason(std::string err, const ImportBudget& budget);
 
@@ -50,11 +47,29 @@ extern int gResultFd;
 Material MaterialFromFile(const aiMaterial& am, const aiScene& scene, const std::string& modelPath,
                           std::vector<TextureSource>* textures, std::vector<std::string>* warnings);
 
+// obj_import.cpp
+/// Replaces `importer`'s OBJ reader (Assimp 5.2's is quadratic in the file's `o` objects)
+/// by tinyobjloader's, laid out as Assimp's: same nodes, meshes and material keys, the
+/// vertices welded as aiProcess_JoinIdenticalVertices would weld them (so that step is left
+/// out for OBJ files). False, leaving Assimp's, when LIGHTMESH_OBJ_READER=assimp.
+bool UseTinyObjReader(Assimp::Importer* importer);
+/// Whether `path` ends in .obj (any case).
+bool HasObjExtension(const std::string& path);
+/// The importer's property (bool) that merges an OBJ's objects and groups into a mesh per
+/// run of one material on the root node, for an import whose excludes name no node or mesh
+/// (200,000 one-triangle objects make 200,000 meshes of Assimp's otherwise: 1.5 s).
+inline constexpr const char* kObjMergeObjects = "LIGHTMESH_OBJ_MERGE_OBJECTS";
+
 // gltf_checks.cpp
 
 /// A .gltf's or .glb's node graph checked for cycles, depth and expansion against the budget
 /// before Assimp sees it (MeshFileError); other files, and JSON Assimp rejects anyway, pass.
 void CheckGltfHierarchy(const std::string& path, const ImportBudget& budget);
+/// A .gltf's JSON with its images' data: URIs made what Assimp reads, or "" when none needs
+/// it: a payload that is not base64 becomes empty (no image, the flat colour; Assimp 5.2
+/// refused the whole file), an unpadded one is padded; each, and an empty payload (which
+/// Assimp drops without a word), gets a warning in *warnings naming the image.
+std::string RepairGltfDataUris(const std::string& path, std::vector<std::string>* warnings);
 
 // isolated_import.cpp
 

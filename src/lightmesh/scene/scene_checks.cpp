@@ -4,6 +4,7 @@
 #include "lightmesh/scene/scene_load.h"
 
 #include <cmath>
+#include <optional>
 
 #include "lightmesh/geometry/instances.h"
 #include "lightmesh/geometry/mesh.h"
@@ -116,18 +117,27 @@ void CheckExtent(const Reader& r, const std::string& path, const Scene& scene) {
 /// Whether p is inside a closed solid of the mesh: the number of surfaces crossed on the
 /// way out of the scene's box is odd along each of six spread-out directions -- the parity
 /// rule of the light mesh's inside test (СТ). Unanimity, rather than a majority, keeps an
-/// open shape (a lampshade, a room without a ceiling) from being taken for a solid.
-bool InsideASolid(const TriangleMesh& mesh, const Bounds3& box, const Vec3& p) {
+/// open shape (a lampshade, a room without a ceiling) from being taken for a solid. Counted
+/// over every triangle, an open surface crossed on some ways out (a floor under a box) makes
+/// those counts even, so the test is made again over the closed parts alone (*parts,
+/// found on first need): inside either way is inside.
+bool InsideASolid(const TriangleMesh& mesh, const Bounds3& box, const Vec3& p, std::optional<ClosedParts>* parts) {
     if (!box.Contains(p)) return false;
     const float reach = 1.01f * Length(box.Diagonal()) + 1.0f;
     const Vec3 directions[6] = {{1, 0.37f, 0.21f},  {-0.29f, 1, 0.43f},   {0.31f, -0.23f, 1},
                                 {-1, -0.41f, 0.17f}, {0.19f, -1, -0.33f}, {-0.27f, 0.13f, -1}};
-    for (const Vec3& d : directions) {
-        const Vec3 out = p + Normalize(d) * reach;
-        if (!IsFinite(out)) return false;  // no room to test in float; assume outside
-        if ((CountCrossings(mesh, Segment(p, out)) & 1) == 0) return false;
-    }
-    return true;
+    auto inside = [&](const ClosedParts* only) {
+        for (const Vec3& d : directions) {
+            const Vec3 out = p + Normalize(d) * reach;
+            if (!IsFinite(out)) return false;  // no room to test in float; assume outside
+            const Ray segment = Segment(p, out);
+            if (((only ? CountCrossings(mesh, segment, *only) : CountCrossings(mesh, segment)) & 1) == 0) return false;
+        }
+        return true;
+    };
+    if (inside(nullptr)) return true;
+    if (!*parts) *parts = FindClosedParts(mesh);
+    return inside(&**parts);
 }
 
 /// Fails on the first light inside a closed solid that the camera is outside of: it would
@@ -141,10 +151,11 @@ bool InsideASolid(const TriangleMesh& mesh, const Bounds3& box, const Vec3& p) {
 /// node of the room is flagged inside, and СТ falls back to P's shadow rays.)
 void CheckLightsOutsideSolids(const Reader& r, const Scene& scene) {
     const Bounds3 box = scene.mesh.Bounds();
-    if (InsideASolid(scene.mesh, box, scene.camera.position)) return;
+    std::optional<ClosedParts> parts;
+    if (InsideASolid(scene.mesh, box, scene.camera.position, &parts)) return;
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         if (!box.Contains(scene.lights[i].position)) continue;
-        if (InsideASolid(scene.mesh, box, scene.lights[i].position))
+        if (InsideASolid(scene.mesh, box, scene.lights[i].position, &parts))
             r.Fail(Index("/lights", i) + "/position",
                    "the light " + FormatVec(scene.lights[i].position) +
                        " is inside a closed object, so it would light nothing (lights must be "

@@ -510,6 +510,12 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
     for (const MeshEntry& e : entries) ++groupRefs[groupKey(e)];
     std::unordered_map<std::string, uint32_t> prototypeOf;
     std::shared_ptr<InstancedMeshes> instances;
+    // The triangles the copied references will hold, counted at each file's first import
+    // (its triangles times its references): past the budget the scene is refused there,
+    // before the copies are made (a million references under --no-instancing ran for
+    // minutes into Embree's "out of memory" at 14.5 GB).
+    uint64_t copiedTriangles = 0;
+    std::unordered_set<std::string> copiedGroups;
     auto place = [&](const MeshEntry& e, uint32_t proto) {
         const Affine toWorld = e.hasTransform ? e.transform : Affine{};
         const size_t before = instances->Instances().size();
@@ -523,6 +529,16 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
     };
     std::unordered_map<std::string, LoadedMesh> imported;
     std::unordered_set<std::string> said;  // the clean-up's warnings, once per file and message
+    // A warning about a file's references (a pattern that excluded nothing, every mesh
+    // excluded) is said once, at its first reference, with the count of the others: one
+    // pattern over 1,024 references printed 1,024 to 3,072 lines.
+    std::vector<std::pair<std::string, size_t>> repeated;  // (message, references), in order
+    std::unordered_map<std::string, size_t> repeatedAt;
+    auto warnOnce = [&](const std::string& key, const std::string& message) {
+        const auto [at, added] = repeatedAt.try_emplace(key, repeated.size());
+        if (added) repeated.push_back({message, 0});
+        ++repeated[at->second].second;
+    };
     TextureCache textureCache;  // each image read once, however many models name it
     for (const MeshEntry& e : entries) {
         const std::string filePath = e.path + "/file";
@@ -555,8 +571,9 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
                 if (matched[k]) continue;
                 const std::string path =
                     e.path + "/" + key + (list ? "/" + std::to_string(k) : std::string());
-                r.Warn(r.Where(path) + ": pattern " + Quoted(patterns[k]) + " matched no " + what +
-                       " of " + Quoted(e.file));
+                warnOnce(std::string(key) + '\0' + patterns[k] + '\0' + e.file,
+                         r.Where(path) + ": pattern " + Quoted(patterns[k]) + " matched no " + what + " of " +
+                             Quoted(e.file));
             }
         };
         warnUnmatched("exclude_materials", e.load.excludeMaterials, loaded.excludeMaterialsMatched,
@@ -566,7 +583,7 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
         scene.report.meshesExcluded += loaded.meshesExcluded;
         scene.report.sources.push_back(e.resolved);
         if (loaded.mesh.TriangleCount() == 0) {
-            r.Warn(r.Where(e.path) + ": every mesh of " + Quoted(e.file) + " was excluded");
+            warnOnce(std::string("excluded") + '\0' + key, r.Where(e.path) + ": every mesh of " + Quoted(e.file) + " was excluded");
             continue;
         }
         const std::string group = groupKey(e);
@@ -577,6 +594,26 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
         const bool texturesOn = options.textures && scene.render.textures && e.material < 0;
         const bool instanced = options.instancing && scene.render.instancing &&
                                InstancesSaveMemory(groupRefs[group], loaded.mesh.TriangleCount());
+        if (!instanced && copiedGroups.insert(group).second) {
+            const uint64_t refs = static_cast<uint64_t>(groupRefs[group]);
+            copiedTriangles += refs * loaded.mesh.TriangleCount();
+            if (const std::string over = CopiesOverBudget(copiedTriangles); !over.empty()) {
+                const std::string why = !options.instancing      ? " (" + options.noInstancingBy + ")"
+                                        : !scene.render.instancing ? " (\"instancing\": false at /render/instancing)"
+                                                                   : "";
+                const std::string hint = !options.instancing || !scene.render.instancing
+                                             ? "; with instancing on, a file referenced many times is placed as "
+                                               "instances of one import"
+                                             : "";
+                r.Fail(e.path, Quoted(e.file) +
+                                   StringPrintf(" (%s triangles) is referenced %s times and copied each time%s: the "
+                                                "scene's copies, %s triangles, ",
+                                                FormatCount(loaded.mesh.TriangleCount()).c_str(),
+                                                FormatCount(refs).c_str(), why.c_str(),
+                                                FormatCount(copiedTriangles).c_str()) +
+                                   over + hint);
+            }
+        }
         if (e.hasTransform && !instanced) {
             TransformMesh(&loaded.mesh, e.transform);
             for (const Vec3& p : loaded.mesh.positions)
@@ -623,6 +660,10 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
         }
         scene.mesh.Append(loaded.mesh);
     }
+    for (const auto& [message, count] : repeated)
+        r.Warn(count == 1 ? message
+                          : message + " (and in " + FormatCount(count - 1) +
+                                (count == 2 ? " other reference to it)" : " other references to it)"));
     // Triangles repeated across meshes (the same file placed twice at the same spot).
     const CleanReport across = CleanMesh(&scene.mesh);
     scene.report.degenerateRemoved += across.degenerate;

@@ -35,6 +35,9 @@ struct SceneLoadOptions {
     /// References to one mesh file that InstancesSaveMemory's rule picks become instances of
     /// one prototype (TriangleMesh::instances); false flattens every reference.
     bool instancing = true;
+    /// Who turned instancing off, for the message that refuses copies past the memory
+    /// budget ("--no-instancing"; bench names itself).
+    std::string noInstancingBy = "--no-instancing";
     /// For tests and fuzzing: loads the mesh files of a JSON scene instead of LoadMeshFile.
     std::function<LoadedMesh(const std::string& path, const MeshLoadOptions&)> loadMesh = nullptr;
 };

@@ -640,8 +640,8 @@ TEST(SceneFile, BadInputsGiveExactMessages) {
                      "for this file format",
          .meshes = R"([{"file": "notes.xyz"}])"},
         {.name = "mesh_truncated",
-         .expected = "scene.json /meshes/0/file: cannot read \"truncated.obj\": OBJ: vertex index "
-                     "out of range",
+         .expected = "scene.json /meshes/0/file: cannot read \"truncated.obj\": OBJ: line 4: face corner \"9\" "
+                     "refers to vertex 9, but 3 vertices are defined before it",
          .meshes = R"([{"file": "truncated.obj"}])"},
         {.name = "mesh_lines",
          .expected = "scene.json /meshes/0/file: \"lines.obj\": no triangles (only points/lines)",
@@ -748,6 +748,31 @@ TEST(SceneFile, CorruptedScenesThrowOnlyErrors) {
         }
     }
     EXPECT_GT(loaded, 0);
+}
+
+// Issue 56: one pattern that excludes nothing, over 1,024 references to one file, is one
+// warning with the count (it was 1,024 of them, and 3,072 with every mesh excluded).
+TEST(SceneFile, AWarningAboutAFilesReferencesIsSaidOnce) {
+    const std::string folder = TempFolder();
+    std::string meshes;
+    for (int i = 0; i < 1024; ++i)
+        meshes += std::string(i ? ", " : "") + R"({"file": "$DATA/two_boxes.obj", "exclude_materials": ["Nothing*"], )" +
+                  R"("exclude_names": "*", "transform": {"translate": [)" + std::to_string(3 * i) + ", 0, 0]}}";
+    const std::string path = WriteFile(
+        folder, "scene.json",
+        Replace(R"({"camera": {"position": [0, 1, 5], "look_at": [0, 0, 0]}, "lights": [{"position": [0, 5, 0]}],
+                    "meshes": [)" + meshes + R"(, {"file": "$DATA/two_boxes.obj"}]})",
+                "$DATA", DataDir));
+    std::vector<std::string> warnings;
+    LoadScene(path, {}, &warnings);
+    for (std::string& w : warnings) w = Replace(w, folder + "/", "");
+    const std::vector<std::string> expected = {
+        "scene.json /meshes/0/exclude_materials/0: pattern \"Nothing*\" matched no material of \"" + DataDir +
+            "/two_boxes.obj\" (and in 1,023 other references to it)",
+        "scene.json /meshes/0: every mesh of \"" + DataDir +
+            "/two_boxes.obj\" was excluded (and in 1,023 other references to it)",
+    };
+    EXPECT_EQ(warnings, expected);
 }
 
 TEST(SceneFile, UnknownAndDuplicateKeysWarn) {

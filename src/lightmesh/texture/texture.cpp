@@ -10,6 +10,7 @@
 
 #include "lightmesh/io/image.h"
 #include "lightmesh/util/error.h"
+#include "lightmesh/util/system.h"
 
 // A second, private instance of stb's decoder (image_io.cpp's reads PNG only): the formats
 // textures come in.
@@ -272,6 +273,15 @@ DecodedImage ReadImageFile(const std::string& path) {
     std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : "";
     for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     if (ext == ".exr") {
+        // Its size from its header first: one past the textures' limit is not decoded.
+        ImageSize head;
+        try {
+            head = ReadImageSize(path);
+        } catch (const Error&) {  // ReadImage says what is wrong with it
+        }
+        if (head.width > kMaxTextureSize || head.height > kMaxTextureSize)
+            ThrowError("the image is %d x %d, beyond the %d x %d textures may have; not read", head.width, head.height,
+                       kMaxTextureSize, kMaxTextureSize);
         const Image exr = ReadImage(path);
         if (exr.width > kMaxTextureSize || exr.height > kMaxTextureSize)
             ThrowError("the image is %d x %d, beyond the %d x %d textures may have", exr.width, exr.height,
@@ -287,10 +297,42 @@ DecodedImage ReadImageFile(const std::string& path) {
         }
         return image;
     }
-    std::ifstream in(path, std::ios::binary);
+    // The format and size are judged from the file's head before it is read whole (issue
+    // 56: a 20 GB sparse file named .png was read for 38 s and 7.9 GB before a warning).
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
     if (!in) ThrowError("cannot open it");
-    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (in.bad()) ThrowError("cannot read it");
+    const auto end = in.tellg();
+    const uint64_t size = end > 0 ? static_cast<uint64_t>(end) : 0;
+    in.seekg(0);
+    std::string bytes(static_cast<size_t>(std::min<uint64_t>(size, kImageProbeBytes)), '\0');
+    in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    if (in.bad() || static_cast<size_t>(in.gcount()) != bytes.size()) ThrowError("cannot read it");
+    if (size > bytes.size()) {
+        const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
+        const size_t zeros = std::min<size_t>(bytes.size(), 4096);
+        if (std::all_of(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(zeros), [](char c) { return c == 0; }))
+            ThrowError("its first %zu bytes are all zero (NUL): not an image (a zeroed or sparse file?); not read", zeros);
+        int w = 0, h = 0, n = 0;
+        // A JPEG's size may follow more than a MiB of metadata: up to 64 MiB, such a file
+        // is read whole and the decoder judges it.
+        const bool known = stbi_info_from_memory(data, static_cast<int>(bytes.size()), &w, &h, &n);
+        if (!known && size <= kImageWholeReadBytes) w = h = 1;
+        else if (!known)
+            ThrowError("its first %s (of %s) are not the head of a PNG, JPEG, TGA or BMP image (%s); not read",
+                       FormatBytes(bytes.size()).c_str(), FormatBytes(size).c_str(), stbi_failure_reason());
+        if (w < 1 || h < 1 || w > kMaxTextureSize || h > kMaxTextureSize)
+            ThrowError("the image is %d x %d, beyond the %d x %d textures may have; not read", w, h, kMaxTextureSize,
+                       kMaxTextureSize);
+        // The largest file those texels make: 16-bit RGBA stored without compression (with
+        // the PNG rows' filter bytes and deflate's block headers), and room for metadata.
+        const uint64_t most = static_cast<uint64_t>(w) * static_cast<uint64_t>(h) * 8 * 102 / 100 + (16u << 20);
+        if (known && size > most)
+            ThrowError("the file is %s, more than a %d x %d image takes (at most %s); not read",
+                       FormatBytes(size).c_str(), w, h, FormatBytes(most).c_str());
+        bytes.resize(static_cast<size_t>(size));
+        in.read(bytes.data() + kImageProbeBytes, static_cast<std::streamsize>(size - kImageProbeBytes));
+        if (in.bad() || static_cast<uint64_t>(in.gcount()) != size - kImageProbeBytes) ThrowError("cannot read it");
+    }
     return DecodeImageBytes(bytes);
 }
 

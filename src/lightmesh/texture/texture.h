@@ -151,5 +151,10 @@ std::shared_ptr<const Texture> ReadTextureFile(const std::string& path);
 
 /// The largest width or height accepted (8192² RGBA8 texels are 341 MiB with the mips).
 inline constexpr int kMaxTextureSize = 8192;
+/// The head of an image file ReadImageFile reads first, to judge its format and size before
+/// reading the rest: 1 MiB (a JPEG's size may follow its metadata).
+inline constexpr uint64_t kImageProbeBytes = 1 << 20;
+/// A file whose head tells no size is still read whole up to this (its decoder judges it).
+inline constexpr uint64_t kImageWholeReadBytes = 64 << 20;
 
 }  // namespace lm

@@ -114,8 +114,8 @@ void DecodeIsolated(const std::vector<const TextureSource*>& todo, const Texture
                                             child.seconds);
                 break;
             case ChildOutcome::End::Signalled:
-                (*why)[next] = StringPrintf("the image decoder crashed on it (signal %d, %s)", child.code,
-                                            SignalName(child.code).c_str());
+                (*why)[next] = StringPrintf("the image decoder crashed on it (signal %d, %s)%s", child.code,
+                                            SignalName(child.code).c_str(), child.Said().c_str());
                 break;
             default:
                 (*why)[next] = StringPrintf("the image decoder crashed on it (exit status %d)", child.code);

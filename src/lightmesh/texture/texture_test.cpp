@@ -3,7 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <chrono>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <limits>
@@ -184,6 +188,81 @@ TEST(TextureCache, AnImageTooLargeToDecodeIsAWarning) {
     EXPECT_NE(warnings[0].find("m.glb: texture \"cut.png\": cannot decode the image"), std::string::npos)
         << warnings[0];
     EXPECT_TRUE(textures.empty());
+}
+
+}  // namespace
+}  // namespace lm
+
+namespace lm {
+namespace {
+
+/// The warnings a fresh cache gives reading `files` (each named by its path) for model m.obj.
+std::vector<std::string> WarningsFor(const std::vector<std::string>& files) {
+    TextureCache cache;
+    std::vector<std::shared_ptr<const Texture>> textures;
+    std::vector<std::string> warnings;
+    std::vector<TextureSource> sources(files.size());
+    for (size_t i = 0; i < files.size(); ++i) sources[i].file = sources[i].name = files[i];
+    for (const int got : cache.GetAll(sources, "m.obj", &textures, [&](const std::string& w) { warnings.push_back(w); }))
+        EXPECT_EQ(got, -1);
+    return warnings;
+}
+
+// Issue 56: a texture file is judged by its head before it is read whole. A 2 GB sparse
+// file named .png, and a true PNG head (16 x 16 texels) followed by 2 GB of holes, are each
+// a warning in well under a second, through the cache as a scene reads them.
+TEST(TextureCache, AHugeFileIsJudgedByItsHeadBeforeItIsRead) {
+    const std::string dir = ::testing::TempDir() + "lm_huge_textures_" + std::to_string(getpid());
+    std::filesystem::create_directories(dir);
+    const std::string zeros = dir + "/zeros.png", headed = dir + "/headed.png";
+    {
+        std::ofstream(zeros, std::ios::binary).put('\0');
+        std::ofstream(headed, std::ios::binary) << ReadBytes(DataDir + "/texels.png").substr(0, 33);
+    }
+    constexpr off_t kTwoGB = off_t(2) << 30;
+    ASSERT_EQ(truncate(zeros.c_str(), kTwoGB), 0);
+    ASSERT_EQ(truncate(headed.c_str(), kTwoGB), 0);
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::vector<std::string> warnings = WarningsFor({zeros, headed});
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_LT(seconds, 1.0);
+    ASSERT_EQ(warnings.size(), 2u);
+    EXPECT_NE(warnings[0].find("zeros.png\": its first 4096 bytes are all zero (NUL): not an image (a zeroed or "
+                               "sparse file?); not read; the material's flat colour is used"),
+              std::string::npos)
+        << warnings[0];
+    EXPECT_NE(warnings[1].find("headed.png\": the file is 2.0 GiB, more than a 2 x 2 image takes (at most 16.0 "
+                               "MiB); not read"),
+              std::string::npos)
+        << warnings[1];
+    std::filesystem::remove_all(dir);
+}
+
+// A head that tells no size (a JPEG's can follow more than a MiB of metadata) is read whole
+// up to 64 MiB, for the decoder to judge; past that it is refused at once. An EXR is judged
+// by its header's dataWindow before it is decoded.
+TEST(TextureCache, AHeadThatTellsNoSizeAndAnExrPastTheLimit) {
+    const std::string dir = ::testing::TempDir() + "lm_texture_heads_" + std::to_string(getpid());
+    std::filesystem::create_directories(dir);
+    const std::string small = dir + "/small.jpg", big = dir + "/big.jpg", exr = dir + "/huge.exr";
+    std::ofstream(small, std::ios::binary) << std::string(2 << 20, 'x');
+    std::ofstream(big, std::ios::binary) << std::string(4096, 'x');
+    ASSERT_EQ(truncate(big.c_str(), off_t(100) << 20), 0);
+    std::string head("\x76\x2f\x31\x01\x02\0\0\0dataWindow\0box2i\0\x10\0\0\0", 29);
+    for (const int32_t v : {0, 0, 16383, 16383}) head.append(reinterpret_cast<const char*>(&v), 4);
+    std::ofstream(exr, std::ios::binary) << head << '\0';
+    const std::vector<std::string> warnings = WarningsFor({small, big, exr});
+    ASSERT_EQ(warnings.size(), 3u);
+    EXPECT_NE(warnings[0].find("small.jpg\": cannot decode the image"), std::string::npos) << warnings[0];
+    EXPECT_NE(warnings[1].find("big.jpg\": its first 1.0 MiB (of 100.0 MiB) are not the head of a PNG, JPEG, TGA "
+                               "or BMP image"),
+              std::string::npos)
+        << warnings[1];
+    EXPECT_NE(warnings[2].find("huge.exr\": the image is 16384 x 16384, beyond the 8192 x 8192 textures may have; "
+                               "not read"),
+              std::string::npos)
+        << warnings[2];
+    std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -77,6 +77,7 @@ ChildOutcome& ChildOutcome::operator=(ChildOutcome&& o) noexcept {
     if (this != &o) {
         if (map_) munmap(map_, size_);
         end = o.end, code = o.code, seconds = o.seconds, map_ = o.map_, size_ = o.size_;
+        lastErrorLine_ = std::move(o.lastErrorLine_);
         o.map_ = nullptr, o.size_ = 0;
     }
     return *this;
@@ -91,6 +92,13 @@ ChildOutcome RunInChild(const char* name, const ChildLimits& limits, const std::
     out.seconds = limits.seconds;
     const int fd = memfd_create(name, MFD_CLOEXEC);
     if (fd < 0) return out;
+#ifndef LIGHTMESH_SANITIZED
+    // The child's standard error, kept from the user's: one error line is the rule, and a
+    // crash's line quotes the library's last words.
+    const int errFd = memfd_create("lightmesh-stderr", MFD_CLOEXEC);
+#else
+    const int errFd = -1;
+#endif
     static std::mutex forkMutex;
     std::unique_lock<std::mutex> lock(forkMutex);
     std::fflush(nullptr);
@@ -98,10 +106,12 @@ ChildOutcome RunInChild(const char* name, const ChildLimits& limits, const std::
     const pid_t pid = fork();
     if (pid < 0) {
         close(fd);
+        if (errFd >= 0) close(errFd);
         return out;
     }
     if (pid == 0) {
         prctl(PR_SET_PDEATHSIG, SIGKILL);
+        if (errFd >= 0) dup2(errFd, STDERR_FILENO);
         for (int sig : {SIGINT, SIGTERM, SIGHUP}) std::signal(sig, SIG_DFL);
 #ifndef LIGHTMESH_SANITIZED
         if (limits.memory && mappedNow) {
@@ -137,7 +147,26 @@ ChildOutcome RunInChild(const char* name, const ChildLimits& limits, const std::
         if (m != MAP_FAILED) out.map_ = m, out.size_ = static_cast<size_t>(st.st_size);
     }
     close(fd);
+    if (errFd >= 0) {
+        // Its last line (of the last KiB).
+        char tail[1024];
+        const off_t size = lseek(errFd, 0, SEEK_END);
+        const off_t from = std::max<off_t>(0, size - static_cast<off_t>(sizeof tail));
+        const ssize_t got = size > 0 ? pread(errFd, tail, static_cast<size_t>(size - from), from) : 0;
+        std::string text(tail, got > 0 ? static_cast<size_t>(got) : 0);
+        while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' ')) text.pop_back();
+        if (const size_t nl = text.find_last_of('\n'); nl != std::string::npos) text.erase(0, nl + 1);
+        if (text.size() > 160) text = text.substr(0, 157) + "...";
+        for (char& c : text)
+            if (static_cast<unsigned char>(c) < 0x20) c = ' ';
+        out.lastErrorLine_ = text;
+        close(errFd);
+    }
     return out;
+}
+
+std::string ChildOutcome::Said() const {
+    return lastErrorLine_.empty() ? std::string() : " (it said: \"" + lastErrorLine_ + "\")";
 }
 
 double ChildDeadlineSeconds(uint64_t bytes) {

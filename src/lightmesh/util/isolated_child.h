@@ -49,8 +49,16 @@ class ChildOutcome {
     std::string_view Bytes() const { return {static_cast<const char*>(map_), size_}; }
     /// Whether it exited with status 0.
     bool Clean() const { return end == End::Exited && code == 0; }
+    /// The last line the child wrote to its standard error, which is kept from the user's
+    /// (a library's "terminate called after throwing ...", an assertion's text), printable
+    /// and at most 160 characters; "" if none. Not kept under the sanitizers, whose reports
+    /// must reach the test logs.
+    const std::string& LastErrorLine() const { return lastErrorLine_; }
+    /// " (it said: \"LINE\")", or "" without one: for the crash's one line.
+    std::string Said() const;
 
   private:
+    std::string lastErrorLine_;
     friend ChildOutcome RunInChild(const char*, const ChildLimits&, const std::function<void(int)>&);
     void* map_ = nullptr;
     size_t size_ = 0;

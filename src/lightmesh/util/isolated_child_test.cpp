@@ -5,8 +5,10 @@
 #include <gtest/gtest.h>
 
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
 #include <new>
+#include <string>
 #include <unistd.h>
 #include <vector>
 
@@ -68,6 +70,27 @@ TEST(IsolatedChild, AnExceptionOutOfTheWorkIsExitStatusThree) {
 #if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
 #define LIGHTMESH_SANITIZED 1
 #endif
+#endif
+
+#ifndef LIGHTMESH_SANITIZED  // (their reports must reach the logs: the child's stderr is kept)
+// Issue 56: a library's last words before its abort ("terminate called after throwing ...",
+// an assertion) were a second line on the user's standard error, before lightmesh's one
+// line; they are kept from it, and the crash's line quotes the last of them.
+TEST(IsolatedChild, ItsStandardErrorIsKeptAndItsLastLineQuoted) {
+    ::testing::internal::CaptureStderr();
+    const ChildOutcome child = RunInChild("test", ChildLimits{}, [](int) {
+        std::fprintf(stderr, "some noise\nterminate called after throwing an instance of 'std::out_of_range'\n");
+        std::fflush(stderr);
+        std::abort();
+    });
+    const std::string ours = ::testing::internal::GetCapturedStderr();
+    ASSERT_EQ(child.end, ChildOutcome::End::Signalled);
+    EXPECT_EQ(ours, "");
+    EXPECT_EQ(child.LastErrorLine(), "terminate called after throwing an instance of 'std::out_of_range'");
+    EXPECT_EQ(child.Said(), " (it said: \"terminate called after throwing an instance of 'std::out_of_range'\")");
+    const ChildOutcome quiet = RunInChild("test", ChildLimits{}, [](int) { std::abort(); });
+    EXPECT_EQ(quiet.Said(), "");
+}
 #endif
 
 #ifndef LIGHTMESH_SANITIZED  // the sanitizers' shadow memory takes no address-space limit

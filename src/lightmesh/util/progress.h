@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <mutex>
 #include <string>
+#include <vector>
 
 namespace lm {
 
@@ -22,6 +23,26 @@ class ProgressReporter {
     /// <what>)". Call before the first Update.
     void AnnounceIfLong(double thresholdSeconds, std::string what);
     static constexpr double kMeasureSeconds = 2.0;
+    /// The work proper starts now, after its set-up (timed apart, and added whole to the
+    /// estimate), and its first `sampleUnits` units are a sample spread over all of it
+    /// (`sampleWhat`: "tiles spread over the image"), so the estimate is made when the
+    /// sample is done (or after kMeasureSeconds, from the part of it done), from the sample
+    /// alone, rather than from whatever came first (issue 56: a frame whose first tiles were
+    /// sky announced nothing; one tile after a 3 GiB image's set-up, extrapolated a million
+    /// times, gave 72 days for 6 minutes). Without it the estimate is the share done after
+    /// kMeasureSeconds, set-up included.
+    void BeginWork(int64_t sampleUnits, std::string sampleWhat);
+    /// When the estimate passes `limitSeconds`, the work is to stop (Stopped()), and
+    /// StopReason() says why: "about 3 h 12 min in all (measured on ...), more than the limit
+    /// of 1 h 0 min<more>". Call before the first Update.
+    void RefuseIfLonger(double limitSeconds, std::string more);
+    /// Whether the work should stop (RefuseIfLonger's limit passed); cheap, thread-safe.
+    bool Stopped() const { return stopped_.load(std::memory_order_relaxed); }
+    const std::string& StopReason() const { return stopReason_; }
+    /// The whole work's estimated seconds (set-up included), once made; -1 before.
+    double EstimatedSeconds() const { return estimate_.load(); }
+    /// Seconds after the start at which the estimate was made; -1 before.
+    double EstimatedAfterSeconds() const { return estimatedAfter_.load(); }
     void Update(int64_t units = 1);
     /// Draws the finished bar and ends the line (called by the destructor if need be).
     void Done();
@@ -36,12 +57,26 @@ class ProgressReporter {
     const std::string title_;
     const bool enabled_;
     double announceAfter_ = -1;  ///< seconds; < 0: no announcement
+    double refuseAfter_ = -1;    ///< seconds; < 0: no limit
+    std::string howToForce_, stopReason_;
+    std::atomic<bool> stopped_{false};
     std::string announceWhat_;
+    int64_t sample_ = 0;  ///< BeginWork's sample (0: none)
+    std::string sampleWhat_;
+    double setupSeconds_ = 0;
+    std::atomic<double> sampleSeconds_{-1};  ///< the work's seconds when the sample was done
+    std::atomic<double> estimate_{-1}, estimatedAfter_{-1};
     std::atomic<bool> announced_{false};
     std::atomic<int64_t> done_{0};
     std::atomic<bool> finished_{false};
     std::mutex drawMutex_;
-    std::chrono::steady_clock::time_point start_, lastDraw_;
+    std::chrono::steady_clock::time_point start_, lastDraw_, workStart_;
 };
+
+/// `n` cells of a cols × rows grid (index row·cols + col) spread over it in both directions:
+/// the centre cell of each of about n strata of the grid's shape, ordered so that every
+/// prefix is spread too (the strata in bit-reversed order). All cells if n ≥ cols × rows.
+/// The samples a long job's estimate is made from (WhittedRenderer's tiles).
+std::vector<int64_t> SpreadOverGrid(int64_t cols, int64_t rows, int64_t n);
 
 }  // namespace lm

@@ -361,20 +361,71 @@ uint64_t PeakMemoryBytes() {
     return static_cast<uint64_t>(usage.ru_maxrss) * 1024;  // Linux reports KiB
 }
 
+std::string ByteCountProblem(const std::string& text, uint64_t* bytes) {
+    // [spaces] number [spaces] [unit] [spaces]: the number is digits, or digits '.' digits;
+    // the unit "", "B", or K, M, G, T alone or followed by "B" or "iB" (any case; all
+    // powers of 1024, as docker, systemd and Slurm read "8G" and "8GB").
+    const size_t begin = text.find_first_not_of(' ');
+    const size_t last = text.find_last_not_of(' ');
+    const std::string t = begin == std::string::npos ? std::string() : text.substr(begin, last - begin + 1);
+    const auto isDigit = [](char c) { return c >= '0' && c <= '9'; };
+    size_t i = 0;
+    while (i < t.size() && isDigit(t[i])) ++i;
+    const size_t wholeEnd = i;
+    if (i < t.size() && t[i] == '.' && i > 0) {
+        ++i;
+        while (i < t.size() && isDigit(t[i])) ++i;
+        if (i == wholeEnd + 1) i = wholeEnd;  // "1." : the '.' is not part of the number
+    }
+    if (wholeEnd == 0) return !t.empty() && (t[0] == '-' || t[0] == '+') ? "not a size: no sign is allowed" : "not a size";
+    const std::string number = t.substr(0, i);
+    size_t u = i;
+    while (u < t.size() && t[u] == ' ') ++u;
+    std::string unit = t.substr(u);
+    for (char& c : unit) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    int power = -1;
+    if (unit.empty() || unit == "b") power = 0;
+    else if (const size_t at = std::string("kmgt").find(unit[0]);
+             at != std::string::npos && (unit.size() == 1 || unit.substr(1) == "b" || unit.substr(1) == "ib"))
+        power = static_cast<int>(at) + 1;
+    if (power < 0) return "not a size: unknown unit \"" + Printable(t.substr(u)) + "\"";
+    const bool fraction = number.size() > wholeEnd;
+    if (power == 0 && fraction) return "not a size: a fraction of a byte";
+    uint64_t result = 0;
+    if (!fraction) {
+        bool overflow = false;
+        for (size_t k = 0; k < wholeEnd && !overflow; ++k) {
+            const uint64_t d = static_cast<uint64_t>(t[k] - '0');
+            overflow = result > (UINT64_MAX - d) / 10;
+            result = result * 10 + d;
+        }
+        const int shift = 10 * power;
+        if (overflow || (shift > 0 && result > (UINT64_MAX >> shift))) return "too large (more than 16 EiB)";
+        result <<= shift;
+    } else {
+        const double value = std::ldexp(std::strtod(number.c_str(), nullptr), 10 * power);
+        if (!(value < 18446744073709551616.0)) return "too large (more than 16 EiB)";
+        result = static_cast<uint64_t>(value);
+    }
+    if (result == 0) return "must be at least 1 byte";
+    if (bytes) *bytes = result;
+    return {};
+}
+
 uint64_t ParseByteCount(const std::string& text) {
-    char* end = nullptr;
-    errno = 0;
-    const double v = std::strtod(text.c_str(), &end);
-    if (end == text.c_str() || errno != 0 || !(v > 0) || v > 1e18) return 0;
-    double scale = 1;
-    const std::string unit(end);
-    if (unit == "K" || unit == "k") scale = 1024.0;
-    else if (unit == "M" || unit == "m") scale = 1024.0 * 1024;
-    else if (unit == "G" || unit == "g") scale = 1024.0 * 1024 * 1024;
-    else if (unit == "T" || unit == "t") scale = 1024.0 * 1024 * 1024 * 1024;
-    else if (!unit.empty()) return 0;
-    const double bytes = v * scale;
-    return bytes < 1.8e19 ? static_cast<uint64_t>(bytes) : 0;
+    uint64_t bytes = 0;
+    return ByteCountProblem(text, &bytes).empty() ? bytes : 0;
+}
+
+uint64_t MemoryLimitFromEnvironment() {
+    const char* env = std::getenv("LIGHTMESH_MEMORY_LIMIT");
+    if (!env || !*env) return 0;  // unset or empty: no limit of its own
+    uint64_t bytes = 0;
+    if (const std::string problem = ByteCountProblem(env, &bytes); !problem.empty())
+        throw Error("LIGHTMESH_MEMORY_LIMIT=" + Printable(env) + ": " + problem +
+                    "; write bytes or a number with K, M, G or T (powers of 1024), e.g. 8G, 8GB, 8GiB, 512M, "
+                    "1073741824");
+    return bytes;
 }
 
 std::string CurrentExceptionLine() {
@@ -383,7 +434,11 @@ std::string CurrentExceptionLine() {
     } catch (const Error& e) {
         return e.what();
     } catch (const std::bad_alloc&) {
-        const uint64_t budget = PhysicalMemoryBytes();
+        uint64_t budget = 0;
+        try {
+            budget = PhysicalMemoryBytes();
+        } catch (...) {  // a LIGHTMESH_MEMORY_LIMIT that is not a size: the budget is unknown
+        }
         return StringPrintf("out of memory: an allocation failed (peak %s; this machine's budget %s, "
                             "LIGHTMESH_MEMORY_LIMIT lowers it)",
                             FormatBytes(PeakMemoryBytes()).c_str(), budget ? FormatBytes(budget).c_str() : "unknown");
@@ -419,7 +474,7 @@ uint64_t PhysicalMemoryBytes() {
             if (ok && std::sscanf(buf, "%llu", &bytes) == 1) lower(bytes);  // "max": no limit
         }
     }
-    if (const char* env = std::getenv("LIGHTMESH_MEMORY_LIMIT"); env && *env) lower(ParseByteCount(env));
+    lower(MemoryLimitFromEnvironment());
     return limit;
 }
 

@@ -59,8 +59,10 @@ uint64_t PeakMemoryBytes();
 
 /// The memory this process may use, in bytes (0 if unknown): the machine's physical memory,
 /// lowered by a cgroup memory limit (a container's) and by the environment variable
-/// LIGHTMESH_MEMORY_LIMIT (bytes, or a number with K, M, G or T: "512M"), when set and
-/// smaller. Light meshes and images that would need more than half are refused up front.
+/// LIGHTMESH_MEMORY_LIMIT (MemoryLimitFromEnvironment: bytes, or a number with K, M, G or T:
+/// "512M", "8GB"), when set and smaller; throws its Error for a value that is not a size (the
+/// executable checks it first). Light meshes and images that would need more than half are
+/// refused up front.
 uint64_t PhysicalMemoryBytes();
 
 /// The message of the exception being handled, as one line: the project's errors as they
@@ -76,8 +78,20 @@ inline double SecondsSince(std::chrono::steady_clock::time_point start) {
 /// The CPUs this process may run on (its affinity mask); 0 if unknown.
 int AffinityCpuCount();
 
-/// Parses "4096", "512K", "64M", "1.5G", "2T" (binary units); 0 for anything else.
+/// Why `text` is not a byte count ("" when it is, and then *bytes is set): a number (digits,
+/// at most one '.'; no sign, no exponent), optional spaces, and a unit: none or "B" (bytes,
+/// whole), or K, M, G, T alone or followed by "B" or "iB", any case, all powers of 1024
+/// ("8G", "8GB", "8GiB", "8 gb", "1.5G", "512M", "4096"). The reasons: "not a size",
+/// "not a size: unknown unit "X"", "too large (...)", "must be at least 1 byte", ...
+std::string ByteCountProblem(const std::string& text, uint64_t* bytes);
+
+/// ByteCountProblem's count, 0 for text that is not one.
 uint64_t ParseByteCount(const std::string& text);
+
+/// LIGHTMESH_MEMORY_LIMIT's bytes, 0 when it is unset or empty; throws Error, one line naming
+/// the variable, its value and the grammar, for a value that is not a byte count (it was
+/// ignored, leaving the process without a budget).
+uint64_t MemoryLimitFromEnvironment();
 
 /// "1.5 GiB", "320 MiB", "12 KiB", "17 B".
 std::string FormatBytes(uint64_t bytes);
