@@ -35,8 +35,9 @@ struct ImageMetrics {
 };
 
 /// The memory `lightmesh compare` takes per pixel at its peak: each image read (12 bytes of
-/// float RGB; two, and one each for a mask and --no-shadows) and CompareImages's planes (seven of doubles, and the
-/// blur's two). Past half the budget a comparison is refused before an image is read.
+/// float RGB; two, and one each for a mask and --no-shadows) and CompareImages's planes
+/// (seven of doubles, and the blur's two). Past half the budget a comparison is refused
+/// before an image is read.
 inline constexpr uint64_t kCompareBytesPerPixel = 72;
 inline uint64_t CompareBytes(uint64_t pixels, int images) {
     return pixels * (kCompareBytesPerPixel + 12 * static_cast<uint64_t>(images));
