@@ -461,7 +461,9 @@ TEST(Robustness, SpreadSamplesCoverTheGridInEveryPrefix) {
     int quadrant[4] = {};
     for (size_t i = 0; i < cells.size(); ++i) {
         const int q = (cells[i] % 40 >= 20) + 2 * (cells[i] / 40 >= 15);
-        if (i < 4) EXPECT_EQ(quadrant[q], 0) << i;
+        if (i < 4) {
+            EXPECT_EQ(quadrant[q], 0) << i;
+        }
         ++quadrant[q];
     }
     for (const int n : quadrant) EXPECT_NEAR(n, static_cast<double>(cells.size()) / 4, cells.size() / 12.0);

@@ -9,6 +9,7 @@
 #include <mutex>
 
 #include "lightmesh/render/penumbra_classifier.h"
+#include "lightmesh/render/soft_frame_rows.h"
 #include "lightmesh/shadow/area_light.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/huge_pages.h"
@@ -17,160 +18,13 @@
 
 namespace lm {
 
-/// One (camera hit, light) pair.
-struct SoftFrame::Entry {
-    uint32_t light = 0;
-    Color omega;       ///< the light's unshadowed term at the hit
-    float v = 0;       ///< its visibility, once known
-    uint8_t probe = 0;   ///< the centre ray reached the light
-    uint8_t seed = 0;    ///< a neighbour's probe disagrees
-    uint8_t marked = 0;  ///< in a penumbra
-    uint8_t spacing = 1; ///< its penumbra's samples per independent value (1, 2 or 4)
-    uint8_t direct = 0;  ///< sampled (else interpolated from the anchors of its spacing)
-};
-
-/// One camera ray's hit.
-struct SoftFrame::Sample {
-    ShadingPoint sp;
-    float footprint = 0;  ///< the world size of a sample on the surface there
-    Color rest;           ///< the shading without the lights' terms (ambient, mirror)
-    uint32_t first = 0;   ///< its entries in its tile's list, ascending by light
-    uint32_t count = 0;
-    bool hit = false;
-    /// With at most 64 lights: bit l set where it needs light l, and where light l's probe
-    /// reached it (the seeds' test compares neighbours by these words).
-    uint64_t need = 0, lit = 0;
-};
-
-/// Where the rows' buffers come from: 2 MiB chunks on huge pages (AllocateLarge), handed
-/// out in turn and released together at the end of the render. The first touch of a 4 KiB
-/// page costs a fault, about 11 µs on the machines measured here (util/huge_pages.h): the
-/// rows of the castle at 1024×768 took 8,000 of them, 90 ms against RT's 170 ms render. A
-/// tile's vectors grow a few times and keep their room from row to row, so what a growth
-/// leaves behind is bounded by what the vectors hold.
-class RowMemory final : public std::pmr::memory_resource {
-  public:
-    ~RowMemory() override {
-        for (void* c : chunks_) std::free(c);
-    }
-
-  private:
-    static constexpr size_t kChunk = size_t(2) << 20;
-    void* do_allocate(size_t bytes, size_t align) override {
-        std::lock_guard<std::mutex> lock(mutex_);
-        size_t at = (used_ + align - 1) & ~(align - 1);
-        if (chunks_.empty() || at + bytes > size_) {
-            size_ = std::max(kChunk, (bytes + kChunk - 1) / kChunk * kChunk);
-            chunks_.push_back(AllocateLarge(size_, 64, kChunk));
-            at = 0;
-        }
-        used_ = at + bytes;
-        return static_cast<char*>(chunks_.back()) + at;
-    }
-    void do_deallocate(void*, size_t, size_t) override {}
-    bool do_is_equal(const std::pmr::memory_resource& o) const noexcept override { return this == &o; }
-    std::mutex mutex_;
-    std::vector<void*> chunks_;
-    size_t used_ = 0, size_ = 0;
-};
-
-/// A tile's hits and their (hit, light) pairs.
-struct SoftFrame::Tile {
-    explicit Tile(std::pmr::memory_resource* m) : samples(m), entries(m) {}
-    std::pmr::vector<Sample> samples;  ///< tileSamples_² (row-major), clipped to the frame
-    std::pmr::vector<Entry> entries;
-    int x0 = 0, y0 = 0, w = 0, h = 0;  ///< its samples in the frame
-};
-
-/// A tile's silhouette points and their lights.
-struct SoftFrame::TileSeeds {
-    explicit TileSeeds(std::pmr::memory_resource* m) : points(m), light(m) {}
-    std::pmr::vector<SilhouettePoint> points;
-    std::pmr::vector<uint32_t> light;
-};
-
-/// The rows of tiles the stream holds, in two rings: the hits of the rows the stages from
-/// the seeds to the pixels read, and the silhouette points of the rows the marks read.
-struct SoftFrame::Window {
-    int tilesX = 0, tileRows = 0, ring = 0, seedRing = 0, ts = 0;
-    std::vector<int> rowHeld;        ///< per ring slot, the tile row it holds (−1: none)
-    std::vector<std::vector<Tile>> slots;
-    std::vector<std::vector<TileSeeds>> seedSlots;
-    Tile& At(int row, int col) { return slots[static_cast<size_t>(row % ring)][static_cast<size_t>(col)]; }
-    TileSeeds& SeedsAt(int row, int col) {
-        return seedSlots[static_cast<size_t>(row % seedRing)][static_cast<size_t>(col)];
-    }
-    /// The sample at frame coordinates (x, y) and its tile, or null outside the frame or
-    /// the held rows.
-    const Sample* SampleAt(int x, int y, const Tile** tile) {
-        if (x < 0 || y < 0 || x >= tilesX * ts || y >= tileRows * ts) return nullptr;
-        const int row = y / ts, col = x / ts;
-        if (rowHeld[static_cast<size_t>(row % ring)] != row) return nullptr;
-        const Tile& t = At(row, col);
-        if (x - t.x0 >= t.w || y - t.y0 >= t.h) return nullptr;
-        *tile = &t;
-        return &t.samples[static_cast<size_t>(y - t.y0) * static_cast<size_t>(ts) + static_cast<size_t>(x - t.x0)];
-    }
-};
-
-namespace {
-
-/// The entry of `light` among a sample's entries (ascending by light), or null.
-template <typename E>
-E* FindEntry(E* first, uint32_t count, uint32_t light) {
-    for (uint32_t k = 0; k < count; ++k) {
-        if (first[k].light == light) return first + k;
-        if (first[k].light > light) break;
-    }
-    return nullptr;
-}
-
-/// A silhouette point that may mark a tile's pairs: its light, and the box of samples it reaches.
-struct Candidate {
-    uint32_t light;
-    const SilhouettePoint* p;
-    int xa, xb, ya, yb;
-};
-
-/// A thread's buffers, kept from tile to tile (a tile's steps run on one thread, none nested).
-struct Scratch {
-    std::vector<Ray> rays;
-    std::vector<Hit> hits;
-    std::vector<Color> omega;
-    std::vector<uint32_t> ids, owner, lights, slotOf, start, order, who;
-    std::vector<std::pair<uint32_t, uint32_t>> blocked;
-    std::vector<Candidate> cand;
-    std::vector<std::vector<uint32_t>> blocks;
-    std::vector<SoftFrame::Entry> entries;
-    std::unique_ptr<bool[]> occluded;
-    size_t room = 0;
-    bool* Occluded(size_t n) {
-        if (room < n) occluded.reset(new bool[room = std::max<size_t>(n, 2 * room)]);
-        return occluded.get();
-    }
-};
+namespace soft_frame {
 Scratch& ThreadScratch() {
     thread_local Scratch scratch;
     return scratch;
 }
-
-/// Whether two neighbouring samples lie on one surface (no depth edge between them): their
-/// points within 3 footprints.
-bool Continuous(const ShadingPoint& a, float fa, const ShadingPoint& b, float fb) {
-    const float reach = 3.0f * std::max(fa, fb);
-    return LengthSquared(a.p - b.p) <= reach * reach;
-}
-
-/// Whether a marked pair at (x, y) of spacing s is sampled by its position alone: spacing 1,
-/// or on the grid of its spacing.
-inline bool OnGrid(int x, int y, int s) { return s == 1 || (x % s == 0 && y % s == 0); }
-
-/// The spacing of the values of a penumbra whose silhouette point reaches `reach` samples:
-/// the visibility across it changes over about 2·(reach − 2) samples, so values every 2, 4
-/// or 8 samples (3 to 4 across the penumbra), interpolated, keep its profile.
-inline uint8_t SpacingOf(float reach) { return reach < 4 ? 1 : reach < 8 ? 2 : reach < 16 ? 4 : 8; }
-
-}  // namespace
+}  // namespace soft_frame
+using namespace soft_frame;
 
 void SoftFrame::CheckMemory(Window& w) const {
     // The rows held: their hits and (hit, light) pairs. Past half the memory budget the
@@ -319,145 +173,6 @@ void SoftFrame::ShadeTile(Window& w, int row, int col, RenderCounters& c) const 
             }
 }
 
-void SoftFrame::SeedTile(Window& w, int row, int col, RenderCounters& c) const {
-    Tile& t = w.At(row, col);
-    TileSeeds& seeds = w.SeedsAt(row, col);
-    seeds.points.clear(), seeds.light.clear();
-    const int ts = tileSamples_;
-    Scratch& sc = ThreadScratch();
-    std::vector<Ray>& rays = sc.rays;
-    std::vector<Hit>& hits = sc.hits;
-    std::vector<std::pair<uint32_t, uint32_t>>& blocked = sc.blocked;  // (sample, entry) of the blocked seeds
-    rays.clear(), blocked.clear();
-    const bool lights64 = scene_.lights.size() <= 64;
-    for (int y = 0; y < t.h; ++y)
-        for (int x = 0; x < t.w; ++x) {
-            const size_t i = static_cast<size_t>(y) * ts + x;
-            const Sample& s = t.samples[i];
-            if (!s.hit || s.count == 0) continue;
-            const Sample* nb[4];
-            const Tile* nt[4] = {&t, &t, &t, &t};
-            const int X = t.x0 + x, Y = t.y0 + y;
-            if (x > 0 && y > 0 && x + 1 < t.w && y + 1 < t.h) {  // inside the tile
-                nb[0] = &s - 1, nb[1] = &s + 1, nb[2] = &s - ts, nb[3] = &s + ts;
-            } else {
-                nb[0] = w.SampleAt(X - 1, Y, &nt[0]), nb[1] = w.SampleAt(X + 1, Y, &nt[1]);
-                nb[2] = w.SampleAt(X, Y - 1, &nt[2]), nb[3] = w.SampleAt(X, Y + 1, &nt[3]);
-            }
-            // The lights whose probes may disagree (all of them past 64 lights).
-            uint64_t differ = 0;
-            for (int k = 0; k < 4; ++k) {
-                if (!nb[k] || !nb[k]->hit) {
-                    nb[k] = nullptr;
-                    continue;
-                }
-                const uint64_t d = lights64 ? (s.lit ^ nb[k]->lit) & s.need & nb[k]->need : ~uint64_t(0);
-                if (d && !Continuous(s.sp, s.footprint, nb[k]->sp, nb[k]->footprint)) nb[k] = nullptr;
-                else differ |= d;
-            }
-            if (!differ) continue;
-            for (uint32_t e = s.first; e < s.first + s.count; ++e) {
-                Entry& en = t.entries[e];
-                if (radii_[en.light] <= 0) continue;  // a point light: the probe is the answer
-                if (lights64 && !(differ >> en.light & 1)) continue;
-                for (int k = 0; k < 4 && !en.seed; ++k) {
-                    if (!nb[k]) continue;
-                    const Entry* other = FindEntry(nt[k]->entries.data() + nb[k]->first, nb[k]->count, en.light);
-                    if (other && other->probe != en.probe) en.seed = 1;
-                }
-                if (en.seed) {
-                    ++c.method[kSoftFrameSeeds];
-                    if (!en.probe) blocked.emplace_back(static_cast<uint32_t>(i), e);
-                }
-            }
-        }
-    // The blocked seeds' probes again, to their closest hit: a point of the silhouette.
-    for (const auto& [i, e] : blocked)
-        rays.push_back(LightSegment(t.samples[i].sp.origin, scene_.lights[t.entries[e].light].position));
-    hits.resize(rays.size());
-    if (!rays.empty()) accel_.IntersectMany(rays.data(), rays.size(), hits.data());
-    c.shadowRays += rays.size();
-    for (size_t k = 0; k < blocked.size(); ++k) {
-        if (hits[k].prim == UINT32_MAX) continue;  // cannot happen for an occluded ray; kept safe
-        const auto [i, e] = blocked[k];
-        const Sample& s = t.samples[i];
-        const uint32_t light = t.entries[e].light;
-        SilhouettePoint p;
-        p.x = rays[k].At(hits[k].t);
-        p.slop = 1.5f * s.footprint;
-        p.sx = t.x0 + static_cast<int>(i % ts), p.sy = t.y0 + static_cast<int>(i / ts);
-        p.reach = PenumbraReach(s.sp.origin, s.sp.n, scene_.lights[light].position, radii_[light],
-                                Length(p.x - s.sp.origin), s.footprint, static_cast<float>(kReach));
-        seeds.points.push_back(p);
-        seeds.light.push_back(light);
-    }
-    c.method[kSoftFrameSilhouettes] += seeds.points.size();
-}
-
-void SoftFrame::MarkTile(Window& w, int row, int col, RenderCounters& c) const {
-    Tile& t = w.At(row, col);
-    const int ts = tileSamples_;
-    // Mark the pairs whose cone holds a silhouette point of the seeds within reach. The
-    // candidates: the seeds whose box meets the tile, by light, the nearest tiles' first
-    // (a pair stops at the first that holds it).
-    std::vector<Candidate>& cand = ThreadScratch().cand;
-    cand.clear();
-    for (int ring = 0; ring <= reachTiles_; ++ring)
-        for (int r = row - ring; r <= row + ring; ++r) {
-            if (r < 0 || r >= w.tileRows) continue;
-            const bool edgeRow = r == row - ring || r == row + ring;
-            for (int q = col - ring; q <= col + ring; q += edgeRow || ring == 0 ? 1 : 2 * ring) {
-                if (q < 0 || q >= w.tilesX) continue;
-                const TileSeeds& o = w.SeedsAt(r, q);
-                for (size_t k = 0; k < o.points.size(); ++k) {
-                    const SilhouettePoint& p = o.points[k];
-                    const int reach = static_cast<int>(std::ceil(p.reach));
-                    const int xa = std::max(p.sx - reach, t.x0), xb = std::min(p.sx + reach, t.x0 + t.w - 1);
-                    const int ya = std::max(p.sy - reach, t.y0), yb = std::min(p.sy + reach, t.y0 + t.h - 1);
-                    if (xa <= xb && ya <= yb) cand.push_back(Candidate{o.light[k], &p, xa, xb, ya, yb});
-                }
-            }
-        }
-    if (cand.empty()) {
-        for (const Entry& en : t.entries) c.method[kSoftFrameMarked] += en.seed;
-        for (Entry& en : t.entries) en.marked = en.seed;
-        return;
-    }
-    // The candidates of each block of 4×4 samples (those whose box meets it), in order.
-    constexpr int B = 4;
-    const int blocksX = (ts + B - 1) / B;
-    std::vector<std::vector<uint32_t>>& blocks = ThreadScratch().blocks;
-    blocks.resize(static_cast<size_t>(blocksX * blocksX));
-    for (auto& b : blocks) b.clear();
-    for (uint32_t k = 0; k < cand.size(); ++k) {
-        const Candidate& q = cand[k];
-        for (int by = (q.ya - t.y0) / B; by <= (q.yb - t.y0) / B; ++by)
-            for (int bx = (q.xa - t.x0) / B; bx <= (q.xb - t.x0) / B; ++bx) blocks[by * blocksX + bx].push_back(k);
-    }
-    for (size_t i = 0; i < t.samples.size(); ++i) {
-        const Sample& s = t.samples[i];
-        if (!s.count) continue;
-        const int lx = static_cast<int>(i % ts), ly = static_cast<int>(i / ts);
-        const int x = t.x0 + lx, y = t.y0 + ly;
-        const std::vector<uint32_t>& list = blocks[(ly / B) * blocksX + lx / B];
-        for (uint32_t e = s.first; e < s.first + s.count; ++e) {
-            Entry& en = t.entries[e];
-            const Vec3& center = scene_.lights[en.light].position;
-            for (const uint32_t k : list) {
-                const Candidate& q = cand[k];
-                if (q.light != en.light || x < q.xa || x > q.xb || y < q.ya || y > q.yb) continue;
-                if (ConeHolds(s.sp.origin, center, radii_[en.light], q.p->x, q.p->slop)) {
-                    en.marked = 1;
-                    en.spacing = SpacingOf(q.p->reach);
-                    break;
-                }
-            }
-            if (en.seed && !en.marked) en.marked = 1, en.spacing = 1;
-            c.method[kSoftFrameMarked] += en.marked;
-        }
-    }
-}
-
 void SoftFrame::SampleTile(Window& w, int row, int col, RenderCounters& c) const {
     Tile& t = w.At(row, col);
     const int ts = tileSamples_;
@@ -583,7 +298,7 @@ void SoftFrame::RenderRows(int y0, int y1, Image* image, RenderCounters& counter
     y0 = std::clamp(y0, 0, height);
     y1 = std::clamp(y1, y0, height);
     if (y0 == y1) return;
-    RowMemory pool;
+    HugePageArena pool;
     Window w;
     w.ts = tileSamples_;
     w.tilesX = (options_.width + tilePixels_ - 1) / tilePixels_;

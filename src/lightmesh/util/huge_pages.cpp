@@ -62,4 +62,28 @@ void ZeroedDeleter::operator()(void* p) const noexcept {
     else std::free(p);
 }
 
+HugePageArena::~HugePageArena() {
+    for (void* c : chunks_) std::free(c);
+}
+
+size_t HugePageArena::ChunkBytes() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return total_;
+}
+
+void* HugePageArena::do_allocate(size_t bytes, size_t align) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    size_t at = (used_ + align - 1) & ~(align - 1);
+    if (chunks_.empty() || at + bytes > size_) {
+        if (bytes > static_cast<size_t>(-1) - kChunk) throw std::bad_alloc();
+        size_ = std::max(kChunk, (bytes + kChunk - 1) / kChunk * kChunk);
+        chunks_.reserve(chunks_.size() + 1);
+        chunks_.push_back(AllocateLarge(size_, std::max<size_t>(align, 64), kChunk));
+        total_ += size_;
+        at = 0;
+    }
+    used_ = at + bytes;
+    return static_cast<char*>(chunks_.back()) + at;
+}
+
 }  // namespace lm

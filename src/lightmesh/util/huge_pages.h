@@ -11,7 +11,10 @@
 
 #include <cstddef>
 #include <cstdlib>
+#include <memory_resource>
+#include <mutex>
 #include <new>
+#include <vector>
 
 namespace lm {
 
@@ -65,6 +68,32 @@ struct HugePageAllocator {
     void deallocate(T* p, size_t) noexcept { std::free(p); }
     template <typename U>
     bool operator==(const HugePageAllocator<U, HugeFrom>&) const noexcept { return true; }
+};
+
+/// A std::pmr resource that hands out memory in turn from 2 MiB chunks on huge pages
+/// (AllocateLarge) and releases it all at its end (deallocation does nothing): for buffers
+/// that live as long as one job and are reused rather than freed, such as the soft
+/// default's rows of tiles (render/soft_frame.cpp), whose vectors grow a few times and keep
+/// their room, so what a growth leaves behind is bounded by what they hold. A request
+/// larger than a chunk gets chunks of its own size rounded up to 2 MiB. Thread-safe (a
+/// mutex: buffers are allocated when they grow, not per use).
+class HugePageArena final : public std::pmr::memory_resource {
+  public:
+    static constexpr size_t kChunk = size_t(2) << 20;
+    HugePageArena() = default;
+    HugePageArena(const HugePageArena&) = delete;
+    HugePageArena& operator=(const HugePageArena&) = delete;
+    ~HugePageArena() override;
+    /// The bytes of the chunks taken so far.
+    size_t ChunkBytes() const;
+
+  private:
+    void* do_allocate(size_t bytes, size_t align) override;
+    void do_deallocate(void*, size_t, size_t) override {}
+    bool do_is_equal(const std::pmr::memory_resource& o) const noexcept override { return this == &o; }
+    mutable std::mutex mutex_;
+    std::vector<void*> chunks_;
+    size_t used_ = 0, size_ = 0, total_ = 0;
 };
 
 }  // namespace lm

@@ -93,5 +93,29 @@ TEST(HugePages, FillingALargeBufferTakesFewPageFaults) {
     EXPECT_LT(taken, 3 * 4096 / 4) << "page faults filling 16 MiB";
 }
 
+// The arena: aligned pieces from 2 MiB chunks, one chunk for many small requests, a chunk
+// of its own for a large one, the pieces disjoint and writable.
+TEST(HugePages, ArenaHandsOutAlignedDisjointPiecesFromChunks) {
+    HugePageArena arena;
+    std::vector<std::pair<char*, size_t>> pieces;
+    for (int k = 0; k < 1000; ++k) {
+        const size_t bytes = 1 + static_cast<size_t>(k * 37 % 500), align = size_t(1) << (k % 7);
+        char* p = static_cast<char*>(arena.allocate(bytes, align));
+        EXPECT_EQ(reinterpret_cast<uintptr_t>(p) % align, 0u);
+        std::memset(p, k & 0xff, bytes);
+        pieces.emplace_back(p, bytes);
+    }
+    EXPECT_EQ(arena.ChunkBytes(), HugePageArena::kChunk);  // about 250 kB: one chunk
+    for (size_t k = 0; k < pieces.size(); ++k)
+        EXPECT_EQ(static_cast<unsigned char>(pieces[k].first[pieces[k].second - 1]), k & 0xff) << k;
+    char* big = static_cast<char*>(arena.allocate(5 * HugePageArena::kChunk + 1, 64));
+    std::memset(big, 1, 5 * HugePageArena::kChunk + 1);
+    EXPECT_EQ(arena.ChunkBytes(), 7 * HugePageArena::kChunk);  // 6 chunks for it
+    // A pmr vector on it grows and keeps its values.
+    std::pmr::vector<int> v(&arena);
+    for (int k = 0; k < 100000; ++k) v.push_back(k);
+    EXPECT_EQ(v[99999], 99999);
+}
+
 }  // namespace
 }  // namespace lm
