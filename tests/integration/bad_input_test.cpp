@@ -684,7 +684,7 @@ std::vector<Case> Corpus() {
          // 200 lights over a box: every hit keeps a (hit, light) pair per light in the rows of
          // tiles in flight, 38 MiB at 640x480: past half of 64 MiB, the render stops first.
          .args = "render $D/scene.json -o $OUT",
-         .expected = "soft shadows: the 10 rows of tiles in flight hold 38.1 MiB for 200 lights, more than half "
+         .expected = "soft shadows: the 10 rows of tiles in flight hold 33.1 MiB for 200 lights, more than half "
                      "the memory budget (64.0 MiB); give the lights a \"range\", render a narrower image, or use "
                      "--shadows rt\n",
          .files = {{"scene.json", WithLights(ManyLights(200))}},

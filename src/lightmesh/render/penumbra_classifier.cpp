@@ -6,16 +6,15 @@
 
 namespace lm {
 
-bool ConeHolds(const Vec3& origin, const Vec3& center, float radius, const Vec3& x, float slop) {
-    const Vec3 oc = center - origin, ox = x - origin;
+LightCone::LightCone(const Vec3& o, const Vec3& center, float r) : origin(o), oc(center - o), radius(r) {
     const float d2 = LengthSquared(oc), r2 = radius * radius;
-    if (d2 <= r2) return false;  // inside the light: it sees all of it
-    const float d = std::sqrt(d2);
-    const float t = Dot(ox, oc) / d;  // along the axis
-    if (t <= 0 || t >= d) return false;
-    const float rho2 = std::max(0.0f, LengthSquared(ox) - t * t);
-    const float cone = t * radius / std::sqrt(d2 - r2) + slop;
-    return rho2 <= cone * cone;
+    inside = d2 <= r2;
+    d = std::sqrt(d2);
+    s = inside ? 0.0f : std::sqrt(d2 - r2);
+}
+
+bool ConeHolds(const Vec3& origin, const Vec3& center, float radius, const Vec3& x, float slop) {
+    return LightCone(origin, center, radius).Holds(x, slop);
 }
 
 float PenumbraReach(const Vec3& origin, const Vec3& n, const Vec3& center, float radius, float b, float footprint,

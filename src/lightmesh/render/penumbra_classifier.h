@@ -15,6 +15,8 @@
 // 2012), which bounds how far from the seed to look.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 #include "lightmesh/math/vec.h"
@@ -35,6 +37,26 @@ struct SilhouettePoint {
 /// radius there, so an occluder's silhouette through x crosses the light as the origin sees
 /// it. The cone's radius at distance t along its axis is t·tanθ, sin θ = R/d.
 bool ConeHolds(const Vec3& origin, const Vec3& center, float radius, const Vec3& x, float slop);
+
+/// ConeHolds's cone from one point to one light, its quantities computed once for the many
+/// silhouette points tested against it (the marks test every point within reach): the same
+/// arithmetic, so the same answers bit for bit.
+struct LightCone {
+    LightCone() = default;
+    LightCone(const Vec3& origin, const Vec3& center, float radius);
+    bool Holds(const Vec3& x, float slop) const {
+        if (inside) return false;  // inside the light: it sees all of it
+        const Vec3 ox = x - origin;
+        const float t = Dot(ox, oc) / d;  // along the axis
+        if (t <= 0 || t >= d) return false;
+        const float rho2 = std::max(0.0f, LengthSquared(ox) - t * t);
+        const float cone = t * radius / s + slop;
+        return rho2 <= cone * cone;
+    }
+    Vec3 origin, oc;        ///< the point, and the light's centre from it
+    float radius = 0, d = 0, s = 0;  ///< R, |oc|, √(d² − R²)
+    bool inside = false;    ///< d ≤ R
+};
 
 /// The penumbra's half width in samples around a silhouette point x at distance b from a
 /// receiver point `origin` (normal n) lit by the sphere (centre, radius): R·b/(d − b) on a

@@ -115,38 +115,34 @@ void SoftFrame::MarkTile(Window& w, int row, int col, RenderCounters& c) const {
         for (Entry& en : t.entries) en.marked = en.seed;
         return;
     }
-    // The candidates of each block of 4×4 samples (those whose box meets it), in order.
-    constexpr int B = 4;
-    const int blocksX = (ts + B - 1) / B;
-    std::vector<std::vector<uint32_t>>& blocks = ThreadScratch().blocks;
-    blocks.resize(static_cast<size_t>(blocksX * blocksX));
-    for (auto& b : blocks) b.clear();
-    for (uint32_t k = 0; k < cand.size(); ++k) {
-        const Candidate& q = cand[k];
-        for (int by = (q.ya - t.y0) / B; by <= (q.yb - t.y0) / B; ++by)
-            for (int bx = (q.xa - t.x0) / B; bx <= (q.xb - t.x0) / B; ++bx) blocks[by * blocksX + bx].push_back(k);
-    }
-    for (size_t i = 0; i < t.samples.size(); ++i) {
-        const Sample& s = t.samples[i];
-        if (!s.count) continue;
-        const int lx = static_cast<int>(i % ts), ly = static_cast<int>(i / ts);
-        const int x = t.x0 + lx, y = t.y0 + ly;
-        const std::vector<uint32_t>& list = blocks[(ly / B) * blocksX + lx / B];
-        for (uint32_t e = s.first; e < s.first + s.count; ++e) {
-            Entry& en = t.entries[e];
-            const Vec3& center = scene_.lights[en.light].position;
-            for (const uint32_t k : list) {
-                const Candidate& q = cand[k];
-                if (q.light != en.light || x < q.xa || x > q.xb || y < q.ya || y > q.yb) continue;
-                if (ConeHolds(s.sp.origin, center, radii_[en.light], q.p->x, q.p->slop)) {
-                    en.marked = 1;
-                    en.spacing = SpacingOf(q.p->reach);
-                    break;
-                }
+    // Each candidate in turn over the samples of its box: a pair takes the first candidate
+    // (nearest tiles first) whose light is its own and whose silhouette point its cone
+    // holds. A pair's cone is made when a candidate first reaches it.
+    Scratch& sc = ThreadScratch();
+    std::vector<LightCone>& cones = sc.cones;
+    std::vector<uint8_t>& made = sc.made;
+    cones.resize(t.entries.size());
+    made.assign(t.entries.size(), 0);
+    for (const Candidate& q : cand) {
+        const Vec3 x = q.p->x;
+        const float slop = q.p->slop;
+        const uint8_t spacing = SpacingOf(q.p->reach);
+        for (int y = q.ya; y <= q.yb; ++y) {
+            const Sample* row = &t.samples[static_cast<size_t>(y - t.y0) * static_cast<size_t>(ts)];
+            for (int x0 = q.xa; x0 <= q.xb; ++x0) {
+                const Sample& s = row[x0 - t.x0];
+                if (!s.count) continue;
+                Entry* en = FindEntry(t.entries.data() + s.first, s.count, q.light);
+                if (!en || en->marked) continue;
+                const size_t e = static_cast<size_t>(en - t.entries.data());
+                if (!made[e]) cones[e] = LightCone(s.sp.origin, scene_.lights[q.light].position, radii_[q.light]), made[e] = 1;
+                if (cones[e].Holds(x, slop)) en->marked = 1, en->spacing = spacing;
             }
-            if (en.seed && !en.marked) en.marked = 1, en.spacing = 1;
-            c.method[kSoftFrameMarked] += en.marked;
         }
+    }
+    for (Entry& en : t.entries) {
+        if (en.seed && !en.marked) en.marked = 1, en.spacing = 1;
+        c.method[kSoftFrameMarked] += en.marked;
     }
 }
 

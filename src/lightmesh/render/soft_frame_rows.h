@@ -16,30 +16,32 @@
 
 namespace lm {
 
-/// One (camera hit, light) pair.
+/// One (camera hit, light) pair: 24 bytes (the rows in flight hold one per pair).
 struct SoftFrame::Entry {
     uint32_t light = 0;
-    Color omega;       ///< the light's unshadowed term at the hit
-    float v = 0;       ///< its visibility, once known
-    uint8_t probe = 0;   ///< the centre ray reached the light
-    uint8_t seed = 0;    ///< a neighbour's probe disagrees
-    uint8_t marked = 0;  ///< in a penumbra
-    uint8_t spacing = 1; ///< its penumbra's samples per independent value (1, 2 or 4)
-    uint8_t direct = 0;  ///< sampled (else interpolated from the anchors of its spacing)
+    Color omega;                ///< the light's unshadowed term at the hit
+    float v = 0;                ///< its visibility, once known
+    uint8_t probe : 1 = 0;      ///< the centre ray reached the light
+    uint8_t seed : 1 = 0;       ///< a neighbour's probe disagrees
+    uint8_t marked : 1 = 0;     ///< in a penumbra
+    uint8_t direct : 1 = 0;     ///< sampled (else interpolated from the anchors of its spacing)
+    uint8_t spacing : 4 = 1;    ///< its penumbra's samples per independent value (1, 2, 4 or 8)
 };
+static_assert(sizeof(SoftFrame::Entry) == 24);
 
-/// One camera ray's hit.
+/// One camera ray's hit: 80 bytes.
 struct SoftFrame::Sample {
     ShadingPoint sp;
     float footprint = 0;  ///< the world size of a sample on the surface there
     Color rest;           ///< the shading without the lights' terms (ambient, mirror)
     uint32_t first = 0;   ///< its entries in its tile's list, ascending by light
-    uint32_t count = 0;
-    bool hit = false;
+    uint32_t count : 31 = 0;
+    uint32_t hit : 1 = 0;  ///< the camera ray hit the scene
     /// With at most 64 lights: bit l set where it needs light l, and where light l's probe
     /// reached it (the seeds' test compares neighbours by these words).
     uint64_t need = 0, lit = 0;
 };
+static_assert(sizeof(SoftFrame::Sample) == 80);
 
 /// A tile's hits and their (hit, light) pairs.
 struct SoftFrame::Tile {
@@ -107,7 +109,8 @@ struct Scratch {
     std::vector<uint32_t> ids, owner, lights, slotOf, start, order, who;
     std::vector<std::pair<uint32_t, uint32_t>> blocked;
     std::vector<Candidate> cand;
-    std::vector<std::vector<uint32_t>> blocks;
+    std::vector<LightCone> cones;  ///< MarkTile's: a pair's cone, made when first needed
+    std::vector<uint8_t> made;
     std::vector<SoftFrame::Entry> entries;
     std::unique_ptr<bool[]> occluded;
     size_t room = 0;
