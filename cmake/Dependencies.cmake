@@ -23,10 +23,16 @@ lightmesh_require(tinyobjloader_FOUND libtinyobjloader-dev "tinyobjloader (OBJ f
 find_package(ZLIB QUIET)
 lightmesh_require(ZLIB_FOUND zlib1g-dev "zlib (PNG compression)")
 
+# Images: PNG by libpng, JPEG by libjpeg-turbo (maintained, patched by Debian, fuzzed by
+# OSS-Fuzz); stb_image only for TGA and BMP textures.
+find_package(PNG QUIET)
+lightmesh_require(PNG_FOUND libpng-dev "libpng (PNG decoding)")
+find_package(JPEG QUIET)
+lightmesh_require(JPEG_FOUND libjpeg62-turbo-dev "libjpeg-turbo (JPEG decoding)")
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(STB QUIET stb)
-find_path(STB_IMAGE_WRITE_DIR stb_image_write.h HINTS ${STB_INCLUDE_DIRS} PATH_SUFFIXES stb)
-lightmesh_require(STB_IMAGE_WRITE_DIR libstb-dev "stb (PNG decoding)")
+find_path(STB_IMAGE_DIR stb_image.h HINTS ${STB_INCLUDE_DIRS} PATH_SUFFIXES stb)
+lightmesh_require(STB_IMAGE_DIR libstb-dev "stb_image (TGA and BMP textures)")
 
 if(LIGHTMESH_ENABLE_EMBREE)
   find_package(embree 3 QUIET)

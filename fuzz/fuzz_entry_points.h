@@ -31,8 +31,8 @@ int FuzzTemplateFile(const uint8_t* data, size_t size);
 /// Assimp itself must come back as one MeshFileError).
 int FuzzMeshImport(const uint8_t* data, size_t size, bool isolated = false);
 
-/// The first byte picks the decoder: even, stb_image on the rest (PNG, JPEG, TGA, BMP, as
-/// texture.h decodes a material's image); odd, the rest written to an .exr file and read by
+/// The first byte picks the decoder: even, texture.h's DecodeImageBytes on the rest (PNG by
+/// libpng, JPEG by libjpeg-turbo, TGA and BMP by stb_image, as a material's image is decoded); odd, the rest written to an .exr file and read by
 /// OpenEXR. A decode must end in lm::Error or give as many texels as its size says. (The
 /// renderer runs these decoders in a child process, texture_cache.h: a crash found here
 /// costs one image, not the render; the target looks for them anyway.) `isolated` decodes

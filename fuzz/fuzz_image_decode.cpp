@@ -1,5 +1,5 @@
-// libFuzzer target: the image decoders of materials' textures (stb_image's PNG, JPEG, TGA and
-// BMP readers, and OpenEXR). Build and run with scripts/fuzz.sh; the work is in
+// libFuzzer target: the image decoders of materials' textures (libpng, libjpeg-turbo,
+// stb_image's TGA and BMP readers, and OpenEXR). Build and run with scripts/fuzz.sh; the work is in
 // fuzz_entry_points.cpp.
 #include <cstddef>
 #include <cstdint>

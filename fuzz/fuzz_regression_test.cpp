@@ -48,9 +48,10 @@ TEST(FuzzRegression, TemplateFileCorpusAndCrashes) {
     Replay("regressions", "fuzz_template_file", lm::fuzz::FuzzTemplateFile);
 }
 
-// The image decoders: the kept corpus in-process, the findings inside stb_image and OpenEXR
-// (an out-of-bounds index in stb_image's JPEG Huffman tables; an EXR attribute whose size
-// asks for gigabytes) through the decoding child, as the renderer reads images.
+// The image decoders: the kept corpus in-process, the findings inside the decoders (an
+// out-of-bounds index in stb_image's JPEG Huffman tables, which libjpeg-turbo now reads; an
+// EXR attribute whose size asks for gigabytes) through the decoding child, as the renderer
+// reads images.
 TEST(FuzzRegression, ImageDecodeCorpusAndCrashes) {
     EXPECT_GT(Replay("corpus", "fuzz_image_decode",
                      [](const uint8_t* d, size_t n) { return lm::fuzz::FuzzImageDecode(d, n); }),

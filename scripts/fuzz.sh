@@ -6,7 +6,14 @@
 # too), FUZZ_JOBS (parallel fuzzing processes per target, default 1), FUZZ_KEEP_CORPUS=1
 # (merge what the run found into fuzz/corpus/ instead of a scratch folder).
 # Inputs found to crash are written to fuzz/regressions/<target>/ (replayed by the test
-# suite's FuzzRegression tests once kept); the script then exits non-zero.
+# suite's FuzzRegression tests once kept); the script then exits non-zero. For the targets
+# whose libraries run in a child process (Assimp, the image decoders), a finding inside the
+# library is triaged by its signature (the sanitizer's kind of error and the first frame in
+# the library): one with the signature of an input kept in fuzz/regressions/<target>/ (those
+# are replayed first; the FuzzRegression tests check that the child process contains them)
+# is known and counted; a new one fails the run too, naming its file, which is copied there:
+# committing it, under a name that says what it is, is its triage.
+# FUZZ_TRIAGE_MAX (default 60) findings are replayed per target; any more fail the run.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
@@ -29,6 +36,17 @@ ninja -C "$build" -j"$(nproc)" "${targets[@]}"
 # here, where a leak report would stop the fuzzer at the first input.
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=0:allocator_may_return_null=1}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
+# A finding's signature: the sanitizer's (or libFuzzer's) kind of error and the function
+# of the first frame inside the library, e.g. "stack-overflow Assimp::ColladaParser::ReadNode".
+finding_signature() {
+  local kind func
+  kind="$(printf '%s\n' "$1" | grep -oE 'ERROR: (AddressSanitizer|LeakSanitizer|libFuzzer|UndefinedBehaviorSanitizer): [A-Za-z-]+' |
+          head -n 1 | awk '{print $3}')"
+  [ -n "$kind" ] || kind="$(printf '%s\n' "$1" | grep -oE 'runtime error: [a-z ]+' | head -n 1 | tr ' ' '-')"
+  func="$(printf '%s\n' "$2" | sed -E 's/^ +#[0-9]+ 0x[0-9a-f]+ in ([^ (]+).*/\1/')"
+  echo "${kind:-crash} ${func:-unknown}"
+}
+
 status=0
 for t in "${targets[@]}"; do
   seeds="fuzz/corpus/$t"
@@ -48,10 +66,18 @@ for t in "${targets[@]}"; do
   contained=""
   case "$t" in
     fuzz_mesh_import) contained="libassimp"; library="Assimp" ;;
-    fuzz_image_decode) contained="stbi__|libOpenEXR|libIex|libImath"; library="stb_image or OpenEXR" ;;
+    fuzz_image_decode) contained="libpng|libjpeg|stbi__|libOpenEXR|libIex|libImath"; library="libpng, libjpeg-turbo, stb_image or OpenEXR" ;;
   esac
   if [ -n "$contained" ]; then
     asan="$asan:max_allocation_size_mb=1024"
+    # The signatures of the findings kept so far: the known ones.
+    signatures=()
+    for f in "$crashes"/*; do
+      [ -f "$f" ] || continue
+      report="$(ASAN_OPTIONS="$asan" timeout 60 "$build/fuzz/$t" -timeout=5 -rss_limit_mb=2048 "$f" 2>&1 || true)"
+      first="$(printf '%s\n' "$report" | grep -E '^ +#[0-9]+ ' | grep -E "$contained" | head -n 1 || true)"
+      [ -z "$first" ] || signatures+=("$(finding_signature "$report" "$first")")
+    done
     findings="$build/findings/$t"  # this run's findings only
     rm -rf "$findings"
     mkdir -p "$findings"
@@ -82,28 +108,41 @@ for t in "${targets[@]}"; do
   if [ -n "$contained" ]; then
     grep -E "^#[0-9]+: .*oom/timeout/crash" "$log" | tail -n 1 >&2 || true
     # Whose code is at fault: the first frame of the replayed report in the library or in lm::.
-    # (At most 30 are replayed: a timeout costs 5 s to reproduce.)
-    n=0; inside=0; memory=0; untriaged=0
+    # A finding in the library is known when a kept regression has its signature.
+    n=0; inside=0; known=0; memory=0; untriaged=()
     for f in "$findings"/*; do
       [ -f "$f" ] || continue
-      if [ "$n" -ge 30 ]; then untriaged=$((untriaged + 1)); continue; fi
+      if [ "$n" -ge "${FUZZ_TRIAGE_MAX:-60}" ]; then untriaged+=("$f"); continue; fi
       n=$((n + 1))
       report="$(ASAN_OPTIONS="$asan" timeout 60 "$build/fuzz/$t" -timeout=5 -rss_limit_mb=2048 "$f" 2>&1 || true)"
       first="$(printf '%s\n' "$report" | grep -E '^ +#[0-9]+ ' | grep -E "$contained|lm::" | head -n 1 || true)"
       if printf '%s' "$first" | grep -qE "$contained"; then
         inside=$((inside + 1))
+        signature="$(finding_signature "$report" "$first")"
+        if printf '%s\n' "${signatures[@]}" | grep -qxF "$signature"; then
+          known=$((known + 1))
+        else
+          status=1
+          signatures+=("$signature")  # its duplicates in this run are not new again
+          cp "$f" "$crashes/"
+          echo "fuzz: $t: a new finding inside $library's code ($signature), kept in $crashes/$(basename "$f"):" \
+               "fix it, or commit it there under a name that says what it is once triaged" >&2
+        fi
       elif [ -z "$first" ] && printf '%s' "$report" | grep -q "libFuzzer: out-of-memory"; then
         # Over the RSS limit with no allocation to blame: counted, not attributed.
         memory=$((memory + 1))
       else
         status=1
         cp "$f" "$crashes/"
-        echo "fuzz: $t: a finding outside Assimp, kept in $crashes/: $f${first:+: $first}" >&2
+        echo "fuzz: $t: a finding outside $library, kept in $crashes/$(basename "$f")${first:+: $first}" >&2
       fi
     done
-    echo "fuzz: $t: $n findings replayed, $inside of them inside $library's own code (contained by the child process; in $findings)" >&2
+    echo "fuzz: $t: $n findings replayed, $inside of them inside $library's own code ($known of those known from $crashes/; contained by the child process; in $findings)" >&2
     [ "$memory" -eq 0 ] || echo "fuzz: $t: $memory of them over the RSS limit without a stack (unattributed)" >&2
-    [ "$untriaged" -eq 0 ] || echo "fuzz: $t: $untriaged more findings not replayed" >&2
+    if [ ${#untriaged[@]} -gt 0 ]; then
+      status=1
+      echo "fuzz: $t: ${#untriaged[@]} more findings not replayed (FUZZ_TRIAGE_MAX=${FUZZ_TRIAGE_MAX:-60}), so not triaged: ${untriaged[*]}" >&2
+    fi
   fi
   rm -f "$log" fuzz-*.log
   [ "${FUZZ_KEEP_CORPUS:-0}" = 1 ] || rm -rf "$work"

@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(cmake ninja-build g++ pkg-config
           libassimp-dev libtinyobjloader-dev libembree-dev libtbb-dev nlohmann-json3-dev libcli11-dev
-          libstb-dev zlib1g-dev libopenexr-dev libgtest-dev libgmock-dev libbenchmark-dev
+          libstb-dev libpng-dev libjpeg62-turbo-dev zlib1g-dev libopenexr-dev libgtest-dev libgmock-dev libbenchmark-dev
           libopenmpi-dev openmpi-bin  # mpirun -np N lightmesh render (optional for the build)
           clang libclang-rt-14-dev)  # sanitizer builds and libFuzzer (scripts/fuzz.sh)
 packages+=("$@")

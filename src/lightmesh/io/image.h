@@ -1,6 +1,7 @@
 // image.h -- a linear RGB float image, and reading/writing PNG and EXR files.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -39,7 +40,13 @@ struct ImageSize {
 };
 ImageSize ReadImageSize(const std::string& path);
 
-/// Reads a PNG (decoded from sRGB to linear) or an EXR. Throws Error naming the file.
+/// What ReadImage takes for an image of this size: its float pixels and the decoder's
+/// samples (18 B a pixel).
+uint64_t ImageReadBytes(const ImageSize& size);
+/// Reads a PNG (libpng, decoded from sRGB to linear) or an EXR. Its size is read from its
+/// head first (ReadImageSize): one whose reading would take more than half the memory
+/// budget (ImageReadBytes), or with more than 2^28 pixels, is refused before it is decoded.
+/// Throws Error naming the file.
 Image ReadImage(const std::string& path);
 /// ReadImage in a child process (util/isolated_child.h), for images a user hands over
 /// (`compare`): a decoder's crash, allocation bomb or endless loop is an Error naming the

@@ -26,21 +26,12 @@
 #endif
 
 #include "lightmesh/io/image.h"
+#include "lightmesh/io/image_decode.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/isolated_child.h"
 #include "lightmesh/util/huge_pages.h"
 #include "lightmesh/util/parallel.h"
 #include "lightmesh/util/system.h"
-
-// stb's PNG decoder lives in this one translation unit, with internal linkage.
-#define STB_IMAGE_IMPLEMENTATION
-#define STB_IMAGE_STATIC
-#define STBI_ONLY_PNG
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
-#pragma GCC diagnostic ignored "-Wunused-function"
-#include <stb_image.h>
-#pragma GCC diagnostic pop
 
 namespace lm {
 
@@ -392,26 +383,33 @@ void WriteExr(const std::string& tmp, const Image& image) {
 }
 
 Image ReadPng(const std::string& path) {
-    int w = 0, h = 0, n = 0;
-    // 16-bit PNGs at their depth (issue 45: two that differed in every sample's low byte
-    // compared as identical when read at 8 bits).
-    if (stbi_is_16_bit(path.c_str())) {
-        stbi_us* data = stbi_load_16(path.c_str(), &w, &h, &n, 3);
-        if (!data) ThrowErrorAt({path}, "cannot read PNG: %s", stbi_failure_reason());
-        Image image(w, h);
-        auto decode = [](stbi_us v) { return SrgbDecode(static_cast<float>(v) / 65535.0f); };
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
+    if (!in) ThrowErrorAt({path}, "cannot open: %s", std::strerror(errno));
+    const auto end = in.tellg();
+    std::string bytes(end > 0 ? static_cast<size_t>(end) : 0, '\0');
+    in.seekg(0);
+    in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    if (in.bad() || static_cast<size_t>(in.gcount()) != bytes.size()) ThrowErrorAt({path}, "cannot read it");
+    DecodedPixels p;
+    try {
+        // libpng; 16-bit PNGs at their depth (issue 45: two that differed in every
+        // sample's low byte compared as identical when read at 8 bits).
+        p = DecodePng(bytes.data(), bytes.size(), 3, INT32_MAX);
+    } catch (const Error& e) {
+        ThrowErrorAt({path}, "cannot read PNG: %s", e.what());
+    }
+    bytes = std::string();
+    Image image(p.width, p.height);
+    if (p.bits == 16) {
+        auto decode = [](uint16_t v) { return SrgbDecode(static_cast<float>(v) / 65535.0f); };
+        const uint16_t* d = p.rgba16.data();
         for (size_t i = 0; i < image.pixels.size(); ++i)
-            image.pixels[i] = Color(decode(data[3 * i]), decode(data[3 * i + 1]), decode(data[3 * i + 2]));
-        stbi_image_free(data);
+            image.pixels[i] = Color(decode(d[3 * i]), decode(d[3 * i + 1]), decode(d[3 * i + 2]));
         return image;
     }
-    unsigned char* data = stbi_load(path.c_str(), &w, &h, &n, 3);
-    if (!data) ThrowErrorAt({path}, "cannot read PNG: %s", stbi_failure_reason());
-    Image image(w, h);
+    const uint8_t* d = p.rgba8.data();
     for (size_t i = 0; i < image.pixels.size(); ++i)
-        image.pixels[i] = Color(DecodeSrgb8(data[3 * i]), DecodeSrgb8(data[3 * i + 1]),
-                                DecodeSrgb8(data[3 * i + 2]));
-    stbi_image_free(data);
+        image.pixels[i] = Color(DecodeSrgb8(d[3 * i]), DecodeSrgb8(d[3 * i + 1]), DecodeSrgb8(d[3 * i + 2]));
     return image;
 }
 
@@ -448,12 +446,12 @@ std::array<std::string, 3> ExrChannels(const std::string& path, const Imf::Chann
                  list().c_str());
 }
 
-Image ReadExr(const std::string& path) {
+Image ReadExr(const std::string& path, const ImageSize& head) {
     Imf::InputFile file(path.c_str());
     const Imath::Box2i dw = file.header().dataWindow();
     const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
-    if (w <= 0 || h <= 0 || static_cast<int64_t>(w) * h > (int64_t(1) << 28))
-        ThrowErrorAt({path}, "unsupported EXR size %dx%d", w, h);
+    if (w != head.width || h != head.height)  // the memory was judged by the head's size
+        ThrowErrorAt({path}, "EXR whose dataWindow is %dx%d after its head said %dx%d", w, h, head.width, head.height);
     const std::array<std::string, 3> names = ExrChannels(path, file.header().channels());
     Image image(w, h);
     Imf::FrameBuffer fb;
@@ -543,14 +541,31 @@ ImageSize ReadImageSize(const std::string& path) {
     ThrowErrorAt({path}, "cannot read EXR: its header has no dataWindow or is cut short");
 }
 
+uint64_t ImageReadBytes(const ImageSize& size) {
+    return static_cast<uint64_t>(size.width) * static_cast<uint64_t>(size.height) * (sizeof(Color) + 6);
+}
+
 Image ReadImage(const std::string& path) {
     const ImageFormat format = ImageFormatFor(path);
     CheckRegularFile(path, "image");  // never blocks on a FIFO
     std::FILE* f = std::fopen(path.c_str(), "rb");
     if (!f) ThrowErrorAt({path}, "cannot open: %s", std::strerror(errno));
     std::fclose(f);
+    // What reading it takes, from its head (a PNG's IHDR, an EXR's dataWindow), before the
+    // decoder sees it: an EXR of 2^28 pixels was decoded into 3 GiB first.
+    const ImageSize head = ReadImageSize(path);
+    const uint64_t pixels = static_cast<uint64_t>(head.width) * static_cast<uint64_t>(head.height);
+    const uint64_t need = ImageReadBytes(head), budget = PhysicalMemoryBytes();
+    if (budget && need > budget / 2)
+        ThrowErrorAt({path}, "%s of %dx%d pixels: reading it takes about %s (%zu B a pixel), more than half of the "
+                     "%s this process may use (LIGHTMESH_MEMORY_LIMIT)",
+                     format == ImageFormat::Png ? "a PNG" : "an EXR", head.width, head.height, FormatBytes(need).c_str(),
+                     sizeof(Color) + 6, FormatBytes(budget).c_str());
+    if (pixels > (uint64_t(1) << 28))
+        ThrowErrorAt({path}, "%s of %dx%d pixels, more than the 2^28 (268,435,456) an image read may have",
+                     format == ImageFormat::Png ? "a PNG" : "an EXR", head.width, head.height);
     try {
-        return format == ImageFormat::Png ? ReadPng(path) : ReadExr(path);
+        return format == ImageFormat::Png ? ReadPng(path) : ReadExr(path, head);
     } catch (const Error&) {
         throw;
     } catch (const std::bad_alloc&) {

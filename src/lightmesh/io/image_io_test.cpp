@@ -315,5 +315,30 @@ TEST(ImageIO, GarbageFilesAreErrorsNotCrashes) {
     EXPECT_THROW(ReadImage(exr), Error);
 }
 
+// Issue 56: an EXR's size is read from its header's dataWindow, and what reading it takes
+// judged against the budget, before OpenEXR sees the file: one of 2^28 pixels was decoded
+// into 3 GiB first (its only check was that count).
+TEST(ImageIO, AnExrPastTheBudgetIsRefusedFromItsHeader) {
+    const std::string exr = TempPath("huge.exr");
+    WriteImage(exr, Gradient(4, 4));
+    std::string bytes = ReadBytes(exr);
+    const size_t at = bytes.find(std::string("dataWindow\0box2i\0", 17));
+    ASSERT_NE(at, std::string::npos);
+    const int32_t box[4] = {0, 0, 16383, 16383};
+    std::memcpy(bytes.data() + at + 17 + 4, box, sizeof box);
+    std::ofstream(exr, std::ios::binary) << bytes;
+    setenv("LIGHTMESH_MEMORY_LIMIT", "1G", 1);
+    try {
+        ReadImage(exr);
+        ADD_FAILURE() << "read";
+    } catch (const Error& e) {
+        EXPECT_EQ(std::string(e.what()), exr + ": an EXR of 16384x16384 pixels: reading it takes about 4.5 GiB (18 B a "
+                                               "pixel), more than half of the 1.0 GiB this process may use "
+                                               "(LIGHTMESH_MEMORY_LIMIT)");
+    }
+    unsetenv("LIGHTMESH_MEMORY_LIMIT");
+    std::remove(exr.c_str());
+}
+
 }  // namespace
 }  // namespace lm

@@ -9,15 +9,15 @@
 #include <iterator>
 
 #include "lightmesh/io/image.h"
+#include "lightmesh/io/image_decode.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/system.h"
 
-// A second, private instance of stb's decoder (image_io.cpp's reads PNG only): the formats
-// textures come in.
+// PNG and JPEG by libpng and libjpeg-turbo (io/image_decode.h); stb_image only for the
+// formats those do not read, TGA and BMP (its PNG and JPEG readers are compiled out: Debian
+// 12's is a 2022 snapshot, and fuzzing found memory errors in its JPEG Huffman tables).
 #define STB_IMAGE_IMPLEMENTATION
 #define STB_IMAGE_STATIC
-#define STBI_ONLY_PNG
-#define STBI_ONLY_JPEG
 #define STBI_ONLY_TGA
 #define STBI_ONLY_BMP
 #define STBI_NO_STDIO
@@ -237,31 +237,62 @@ std::shared_ptr<const Texture> DecodedImage::MakeTexture() && {
     return std::make_shared<Texture>(width, height, std::move(hdr));
 }
 
+namespace {
+
+/// The width and height an image's head tells: a PNG's or JPEG's (io/image_decode.h), or
+/// stb_image's reading of a TGA or BMP head. False when it tells none.
+bool HeadSize(const std::string& bytes, int* w, int* h) {
+    if (CodedImageKindOf(bytes.data(), bytes.size()) != CodedImageKind::Other)
+        return CodedImageHeadSize(bytes.data(), bytes.size(), w, h);
+    int n = 0;
+    return stbi_info_from_memory(reinterpret_cast<const stbi_uc*>(bytes.data()),
+                                 static_cast<int>(std::min<size_t>(bytes.size(), INT32_MAX)), w, h, &n) != 0;
+}
+
+}  // namespace
+
 DecodedImage DecodeImageBytes(const std::string& bytes) {
-    const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
     if (bytes.empty()) ThrowError("the image is empty");
     if (bytes.size() > static_cast<size_t>(INT32_MAX)) ThrowError("the image is larger than 2 GiB");
-    const int size = static_cast<int>(bytes.size());
-    int w = 0, h = 0, n = 0;
-    if (!stbi_info_from_memory(data, size, &w, &h, &n))
+    const CodedImageKind kind = CodedImageKindOf(bytes.data(), bytes.size());
+    int w = 0, h = 0;
+    if (kind != CodedImageKind::Other && !CodedImageHeadSize(bytes.data(), bytes.size(), &w, &h))
+        ThrowError("cannot decode the image (its %s head is cut short or malformed)",
+                   kind == CodedImageKind::Png ? "PNG" : "JPEG");
+    if (kind == CodedImageKind::Other && !HeadSize(bytes, &w, &h))
         ThrowError("cannot decode the image (%s)", stbi_failure_reason());
     if (w < 1 || h < 1 || w > kMaxTextureSize || h > kMaxTextureSize)
         ThrowError("the image is %d x %d, beyond the %d x %d textures may have", w, h, kMaxTextureSize,
                    kMaxTextureSize);
     const size_t texels = static_cast<size_t>(w) * static_cast<size_t>(h);
     DecodedImage image;
-    if (stbi_is_16_bit_from_memory(data, size)) {
-        stbi_us* p = stbi_load_16_from_memory(data, size, &w, &h, &n, 4);
-        if (!p) ThrowError("cannot decode the image (%s)", stbi_failure_reason());
-        image.hdr.resize(texels * 4);
-        for (size_t i = 0; i < texels * 4; ++i) {
-            const float x = static_cast<float>(p[i]) / 65535.0f;
-            image.hdr[i] = i % 4 == 3 ? x : SrgbDecode(x);
+    if (kind != CodedImageKind::Other) {
+        DecodedPixels p;
+        try {
+            p = kind == CodedImageKind::Png ? DecodePng(bytes.data(), bytes.size(), 4, kMaxTextureSize)
+                                            : DecodeJpeg(bytes.data(), bytes.size(), 4, kMaxTextureSize);
+        } catch (const Error& e) {
+            ThrowError("cannot decode the image (%s)", e.what());
         }
-        stbi_image_free(p);
-    } else {
-        stbi_uc* p = stbi_load_from_memory(data, size, &w, &h, &n, 4);
+        if (p.width != w || p.height != h) ThrowError("cannot decode the image (its size changed while it was read)");
+        if (p.bits == 16) {
+            image.hdr.resize(texels * 4);
+            for (size_t i = 0; i < texels * 4; ++i) {
+                const float x = static_cast<float>(p.rgba16[i]) / 65535.0f;
+                image.hdr[i] = i % 4 == 3 ? x : SrgbDecode(x);
+            }
+        } else {
+            image.ldr = std::move(p.rgba8);
+        }
+    } else {  // TGA, BMP: stb_image, 8 bits
+        const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
+        int lw = 0, lh = 0;
+        stbi_uc* p = stbi_load_from_memory(data, static_cast<int>(bytes.size()), &lw, &lh, nullptr, 4);
         if (!p) ThrowError("cannot decode the image (%s)", stbi_failure_reason());
+        if (lw != w || lh != h) {
+            stbi_image_free(p);
+            ThrowError("cannot decode the image (its size changed while it was read)");
+        }
         image.ldr.assign(p, p + texels * 4);
         stbi_image_free(p);
     }
@@ -308,18 +339,17 @@ DecodedImage ReadImageFile(const std::string& path) {
     in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     if (in.bad() || static_cast<size_t>(in.gcount()) != bytes.size()) ThrowError("cannot read it");
     if (size > bytes.size()) {
-        const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
         const size_t zeros = std::min<size_t>(bytes.size(), 4096);
         if (std::all_of(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(zeros), [](char c) { return c == 0; }))
             ThrowError("its first %zu bytes are all zero (NUL): not an image (a zeroed or sparse file?); not read", zeros);
-        int w = 0, h = 0, n = 0;
+        int w = 0, h = 0;
         // A JPEG's size may follow more than a MiB of metadata: up to 64 MiB, such a file
         // is read whole and the decoder judges it.
-        const bool known = stbi_info_from_memory(data, static_cast<int>(bytes.size()), &w, &h, &n);
+        const bool known = HeadSize(bytes, &w, &h);
         if (!known && size <= kImageWholeReadBytes) w = h = 1;
         else if (!known)
-            ThrowError("its first %s (of %s) are not the head of a PNG, JPEG, TGA or BMP image (%s); not read",
-                       FormatBytes(bytes.size()).c_str(), FormatBytes(size).c_str(), stbi_failure_reason());
+            ThrowError("its first %s (of %s) are not the head of a PNG, JPEG, TGA or BMP image; not read",
+                       FormatBytes(bytes.size()).c_str(), FormatBytes(size).c_str());
         if (w < 1 || h < 1 || w > kMaxTextureSize || h > kMaxTextureSize)
             ThrowError("the image is %d x %d, beyond the %d x %d textures may have; not read", w, h, kMaxTextureSize,
                        kMaxTextureSize);

@@ -1,6 +1,6 @@
 // texture.h -- an image a material samples: its mip-map pyramid in memory, bilinear and
-// trilinear lookups with wrap modes, and the decoding of the files it comes from (PNG, JPEG,
-// TGA and BMP through stb_image, OpenEXR). Loading each image once is texture_cache.h's.
+// trilinear lookups with wrap modes, and the decoding of the files it comes from (PNG by
+// libpng, JPEG by libjpeg-turbo, TGA and BMP by stb_image, OpenEXR). Loading each image once is texture_cache.h's.
 #pragma once
 
 #include <cmath>

@@ -27,7 +27,7 @@ struct TextureSource {
 };
 
 /// Reads each image once for a scene: sources naming the same file (by its canonical path)
-/// or embedding the same bytes share one Texture. The decoders (stb_image, OpenEXR) run in a
+/// or embedding the same bytes share one Texture. The decoders (libpng, libjpeg-turbo, stb_image, OpenEXR) run in a
 /// child process (util/isolated_child.h) with the memory limit and a deadline, as the
 /// importers do: a malformed image that crashes a decoder, or makes it allocate or loop
 /// without end, costs that image (one warning, the flat colour), not the render.

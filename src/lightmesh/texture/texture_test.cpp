@@ -267,3 +267,60 @@ TEST(TextureCache, AHeadThatTellsNoSizeAndAnExrPastTheLimit) {
 
 }  // namespace
 }  // namespace lm
+
+namespace lm {
+namespace {
+
+// Issue 56: PNG and JPEG are decoded by libpng and libjpeg-turbo. A file cut short or
+// corrupt is a warning naming the decoder's reason and the flat colour, decoded in the
+// child as a scene reads it; valid ones give their texels (the 16-bit PNG as linear floats).
+TEST(TextureCache, BrokenPngAndJpegAreAWarningAndTheFlatColour) {
+    const std::string dir = ::testing::TempDir() + "lm_broken_textures_" + std::to_string(getpid());
+    std::filesystem::create_directories(dir);
+    const std::string png = ReadBytes(DataDir + "/texels.png");
+    // A 2 x 2 baseline JPEG of grey 128, written by libjpeg.
+    const std::string jpeg(
+        "\xff\xd8\xff\xdb\x00\x43\x00\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01"
+        "\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01"
+        "\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\xff\xc0\x00\x0b"
+        "\x08\x00\x02\x00\x02\x01\x01\x11\x00\xff\xc4\x00\x14\x00\x01\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00"
+        "\x00\x00\x00\x00\x00\x00\xff\xc4\x00\x14\x10\x01\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00"
+        "\x00\x00\x00\xff\xda\x00\x08\x01\x01\x00\x00\x3f\x00\x3f\xff\xd9",
+        141);
+    const std::vector<std::pair<std::string, std::string>> files = {
+        {"good.png", png},
+        {"good.jpg", jpeg},
+        {"cut.png", png.substr(0, png.size() - 20)},
+        {"bad.png", png.substr(0, 45) + char(png[45] ^ 1) + png.substr(46)},
+        {"cut.jpg", jpeg.substr(0, 100)},
+    };
+    std::vector<TextureSource> sources;
+    for (const auto& [name, bytes] : files) {
+        std::ofstream(dir + "/" + name, std::ios::binary) << bytes;
+        TextureSource s;
+        s.file = dir + "/" + name;
+        s.name = name;
+        sources.push_back(s);
+    }
+    TextureCache cache;
+    std::vector<std::shared_ptr<const Texture>> textures;
+    std::vector<std::string> warnings;
+    const std::vector<int> got =
+        cache.GetAll(sources, "m.obj", &textures, [&](const std::string& w) { warnings.push_back(w); });
+    EXPECT_EQ(got, (std::vector<int>{0, 1, -1, -1, -1}));
+    ASSERT_EQ(textures.size(), 2u);
+    EXPECT_EQ(textures[0]->Sample(0.25f, 0.75f, 0, TextureWrap::Clamp, TextureWrap::Clamp).Rgb(), Color(1, 0, 0));
+    EXPECT_EQ(textures[1]->Width(), 2);
+    EXPECT_NEAR(textures[1]->Sample(0.5f, 0.5f, 0, TextureWrap::Clamp, TextureWrap::Clamp).r, DecodeSrgb8(128), 0.01f);
+    ASSERT_EQ(warnings.size(), 3u);
+    EXPECT_EQ(warnings[0], "m.obj: texture \"cut.png\": cannot decode the image (the PNG is cut short: its data ends "
+                           "before the image does); the material's flat colour is used");
+    EXPECT_EQ(warnings[1], "m.obj: texture \"bad.png\": cannot decode the image (the PNG is corrupt (libpng: IDAT: "
+                           "incorrect data check)); the material's flat colour is used");
+    EXPECT_EQ(warnings[2], "m.obj: texture \"cut.jpg\": cannot decode the image (the JPEG is cut short: its data ends "
+                           "before the image does); the material's flat colour is used");
+    std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace lm
