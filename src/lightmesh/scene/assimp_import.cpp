@@ -456,7 +456,10 @@ LoadedMesh ImportMeshInProcess(const std::string& path, const MeshLoadOptions& o
     try {
         ScopedAssimpLog scopedLog(&log);
         Assimp::Importer importer;
-        importer.SetIOHandler(new RegularFilesOnly(&refused, path, mesh_import::RepairGltfDataUris(path, &out.warnings)));
+        // A file read through a repaired copy: a glTF's data: URIs, an AC3D file's texture layers.
+        std::string replacement = mesh_import::RepairGltfDataUris(path, &out.warnings);
+        if (replacement.empty()) replacement = mesh_import::RepairAc3dTextureLayers(path);
+        importer.SetIOHandler(new RegularFilesOnly(&refused, path, std::move(replacement)));
         // Triangulate polygons; split meshes by primitive type so points and lines sit in
         // meshes of their own, which the walk skips. No normals are generated: shading
         // uses face normals where the file has none. Instances are expanded by the walk

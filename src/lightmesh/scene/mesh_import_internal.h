@@ -71,6 +71,14 @@ void CheckGltfHierarchy(const std::string& path, const ImportBudget& budget);
 /// Assimp drops without a word), gets a warning in *warnings naming the image.
 std::string RepairGltfDataUris(const std::string& path, std::vector<std::string>* warnings);
 
+// ac3d_checks.cpp
+
+/// An AC3D file's text with every `texture` line after an object's first left out, or ""
+/// when the file is not AC3D or no object has more than one (the first texture layer is the
+/// object's image, its coordinates the first pair of each `refs` line, the pair Assimp
+/// reads; Assimp 5.2 keeps the last layer instead). `*dropped` (if given): the lines left out.
+std::string RepairAc3dTextureLayers(const std::string& path, size_t* dropped = nullptr);
+
 // isolated_import.cpp
 
 /// The import deadline without LIGHTMESH_IMPORT_TIMEOUT: 60 s + 2 s per MB, at most this.

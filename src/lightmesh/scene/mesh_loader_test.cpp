@@ -564,5 +564,55 @@ TEST(MeshLoader, AnUnpaddedDataUriIsRead) {
     EXPECT_TRUE(m.warnings.empty()) << m.warnings[0];
 }
 
+// An AC3D object with several texture layers (TORCS's .acc: the base image, then
+// placeholders and skid layers, a coordinate pair per layer on each refs line) takes its
+// first layer, with the first pair: its image and its cut-out (Assimp 5.2 kept the last,
+// an unquoted placeholder read as "ERROR", and the leaf cards became solid slabs).
+TEST(MeshLoader, Ac3dTakesAnObjectsFirstTextureLayer) {
+    const std::string folder = TempFolder();
+    fs::copy_file(std::string(LIGHTMESH_TEST_DATA) + "/textures/texels.png", folder + "/leaf.png");
+    const std::string ac =
+        "AC3Db\n"
+        "MATERIAL \"leaf\" rgb 1 1 1  amb 0.2 0.2 0.2  emis 0 0 0  spec 0 0 0  shi 0  trans 0\n"
+        "OBJECT world\nkids 2\n"
+        "OBJECT poly\nname \"tree\"\n"
+        "texture \"leaf.png\" base\ntexture empty_texture_no_mapping tiled\n"
+        "texture empty_texture_no_mapping skids\n"
+        "numvert 4\n-1 0 0\n1 0 0\n1 2 0\n-1 2 0\n"
+        "numsurf 1\nSURF 0x10\nmat 0\nrefs 4\n"
+        "0 0 0 0.5 0.5 0.5 0.5\n1 1 0 0.5 0.5 0.5 0.5\n2 1 1 0.5 0.5 0.5 0.5\n3 0 1 0.5 0.5 0.5 0.5\n"
+        "kids 0\n"
+        "OBJECT poly\nname \"bare\"\nnumvert 3\n0 0 1\n1 0 1\n0 1 1\nnumsurf 1\nSURF 0x10\nmat 0\nrefs 3\n"
+        "0 0 0\n1 0 0\n2 0 0\nkids 0\n";
+    const std::string path = WriteFile(folder, "tree.acc", ac);
+    size_t dropped = 0;
+    const std::string repaired = mesh_import::RepairAc3dTextureLayers(path, &dropped);
+    EXPECT_EQ(dropped, 2u);
+    EXPECT_EQ(repaired.find("empty_texture_no_mapping"), std::string::npos);
+    EXPECT_NE(repaired.find("texture \"leaf.png\" base"), std::string::npos);
+    EXPECT_EQ(mesh_import::RepairAc3dTextureLayers(WriteFile(folder, "one.ac", "AC3Db\nOBJECT world\nkids 0\n")), "");
+    const LoadedMesh m = LoadMeshFile(path);
+    for (const std::string& w : m.warnings) EXPECT_EQ(w.find("ERROR"), std::string::npos) << w;
+    ASSERT_EQ(m.textures.size(), 1u);
+    EXPECT_EQ(fs::path(m.textures[0].file).filename(), "leaf.png");
+    ASSERT_EQ(m.mesh.TriangleCount(), 3u);
+    int textured = 0;
+    for (size_t t = 0; t < m.mesh.TriangleCount(); ++t) {
+        const Material& mat = m.materials[m.mesh.MaterialOf(static_cast<uint32_t>(t))];
+        if (mat.texture < 0) continue;
+        ++textured;
+        EXPECT_EQ(mat.alphaTexture, mat.texture);  // its alpha is the cut-out
+        EXPECT_EQ(mat.alphaSource, Material::AlphaSource::AlphaIfAny);
+        // The first layer's coordinates: a corner of the card, not the other layers' 0.5.
+        TexCoord uv[3];
+        ASSERT_TRUE(m.mesh.UvsOf(static_cast<uint32_t>(t), uv));
+        for (const TexCoord& c : uv) {
+            EXPECT_TRUE(c.u == 0 || c.u == 1) << c.u;
+            EXPECT_TRUE(c.v == 0 || c.v == 1) << c.v;
+        }
+    }
+    EXPECT_EQ(textured, 2);
+}
+
 }  // namespace
 }  // namespace lm
