@@ -178,6 +178,10 @@ namespace {
 
 /// Tiles a probe renders (WhittedRenderer::EstimateSeconds): enough for every thread to
 /// have several, few enough to take a fraction of a second.
+/// At most this long a probe renders tiles (the RT probe and up to three LMM probes: the
+/// estimate within the rule's 2 s however slow a tile, issue 56).
+constexpr double kProbeSeconds = 0.4;
+
 int ProbeTiles() {
     return std::max(64, 8 * static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)));
 }
@@ -213,7 +217,7 @@ class LmmCost {
             NameOrigins(m, cc, ki, &o);
             const RenderJob job(scene, o, &accel);
             *setup = job.ShadowSetupSeconds();
-            *render = job.Renderer().EstimateSeconds(ProbeTiles());
+            *render = job.Renderer().EstimateSeconds(ProbeTiles(), kProbeSeconds);
         };
         probe(ccHi_, kiHi_, &setupHi_, &renderHi_);
         setupLo_ = setupHi_;
@@ -360,7 +364,7 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
             // Sampled tiles, not a whole render: a 16384 x 16384 matrix is estimated in
             // about a second.
             const Accelerator& probeAccel = *loaded[si]->accels[m.accels.front()];
-            const double rt = RenderJob(scene, o, &probeAccel).Renderer().EstimateSeconds(ProbeTiles());
+            const double rt = RenderJob(scene, o, &probeAccel).Renderer().EstimateSeconds(ProbeTiles(), kProbeSeconds);
             const LmmCost lmm(scene, probeAccel, m, o);
             const double px0 = static_cast<double>(o.width) * o.height;
             for (const auto& size : m.sizes) {

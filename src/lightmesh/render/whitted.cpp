@@ -1,6 +1,7 @@
 #include "lightmesh/render/whitted.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <memory>
 #include <vector>
@@ -247,7 +248,7 @@ void WhittedRenderer::RenderTile(int tile, Image* image, RenderCounters& counter
         }
 }
 
-double WhittedRenderer::EstimateSeconds(int samples) const {
+double WhittedRenderer::EstimateSeconds(int samples, double maxSeconds) const {
     const int tiles = TileCount();
     const std::vector<int64_t> picked = SpreadOverGrid(TilesX(), tiles / TilesX(), std::max(samples, 1));
     const int n = static_cast<int>(picked.size());
@@ -256,15 +257,20 @@ double WhittedRenderer::EstimateSeconds(int samples) const {
     auto time = [&](int parity) {
         const auto start = std::chrono::steady_clock::now();
         const int count = (n - parity + 1) / 2;
+        std::atomic<int> done{0};
         ParallelFor(tbb::blocked_range<int>(0, count, 1), [&](const tbb::blocked_range<int>& range) {
             Image scratch(kTileSize, kTileSize);
             RenderCounters counters;
             for (int i = range.begin(); i != range.end(); ++i) {
+                if (maxSeconds > 0 && done.load(std::memory_order_relaxed) > 0 &&
+                    std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > 0.5 * maxSeconds)
+                    return;
                 const int tile = static_cast<int>(picked[static_cast<size_t>(2 * i + parity)]);
                 RenderTile(tile, &scratch, counters, (tile % TilesX()) * kTileSize, (tile / TilesX()) * kTileSize);
+                done.fetch_add(1, std::memory_order_relaxed);
             }
         });
-        return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / count;
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / std::max(done.load(), 1);
     };
     const double perTile = n >= 2 ? std::min(time(0), time(1)) : time(0);
     return perTile * static_cast<double>(tiles);

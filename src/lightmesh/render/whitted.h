@@ -69,8 +69,10 @@ class WhittedRenderer {
     /// images in two interleaved halves: the faster half's wall time per tile × tiles.
     /// `bench` estimates its matrix so (issue 45); the lazily evaluated work a render shares
     /// between neighbouring tiles (the light mesh's nodes) is shared less among spread
-    /// tiles, so the figure errs high.
-    double EstimateSeconds(int samples) const;
+    /// tiles, so the figure errs high. With `maxSeconds` > 0 each half starts no tile past
+    /// half of it (each does one at least) and counts the tiles it did: a slow render is
+    /// estimated in about that time, from a spread prefix of the sample (issue 56).
+    double EstimateSeconds(int samples, double maxSeconds = 0) const;
     static constexpr int kPacketSize = 8;
 
     /// The camera ray of sub-pixel (sx, sy) of pixel (x, y), as Pixel() and RenderTile make it.

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <chrono>
 #include <cmath>
 
 #include "support/floor_scenes.h"
@@ -127,6 +128,33 @@ TEST(Whitted, NoShadowAcneOnLargeAndSmallScenes) {
         const RenderResult expected = lit.renderer->Render();
         EXPECT_EQ(r.image.pixels, expected.image.pixels) << "scale " << scale;
     }
+}
+
+// The estimate bounded in time (bench's probes, issue 56): slow tiles (area sampling with
+// 256 rays per light on the brute-force back-end) stop being started after half the bound
+// in each half, and the figure, from the tiles done, stays near the unbounded one.
+TEST(Whitted, EstimateStopsAtItsTimeBound) {
+    Scene s = FloorScene();
+    AddBox(&s, {-0.5f, 0, -0.5f}, {0.5f, 1, 0.5f});
+    s.render.width = 256;
+    s.render.height = 256;
+    s.render.areaLight.radius = 0.3f;
+    s.render.areaLight.samples = 256;
+    Rig setup(s, "area", "brute");
+    auto timed = [&](double bound, double* seconds) {
+        const auto start = std::chrono::steady_clock::now();
+        const double e = setup.renderer->EstimateSeconds(64, bound);
+        *seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        return e;
+    };
+    double fullTook = 0, boundedTook = 0;
+    const double full = timed(0, &fullTook);
+    const double bounded = timed(0.1, &boundedTook);
+    EXPECT_GT(bounded, 0);
+    // 64 tiles against 0.1 s and the tiles in flight (comparisons, not a clock's figure).
+    EXPECT_LT(boundedTook, 0.5 * fullTook) << boundedTook << " s against " << fullTook << " s";
+    EXPECT_GT(bounded, full / 3);
+    EXPECT_LT(bounded, full * 3);
 }
 
 TEST(Whitted, ImageIsIdenticalForAnyThreadCount) {
