@@ -121,7 +121,11 @@ void SoftFrame::ShadeTile(Window& w, int row, int col, RenderCounters& c) const 
                     s.footprint = hits[k].t * Length(rays[k].d) * sampleAngle_ / cosView;
                     s.first = static_cast<uint32_t>(entries.size());
                     s.count = count;
-                    for (uint32_t e = 0; e < count; ++e) entries.push_back(Entry{ids[e], omega[e]});
+                    // Written in place (an Entry built aside and copied in stalled on its
+                    // flag byte's store: a quarter of this function's time).
+                    const size_t at = entries.size();
+                    entries.resize(at + count);
+                    for (uint32_t e = 0; e < count; ++e) entries[at + e].light = ids[e], entries[at + e].omega = omega[e];
                 }
         }
     // A quarter more room than the first row needs, so that the rows after it seldom grow.
