@@ -64,3 +64,26 @@ if(LIGHTMESH_ENABLE_MPI)
                    "scripts/install-deps.sh): building without `mpirun -np N lightmesh render`")
   endif()
 endif()
+
+# The Python module (python/): pybind11 (pybind11-dev) against Debian's python3 and NumPy
+# (python3-dev, python3-numpy). Optional: without them it is left out, and said so.
+# LIGHTMESH_HAS_PYTHON tells python/CMakeLists.txt.
+set(LIGHTMESH_HAS_PYTHON OFF)
+if(LIGHTMESH_BUILD_PYTHON)
+  # Debian's interpreter, whose dist-packages hold python3-numpy, unless one is named
+  # (-DPython3_EXECUTABLE=...): a pyenv or conda python3 first on the PATH has no NumPy.
+  if(NOT DEFINED Python3_EXECUTABLE AND EXISTS /usr/bin/python3)
+    set(Python3_EXECUTABLE /usr/bin/python3)
+  endif()
+  find_package(Python3 QUIET COMPONENTS Interpreter Development.Module NumPy)
+  if(Python3_FOUND AND Python3_NumPy_FOUND)
+    set(PYBIND11_FINDPYTHON ON)
+    find_package(pybind11 CONFIG QUIET)
+  endif()
+  if(Python3_FOUND AND Python3_NumPy_FOUND AND pybind11_FOUND)
+    set(LIGHTMESH_HAS_PYTHON ON)
+  else()
+    message(STATUS "lightmesh: the Python module is not built: it needs pybind11, Python 3 with its headers "
+                   "and NumPy (apt-get install pybind11-dev python3-dev python3-numpy, or scripts/install-deps.sh)")
+  endif()
+endif()

@@ -7,6 +7,8 @@ packages=(cmake ninja-build g++ pkg-config
           libassimp-dev libtinyobjloader-dev libembree-dev libtbb-dev nlohmann-json3-dev libcli11-dev
           libstb-dev libpng-dev libjpeg62-turbo-dev zlib1g-dev libopenexr-dev libgtest-dev libgmock-dev libbenchmark-dev
           libopenmpi-dev openmpi-bin  # mpirun -np N lightmesh render (optional for the build)
+          pybind11-dev python3-dev python3-numpy python3-pytest  # the Python module and its tests (optional)
+          python3-matplotlib  # examples/radius_sweep.py's plot
           clang libclang-rt-14-dev)  # sanitizer builds and libFuzzer (scripts/fuzz.sh)
 packages+=("$@")
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The whole test suite -- the README's test command, and what CI runs (.ci/run):
-#   1. the Release build (scripts/build.sh) and every test;
+#   1. the Release build (scripts/build.sh) and every test (the Python module's pytest tests too);
 #   1b. the build without MPI (core and executable only, in build-nompi): it must build,
 #      and say how to get the MPI build when started by mpirun with several processes;
 #   2. the asan preset (CMakePresets.json): every test under AddressSanitizer +

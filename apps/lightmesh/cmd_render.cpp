@@ -67,11 +67,8 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
 
     if (cmd.variant && cmd.variant->empty())
         lm::ThrowError("--variant: must not be empty (leave it out for the default)");
-    // The flags given replace the file's values: theirs is the place a message names. Flags
-    // the chosen method or back-end does not use get a warning each, as pbrt reports unused
-    // parameters (which knob each method uses is the settings table's). A scene file's
-    // "render" values stay silent: a file may set up several methods.
-    const std::pair<const char*, bool> given[] = {
+    // The flags given replace the file's values: theirs is the place a message names.
+    const std::pair<const char*, bool> flags[] = {
         {"width", cmd.width.has_value()},
         {"height", cmd.height.has_value()},
         {"aa", cmd.aa.has_value()},
@@ -92,33 +89,13 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
         {"textures", cmd.noTextures},
         {"instancing", cmd.noInstancing},
     };
-    for (const auto& [key, isGiven] : given) {
+    std::vector<std::string> given;
+    for (const auto& [key, isGiven] : flags) {
         if (!isGiven) continue;
-        const lm::RenderSetting& setting = lm::RenderSettingFor(key);
-        options.origins[key] = lm::SourceLoc::Option(setting.flag);
-        if (!setting.usedWith) continue;
-        const std::string warning =
-            lm::UnusedSettingWarning(key, std::string(setting.usedWith) == "accel" ? options.accel : options.shadows);
-        if (!warning.empty()) lm::LogWarning(warning);
+        given.push_back(key);
+        options.origins[key] = lm::SourceLoc::Option(lm::RenderSettingFor(key).flag);
     }
-    lm::NamingOrigins(options, [&] {
-        if (options.shadows == "lmm") lm::ParseLightMeshVariant(options.lightMesh.variant);
-        if (options.shadows == "area" || options.shadows == "denoised" || cmd.lightRadius || cmd.samples) lm::ValidateAreaLightOptions(options.areaLight);
-    });
-    if (cmd.thinCheck && options.shadows == "lmm" && !(options.areaLight.radius.value_or(0.0f) > 0))
-        lm::LogWarning("--thin-check is used only with a light radius (--light-radius > 0); ignored");
-    if (options.shadows == "area" || options.shadows == "denoised") {
-        // Only when no light has a size left: the lights' own radii, unless overridden.
-        const std::vector<float> radii = lm::LightRadii(scene, options);
-        if (std::all_of(radii.begin(), radii.end(), [](float r) { return r == 0; }))
-            lm::LogWarning(options.areaLight.radius
-                               ? "--shadows " + options.shadows +
-                                     " with light radius 0: point lights, the same image as --shadows rt "
-                                     "(set --light-radius > 0)"
-                               : "--shadows " + options.shadows +
-                                     " with every light's radius 0: point lights, the same image as "
-                                     "--shadows rt (give the lights a \"radius\" or set --light-radius)");
-    }
+    lm::CheckRenderOptions(scene, options, given);
     // Check everything about the output before spending time on the render.
     std::string& output = prepared->output;
     output = cmd.output;
@@ -135,27 +112,7 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
     if (output.back() == '/') lm::ThrowErrorAt({output}, "names a folder, not a file");
     lm::ImageFormatFor(output);
     lm::CheckWritableFolder(output);
-    const uint64_t imageBytes = static_cast<uint64_t>(options.width) * options.height * sizeof(lm::Color);
-    const uint64_t physical = lm::PhysicalMemoryBytes();
-    if (physical && imageBytes > physical / 2)
-        lm::ThrowError("image %dx%d would need %s, more than half of this machine's %s",
-                       options.width, options.height, lm::FormatBytes(imageBytes).c_str(),
-                       lm::FormatBytes(physical).c_str());
-
-    // The light mesh, brute force and the grid read triangles as one array: instances are
-    // flattened for them, refused first past the budget, naming the scene and the option.
-    const std::string sceneName = lm::Printable(cmd.common.scene) + ": ";
-    if (options.accel != "embree") lm::CheckFlatteningFits(scene.mesh, sceneName + "--accel " + options.accel + ": ");
-    if (options.shadows == "lmm" && scene.mesh.instances) {
-        const size_t instances = scene.mesh.instances->Instances().size();
-        lm::FlattenInstances(&scene.mesh, sceneName + "--shadows lmm: ");
-        const lm::TriangleMesh& m = scene.mesh;
-        lm::LogInfo(lm::StringPrintf("--shadows lmm: %s instances flattened into %s triangles (%s)",
-                                     lm::FormatCount(instances).c_str(), lm::FormatCount(m.TriangleCount()).c_str(),
-                                     lm::FormatBytes(m.positions.size() * sizeof(lm::Vec3) + m.normals.size() * sizeof(lm::Vec3) +
-                                                     m.uvs.size() * sizeof(lm::TexCoord) + m.triangles.size() * 16)
-                                         .c_str()));
-    }
+    lm::PrepareSceneForRender(&scene, options, cmd.common.scene);
     prepared->job = std::make_unique<lm::RenderJob>(scene, options);
     return prepared;
 }

@@ -97,16 +97,7 @@ CLI::Validator FiniteFloat(bool nonNegative) {
 size_t EditDistance(const std::string& a, const std::string& b) { return json::EditDistance(a, b); }
 
 std::string Nearest(const std::string& word, const std::vector<std::string>& candidates) {
-    std::string best;
-    size_t bestDistance = 3;
-    for (const std::string& c : candidates) {
-        const size_t d = EditDistance(word, c);
-        if (d < bestDistance && d < std::max<size_t>(word.size(), 2)) {
-            bestDistance = d;
-            best = c;
-        }
-    }
-    return best;
+    return json::Nearest(word, candidates);
 }
 
 namespace {

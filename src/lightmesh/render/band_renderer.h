@@ -16,7 +16,8 @@ class BandRenderer {
     /// Image rows [y0, y1) into the same rows of *image (of the render's size), computing
     /// what they read of the rows around them. Any band gets the whole image's bytes (a
     /// pixel depends on a fixed neighbourhood, never on the band), so MPI ranks render bands.
-    /// `progress` gets one unit per WhittedRenderer tile of the band.
+    /// `progress` gets one unit per WhittedRenderer tile of the band; once it is Stopped(),
+    /// the soft frame leaves its remaining rows undone.
     virtual void RenderRows(int y0, int y1, Image* image, RenderCounters& counters,
                             ProgressReporter* progress = nullptr) const = 0;
     /// The whole image as one band, timed.

@@ -1,8 +1,15 @@
 #include "lightmesh/render/render_job.h"
 
+#include <algorithm>
 #include <chrono>
 
+#include "lightmesh/geometry/instances.h"
+#include "lightmesh/settings/render_settings.h"
+#include "lightmesh/shadow/area_light.h"
+#include "lightmesh/shadow/light_mesh.h"
+#include "lightmesh/shadow/shadow.h"
 #include "lightmesh/util/error.h"
+#include "lightmesh/util/log.h"
 #include "lightmesh/util/system.h"
 
 namespace lm {
@@ -30,6 +37,61 @@ void CheckSceneSpan(const Scene& scene, const std::string& accel) {
 }
 
 }  // namespace
+
+void CheckRenderOptions(const Scene& scene, const RenderOptions& options, const std::vector<std::string>& given) {
+    auto isGiven = [&](const char* key) { return std::find(given.begin(), given.end(), key) != given.end(); };
+    // Flags the chosen method or back-end does not use get a warning each, as pbrt reports
+    // unused parameters (which knob each method uses is the settings table's). A scene
+    // file's "render" values stay silent: a file may set up several methods.
+    for (const RenderSetting& setting : RenderSettings()) {
+        if (!isGiven(setting.key) || !setting.usedWith) continue;
+        const std::string warning = UnusedSettingWarning(
+            setting.key, std::string(setting.usedWith) == "accel" ? options.accel : options.shadows);
+        if (!warning.empty()) LogWarning(warning);
+    }
+    NamingOrigins(options, [&] {
+        if (options.shadows == "lmm") ParseLightMeshVariant(options.lightMesh.variant);
+        if (options.shadows == "area" || options.shadows == "denoised" || isGiven("light_radius") || isGiven("samples"))
+            ValidateAreaLightOptions(options.areaLight);
+    });
+    if (isGiven("thin_check") && options.shadows == "lmm" && !(options.areaLight.radius.value_or(0.0f) > 0))
+        LogWarning("--thin-check is used only with a light radius (--light-radius > 0); ignored");
+    if (options.shadows == "area" || options.shadows == "denoised") {
+        // Only when no light has a size left: the lights' own radii, unless overridden.
+        const std::vector<float> radii = LightRadii(scene, options);
+        if (std::all_of(radii.begin(), radii.end(), [](float r) { return r == 0; }))
+            LogWarning(options.areaLight.radius
+                           ? "--shadows " + options.shadows +
+                                 " with light radius 0: point lights, the same image as --shadows rt "
+                                 "(set --light-radius > 0)"
+                           : "--shadows " + options.shadows +
+                                 " with every light's radius 0: point lights, the same image as "
+                                 "--shadows rt (give the lights a \"radius\" or set --light-radius)");
+    }
+}
+
+void PrepareSceneForRender(Scene* scene, const RenderOptions& options, const std::string& sceneName) {
+    const uint64_t imageBytes = static_cast<uint64_t>(options.width) * options.height * sizeof(Color);
+    const uint64_t physical = PhysicalMemoryBytes();
+    if (physical && imageBytes > physical / 2)
+        ThrowError("image %dx%d would need %s, more than half of this machine's %s", options.width, options.height,
+                   FormatBytes(imageBytes).c_str(), FormatBytes(physical).c_str());
+
+    // The light mesh, brute force and the grid read triangles as one array: instances are
+    // flattened for them, refused first past the budget, naming the scene and the option.
+    const std::string who = Printable(sceneName) + ": ";
+    if (options.accel != "embree") CheckFlatteningFits(scene->mesh, who + "--accel " + options.accel + ": ");
+    if (options.shadows == "lmm" && scene->mesh.instances) {
+        const size_t instances = scene->mesh.instances->Instances().size();
+        FlattenInstances(&scene->mesh, who + "--shadows lmm: ");
+        const TriangleMesh& m = scene->mesh;
+        LogInfo(StringPrintf("--shadows lmm: %s instances flattened into %s triangles (%s)",
+                             FormatCount(instances).c_str(), FormatCount(m.TriangleCount()).c_str(),
+                             FormatBytes(m.positions.size() * sizeof(Vec3) + m.normals.size() * sizeof(Vec3) +
+                                         m.uvs.size() * sizeof(TexCoord) + m.triangles.size() * 16)
+                                 .c_str()));
+    }
+}
 
 RenderJob::RenderJob(const Scene& scene, const RenderOptions& options, const Accelerator* accel)
     : options_(options), accel_(accel) {

@@ -5,12 +5,28 @@
 #pragma once
 
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "lightmesh/render/shadow_denoiser.h"
 #include "lightmesh/render/soft_frame.h"
 #include "lightmesh/render/whitted.h"
 
 namespace lm {
+
+/// What every front end (the CLI, the Python module) does once a render's options are
+/// merged, before anything else is checked: a warning for each knob in `given` (scene-file
+/// keys the caller set explicitly, worded with its flag) that the chosen method or back-end
+/// does not use, the light-mesh variant and the area-light options checked (an error names
+/// where the value came from, RenderOptions::origins), and warnings for settings that
+/// change nothing (--thin-check without a light radius, area shadows of point lights).
+void CheckRenderOptions(const Scene& scene, const RenderOptions& options, const std::vector<std::string>& given);
+
+/// The last step before RenderJob: refuses an image that would need more than half of the
+/// machine's memory, and, for the back-ends and the shadow method that read one triangle
+/// array, flattens the scene's instances (refused past the memory budget, naming
+/// `sceneName` and the option).
+void PrepareSceneForRender(Scene* scene, const RenderOptions& options, const std::string& sceneName);
 
 class RenderJob {
   public:

@@ -339,7 +339,9 @@ void SoftFrame::RenderRows(int y0, int y1, Image* image, RenderCounters& counter
     const int64_t rendererTilesX = renderer_.TilesX();
     const int64_t unitsTotal = int64_t((y1 - y0 + 15) / 16) * rendererTilesX;
     int64_t unitsDone = 0;
-    for (int j = std::max(0, k0 - R - 3); j < std::min(T, k1) + 4 + R + 1; ++j)
+    for (int j = std::max(0, k0 - R - 3); j < std::min(T, k1) + 4 + R + 1; ++j) {
+        // Stopped (a refused estimate, the Python module's Ctrl-C): the rest is left undone.
+        if (progress && progress->Stopped()) break;
         for (int which = 0; which < 5; ++which) {
             const Stage& st = stages[which];
             const int row = j - st.lag;
@@ -366,6 +368,7 @@ void SoftFrame::RenderRows(int y0, int y1, Image* image, RenderCounters& counter
                 unitsDone = units;
             }
         }
+    }
     for (const RenderCounters& c : tileCounters) counters += c;
 }
 

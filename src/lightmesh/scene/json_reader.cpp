@@ -73,6 +73,19 @@ size_t EditDistance(std::string_view a, std::string_view b) {
     return row[b.size()];
 }
 
+std::string Nearest(const std::string& word, const std::vector<std::string>& candidates) {
+    std::string best;
+    size_t bestDistance = 3;
+    for (const std::string& c : candidates) {
+        const size_t d = EditDistance(word, c);
+        if (d < bestDistance && d < std::max<size_t>(word.size(), 2)) {
+            bestDistance = d;
+            best = c;
+        }
+    }
+    return best;
+}
+
 std::string NumberText(double v) {
     // The shortest digits that read back as v (std::to_chars), so 16.000001 is not "16";
     // integers and everyday magnitudes without an exponent, as a person writes them.

@@ -49,6 +49,9 @@ std::string Quoted(std::string_view s);
 std::string Describe(const Json& j);
 std::string JoinQuoted(const std::vector<std::string>& items);
 size_t EditDistance(std::string_view a, std::string_view b);
+/// The candidate nearest to `word` within edit distance 2 (and less than its length), or
+/// "": the "did you mean" of the CLI's options and the Python module's keywords.
+std::string Nearest(const std::string& word, const std::vector<std::string>& candidates);
 
 class Reader {
   public:

@@ -261,8 +261,8 @@ bool Bool(const Reader& r, const Json& j, const std::string& path) {
     return j.get<bool>();
 }
 
-void ReadRender(const Reader& r, const Json& j, RenderOptions* ro) {
-    Object o(r, j, "/render");
+void ReadRender(const Reader& r, const Json& j, RenderOptions* ro, const std::string& path = "/render") {
+    Object o(r, j, path);
     // The knobs' ranges and choices come from the settings table (the CLI checks the same rows).
     auto integer = [&](const Json& v, const char* key) { return SettingInt(r, v, o.Child(key), RenderSettingFor(key)); };
     auto number = [&](const Json& v, const char* key) { return SettingFloat(r, v, o.Child(key), RenderSettingFor(key)); };
@@ -271,7 +271,7 @@ void ReadRender(const Reader& r, const Json& j, RenderOptions* ro) {
     if (const Json* v = o.Find("height")) ro->height = integer(*v, "height");
     constexpr int64_t MaxPixels = int64_t(1) << 28;
     if (int64_t(ro->width) * ro->height > MaxPixels) {
-        r.Fail("/render",
+        r.Fail(path,
                StringPrintf("%d x %d is %lld pixels, more than the limit of %lld", ro->width,
                             ro->height, static_cast<long long>(int64_t(ro->width) * ro->height),
                             static_cast<long long>(MaxPixels)));
@@ -735,6 +735,13 @@ float DefaultLightRadius(const Bounds3& sceneBounds, const Vec3& position) {
 std::string ModelCacheDir() {
     const std::string dir = CacheDir("models");
     return dir.empty() ? "lightmesh-models" : dir;
+}
+
+void ReadRenderSettings(const std::string& origin, const std::string& jsonText, RenderOptions* options,
+                        std::vector<std::string>* warnings) {
+    Reader r(origin, /*strict=*/true, warnings);
+    const Json j = ParseJson(r, jsonText);
+    ReadRender(r, j, options, "");
 }
 
 Scene LoadScene(const std::string& spec, const SceneLoadOptions& options,

@@ -77,4 +77,12 @@ std::string ModelCacheDir();
 Scene LoadScene(const std::string& spec, const SceneLoadOptions& options,
                 std::vector<std::string>* warnings);
 
+/// Reads `jsonText`, an object of the keys of a scene file's "render" (the settings
+/// table's), into *options as LoadScene reads a scene file's "render": the same checks,
+/// and each key's origin recorded ("<origin> /width"). For front ends that take the render
+/// settings as named values (the Python module's keyword arguments); unknown keys are
+/// errors. Throws Error naming `origin` and the key: "<origin> /width: must be ...".
+void ReadRenderSettings(const std::string& origin, const std::string& jsonText, RenderOptions* options,
+                        std::vector<std::string>* warnings = nullptr);
+
 }  // namespace lm

@@ -325,6 +325,34 @@ TEST(SceneFile, RenderValuesRememberTheirPlace) {
     EXPECT_EQ(scene.render.origins.count("cc"), 0u);
 }
 
+// The render object read on its own (the Python module's keywords): the file's checks and
+// messages, each value's origin, unknown keys refused with the near one.
+TEST(SceneFile, RenderSettingsReadOnTheirOwn) {
+    RenderOptions options;
+    options.width = 100;
+    ReadRenderSettings("kw", R"({"width": 64, "cc": 12, "light_radius": 0.5, "shadows": "rt"})", &options);
+    EXPECT_EQ(options.width, 64);
+    EXPECT_EQ(options.height, 480);
+    EXPECT_EQ(options.lightMesh.cc, 12);
+    EXPECT_EQ(options.soft.cc, 12);
+    EXPECT_EQ(options.areaLight.radius, 0.5f);
+    EXPECT_EQ(options.shadows, "rt");
+    EXPECT_EQ(options.origins.at("cc").Format(), "kw /cc");
+    auto message = [](const std::string& json) {
+        RenderOptions o;
+        try {
+            ReadRenderSettings("kw", json, &o);
+        } catch (const Error& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    EXPECT_EQ(message(R"({"width": 0})"), "kw /width: must be between 1 and 16384, got 0");
+    EXPECT_EQ(message(R"({"shadows": "hard"})").rfind("kw /shadows: ", 0), 0u);
+    EXPECT_NE(message(R"({"widht": 3})").find("did you mean \"width\""), std::string::npos);
+    EXPECT_EQ(message(R"({"variant": ""})"), "kw /variant: must not be empty (leave the key out for the default)");
+}
+
 TEST(SceneFile, BadInputsGiveExactMessages) {
     const std::string wood = R"(, "materials": {"wood": {"kd": 0.5}, "mirror": {"mirror": 1}})";
     const std::vector<BadCase> cases = {

@@ -134,6 +134,13 @@ void ProgressReporter::Update(int64_t units) {
     Draw(done, false);
 }
 
+void ProgressReporter::Stop(std::string reason) {
+    std::lock_guard<std::mutex> lock(drawMutex_);
+    if (stopped_) return;
+    stopReason_ = std::move(reason);
+    stopped_ = true;
+}
+
 void ProgressReporter::Done() {
     if (finished_.exchange(true) || !enabled_) return;
     std::lock_guard<std::mutex> lock(drawMutex_);

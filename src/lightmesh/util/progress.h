@@ -39,6 +39,13 @@ class ProgressReporter {
     /// Whether the work should stop (RefuseIfLonger's limit passed); cheap, thread-safe.
     bool Stopped() const { return stopped_.load(std::memory_order_relaxed); }
     const std::string& StopReason() const { return stopReason_; }
+    /// Asks the work to stop (Stopped()) for `reason`, from any thread, unless it was
+    /// stopped already: the Python module's KeyboardInterrupt. The renderers that check
+    /// Stopped() leave their remaining tiles undone.
+    void Stop(std::string reason);
+    /// The units reported done so far (Update's sum), from any thread.
+    int64_t UnitsDone() const { return done_.load(std::memory_order_relaxed); }
+    int64_t Total() const { return total_; }
     /// The whole work's estimated seconds (set-up included), once made; -1 before.
     double EstimatedSeconds() const { return estimate_.load(); }
     /// Seconds after the start at which the estimate was made; -1 before.
