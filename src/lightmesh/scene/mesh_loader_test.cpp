@@ -1,6 +1,7 @@
 // Tests of LoadMeshFile (Assimp import, node walk, materials, excludes).
 #include "lightmesh/scene/mesh_loader.h"
 #include "lightmesh/scene/mesh_import_internal.h"
+#include "support/sanitized.h"
 
 #include <gtest/gtest.h>
 
@@ -427,18 +428,7 @@ TEST(MeshLoader, ImportDeadlineAndEarlyRefusals) {
     EXPECT_EQ(LoadMeshFile(WriteFile(folder, "zero-header.stl", stl)).mesh.TriangleCount(), 1u);
 }
 
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-#define LIGHTMESH_TEST_SANITIZED 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-#define LIGHTMESH_TEST_SANITIZED 1
-#endif
-#endif
-#ifdef LIGHTMESH_TEST_SANITIZED
-constexpr double kSanitizerSlowdown = 15;  // what the sanitizers' instrumentation costs, at most
-#else
-constexpr double kSanitizerSlowdown = 1;
-#endif
+using lm::testing::kSanitizerSlowdown;
 
 // Issue 56: OBJ files are read by lightmesh's parser (MTL by tinyobjloader), laid out as
 // Assimp's reader lays them out. A 12 MB file of 200,000 one-triangle objects, which

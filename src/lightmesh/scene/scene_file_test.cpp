@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -15,6 +16,7 @@
 #include "lightmesh/scene/demo_scene.h"
 #include "lightmesh/scene/json_reader.h"
 #include "lightmesh/util/error.h"
+#include "support/sanitized.h"
 
 namespace lm {
 namespace {
@@ -1133,7 +1135,7 @@ TEST(SceneFile, DeepOrWideJsonIsLinearOrRefused) {
     std::vector<std::string> warnings;
     EXPECT_EQ(LoadScene(WriteFile(folder, "wide.json", scene(wide)), {}, &warnings).mesh.TriangleCount(), 12u);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    EXPECT_LT(seconds, 10.0);  // about 1.5 s here; room for the sanitizer builds
+    EXPECT_LT(seconds, std::max(10.0, 2.0 * testing::kSanitizerSlowdown));  // about 1.5 s here (Release); 24 s under ASan on a busy machine
 }
 
 // Issue 45: values as given, not as stored: 16.000001 rounds to the float 16.000002, which
