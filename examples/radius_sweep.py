@@ -34,6 +34,7 @@ def main():
     args = parser.parse_args()
 
     import matplotlib
+    import matplotlib.ticker
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -60,6 +61,9 @@ def main():
             print(f"radius {radius:g}: {label}: " + ", ".join(f"{t:.3f} s {p:.2f} dB" for t, p in pts))
         ax.set_title(f"light radius {radius:g}")
         ax.set_xscale("log")
+        ax.xaxis.set_major_formatter(matplotlib.ticker.FormatStrFormatter("%g"))
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.FormatStrFormatter("%g"))
+        ax.tick_params(axis="x", which="minor", labelsize=7)
         ax.set_xlabel("render time (s)")
         ax.grid(True, alpha=0.3)
     axes[0][0].set_ylabel(f"PSNR against area N={args.ref_samples} (dB)")
