@@ -14,6 +14,8 @@
 # is known and counted; a new one fails the run too, naming its file, which is copied there:
 # committing it, under a name that says what it is, is its triage.
 # FUZZ_TRIAGE_MAX (default 60) findings are replayed per target; any more fail the run.
+# FUZZ_LIBRARY_FINDINGS=report (scripts/test.sh, CI): a new finding inside a contained
+# library is kept and named but does not fail the run.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
@@ -122,7 +124,10 @@ for t in "${targets[@]}"; do
         if printf '%s\n' "${signatures[@]}" | grep -qxF "$signature"; then
           known=$((known + 1))
         else
-          status=1
+          # FUZZ_LIBRARY_FINDINGS=report (CI): kept and named, not a failure -- the library
+          # runs contained in a child process, and a run's random new finding in it must not
+          # block a change to lightmesh; a developer's run fails on it for triage.
+          [ "${FUZZ_LIBRARY_FINDINGS:-fail}" = report ] || status=1
           signatures+=("$signature")  # its duplicates in this run are not new again
           cp "$f" "$crashes/"
           echo "fuzz: $t: a new finding inside $library's code ($signature), kept in $crashes/$(basename "$f"):" \

@@ -10,6 +10,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -1325,8 +1326,11 @@ TEST(BadInput, EveryCaseIsAClearErrorAndLeavesTheOutputAlone) {
         // 1. No output file before: none after (unless the case is accepted).
         std::error_code removeError;
         fs::remove(out, removeError);
+        const auto started = std::chrono::steady_clock::now();
         const CliResult run = lm::testing::RunLightmesh(args, prefix);
-        if (getenv("LM_PRINT")) printf("%-36s %d %s", c.name.c_str(), run.exitCode, run.output.c_str());
+        if (getenv("LM_PRINT"))
+            printf("%-36s %d %.2f s %s", c.name.c_str(), run.exitCode,
+                   std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(), run.output.c_str());
         EXPECT_EQ(run.exitCode, c.exitCode) << run.output;
         EXPECT_LT(run.exitCode, 128) << "died by a signal:\n" << run.output;
         EXPECT_NE(run.output.find(expected), std::string::npos)

@@ -16,16 +16,19 @@
 
 namespace lm {
 
-/// One (camera hit, light) pair: 24 bytes (the rows in flight hold one per pair).
+/// One (camera hit, light) pair: 24 bytes (the rows in flight hold one per pair). The
+/// flags are separate memory locations where one stage writes a tile's own pairs while its
+/// neighbours read theirs (the seeds read the probes, the samples read the marks and
+/// spacings): only `marked` and `spacing`, both written by the marks alone, share a byte.
 struct SoftFrame::Entry {
     uint32_t light = 0;
-    Color omega;                ///< the light's unshadowed term at the hit
-    float v = 0;                ///< its visibility, once known
-    uint8_t probe : 1 = 0;      ///< the centre ray reached the light
-    uint8_t seed : 1 = 0;       ///< a neighbour's probe disagrees
-    uint8_t marked : 1 = 0;     ///< in a penumbra
-    uint8_t direct : 1 = 0;     ///< sampled (else interpolated from the anchors of its spacing)
-    uint8_t spacing : 4 = 1;    ///< its penumbra's samples per independent value (1, 2, 4 or 8)
+    Color omega;              ///< the light's unshadowed term at the hit
+    float v = 0;              ///< its visibility, once known
+    uint8_t probe = 0;        ///< the centre ray reached the light
+    uint8_t seed = 0;         ///< a neighbour's probe disagrees
+    uint8_t marked : 1 = 0;   ///< in a penumbra
+    uint8_t spacing : 4 = 1;  ///< its penumbra's samples per independent value (1, 2, 4 or 8)
+    uint8_t direct = 0;       ///< sampled (else interpolated from the anchors of its spacing)
 };
 static_assert(sizeof(SoftFrame::Entry) == 24);
 
