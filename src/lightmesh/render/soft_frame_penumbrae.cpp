@@ -92,7 +92,8 @@ void SoftFrame::MarkTile(Window& w, int row, int col, RenderCounters& c) const {
     // Mark the pairs whose cone holds a silhouette point of the seeds within reach. The
     // candidates: the seeds whose box meets the tile, by light, the nearest tiles' first
     // (a pair stops at the first that holds it).
-    std::vector<Candidate>& cand = ThreadScratch().cand;
+    Scratch& sc = ThreadScratch();
+    std::vector<Candidate>& cand = sc.cand;
     cand.clear();
     for (int ring = 0; ring <= reachTiles_; ++ring)
         for (int r = row - ring; r <= row + ring; ++r) {
@@ -110,15 +111,10 @@ void SoftFrame::MarkTile(Window& w, int row, int col, RenderCounters& c) const {
                 }
             }
         }
-    if (cand.empty()) {
-        for (const Entry& en : t.entries) c.method[kSoftFrameMarked] += en.seed;
-        for (Entry& en : t.entries) en.marked = en.seed;
-        return;
-    }
     // Each candidate in turn over the samples of its box: a pair takes the first candidate
     // (nearest tiles first) whose light is its own and whose silhouette point its cone
-    // holds. A pair's cone is made when a candidate first reaches it.
-    Scratch& sc = ThreadScratch();
+    // holds. A pair's cone is made when a candidate first reaches it. A seed no candidate
+    // marks is marked at spacing 1 (its own penumbra, narrower than a sample).
     std::vector<LightCone>& cones = sc.cones;
     std::vector<uint8_t>& made = sc.made;
     cones.resize(t.entries.size());
