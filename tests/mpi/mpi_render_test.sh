@@ -14,7 +14,7 @@ size=(--width 96 --height 72)
 
 case "$case_name" in
 identical)
-    # Every shadow method and light-mesh variant (and the penumbra mode): 1, 2, 3 ranks x 1, 2 threads give the
+    # Every shadow method and light-mesh variant (and the penumbra mode): 1, 2, 3 ranks and 1, 2 threads give the
     # bytes of a single-process render.
     methods=("--shadows soft" "--shadows soft --light-radius 0.4 --soft-samples 16" "--shadows rt"
              "--shadows area --light-radius 0.15 --samples 4" "--shadows denoised --light-radius 0.15 --samples 2")
@@ -24,14 +24,14 @@ identical)
         # shellcheck disable=SC2086
         "$lightmesh" render builtin:gazebo "${size[@]}" $m -q -o "$work/ref.png" >/dev/null ||
             fail "single-process render ($m)"
-        for n in 1 2 3; do
-            for t in 1 2; do
-                # shellcheck disable=SC2086
-                mpi "$n" "$lightmesh" render builtin:gazebo "${size[@]}" $m -t "$t" -q -o "$work/mpi.png" \
-                    >/dev/null || fail "mpirun -np $n, $t threads ($m)"
-                cmp -s "$work/ref.png" "$work/mpi.png" || fail "$n ranks x $t threads differ from one process ($m)"
-                rm -f "$work/mpi.png"
-            done
+        # Ranks x threads: 1 x 2, 2 x 1, 3 x 2 (each count of ranks, each count of threads).
+        for nt in 1:2 2:1 3:2; do
+            n=${nt%:*} t=${nt#*:}
+            # shellcheck disable=SC2086
+            mpi "$n" "$lightmesh" render builtin:gazebo "${size[@]}" $m -t "$t" -q -o "$work/mpi.png" \
+                >/dev/null || fail "mpirun -np $n, $t threads ($m)"
+            cmp -s "$work/ref.png" "$work/mpi.png" || fail "$n ranks x $t threads differ from one process ($m)"
+            rm -f "$work/mpi.png"
         done
         echo "ok: $m"
     done

@@ -6,6 +6,7 @@
 #include <random>
 
 #include "lightmesh/geometry/triangle.h"
+#include "support/sanitized.h"
 
 namespace lm {
 namespace {
@@ -40,7 +41,7 @@ TEST(OccluderBvh, ListsEveryTriangleASegmentBetweenTheBallsCrosses) {
     const OccluderBvh bvh(mesh);
     std::uniform_real_distribution<float> pos(-12, 12), rad(0.0f, 2.0f);
     int checked = 0;
-    for (int q = 0; q < 60; ++q) {
+    for (int q = 0; q < testing::SweepCases(60, 3); ++q) {
         const BallHull hull{Vec3(pos(rng), pos(rng), pos(rng)), rad(rng), Vec3(pos(rng), pos(rng), pos(rng)), rad(rng)};
         std::vector<uint32_t> ids;
         ASSERT_TRUE(bvh.Query(hull, &ids));
