@@ -209,6 +209,32 @@ ShadowDenoiser::ShadowDenoiser(const Scene& scene, const Accelerator& accel, con
     pixelAngle_ = 2.0f * std::tan(0.5f * scene.camera.fovY * Pi / 180.0f) / static_cast<float>(options.height);
 }
 
+namespace {
+
+/// The visibility image's rows [y0, y1): 0 for every light where some camera ray of the
+/// pixel hit the scene (hit: the rows' pixels), NaN elsewhere.
+void ClearVisibilityRows(const uint8_t* hit, int y0, int y1, VisibilityImage* visibility) {
+    const int width = visibility->width;
+    for (int y = y0; y < y1; ++y)
+        for (int x = 0; x < width; ++x)
+            std::fill_n(visibility->At(x, y), visibility->lights,
+                        hit[static_cast<size_t>(y - y0) * width + x] ? 0.0f : std::numeric_limits<float>::quiet_NaN());
+}
+
+/// Light `light`'s filtered values (of rows [y0, y1)) into the visibility image where it
+/// reaches the pixel (its weight > 0); it stays 0 elsewhere, as the image leaves its term out.
+void SetVisibilityRows(size_t light, const float* weight, const float* filtered, int y0, int y1,
+                       VisibilityImage* visibility) {
+    const int width = visibility->width;
+    for (int y = y0; y < y1; ++y)
+        for (int x = 0; x < width; ++x) {
+            const size_t k = static_cast<size_t>(y - y0) * width + x;
+            if (weight[k] > 0) visibility->At(x, y)[light] = filtered[k];
+        }
+}
+
+}  // namespace
+
 size_t ShadowDenoiser::BytesPerPixel() const {
     // The frame (point, normal, footprint), the rest of the shading, then per light its
     // unshadowed term, visibility, weight and penumbra; the filter's radius and pass
@@ -361,11 +387,7 @@ void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& co
     std::vector<Color> sum(rest.begin() + static_cast<ptrdiff_t>(static_cast<size_t>(oy0) * width),
                            rest.begin() + static_cast<ptrdiff_t>(static_cast<size_t>(oy1) * width));
     std::vector<float> filtered(outPixels);
-    if (visibility)
-        for (int y = y0; y < y1; ++y)
-            for (int x = 0; x < width; ++x)
-                std::fill_n(visibility->At(x, y), lights,
-                            hitPixel[frame.Index(x, y - ry0)] ? 0.0f : std::numeric_limits<float>::quiet_NaN());
+    if (visibility) ClearVisibilityRows(hitPixel.data() + static_cast<size_t>(oy0) * width, y0, y1, visibility);
     for (size_t l = 0; l < lights; ++l) {
         const DenoiseLayer& layer = layers[l];
         if (std::all_of(layer.weight.begin(), layer.weight.end(), [](float w) { return w <= 0; })) continue;
@@ -373,12 +395,8 @@ void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& co
         const Color* om = omega.data() + l * pixels + static_cast<size_t>(oy0) * width;
         for (size_t k = 0; k < outPixels; ++k)
             if (layer.weight[static_cast<size_t>(oy0) * width + k] > 0) sum[k] += om[k] * filtered[k];
-        // The visibility image: the filtered value where the light reaches the pixel (its
-        // weight), 0 elsewhere (the lights left out above stay 0 too).
         if (visibility)
-            for (size_t k = 0; k < outPixels; ++k)
-                if (layer.weight[static_cast<size_t>(oy0) * width + k] > 0)
-                    visibility->At(static_cast<int>(k % width), y0 + static_cast<int>(k / width))[l] = filtered[k];
+            SetVisibilityRows(l, layer.weight.data() + static_cast<size_t>(oy0) * width, filtered.data(), y0, y1, visibility);
     }
     for (int y = y0; y < y1; ++y)
         for (int x = 0; x < width; ++x) image->At(x, y) = sum[static_cast<size_t>(y - y0) * width + x];
