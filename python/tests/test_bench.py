@@ -62,6 +62,16 @@ def test_bench_bad_options(lightmesh):
         lightmesh.bench(**dict(TINY, accels="nope"))
     with pytest.raises(lightmesh.Error, match=r"variants=.*must not be empty"):
         lightmesh.bench(**dict(TINY, variants=[]))
+    # Hostile values: NaN, infinities, counts past int, negative thread counts.
+    for bad, message in [(dict(ki=float("nan")), r"ki=: must be between 0.01 and 16, got nan"),
+                         (dict(cc=2 ** 40), r"cc=: expected an int"),
+                         (dict(light_radius=float("inf"), quality=True), r"light_radius=: must be a finite number"),
+                         (dict(ref_samples=10 ** 6), r"ref_samples=: must be between 1 and 4096"),
+                         (dict(threads=-1), r"threads=: must be between 0 and 1024"),
+                         (dict(scene=[]), r"scene=: must not be empty"),
+                         (dict(quality="yes"), r"quality=: expected True or False")]:
+        with pytest.raises(lightmesh.Error, match=message):
+            lightmesh.bench(**dict(TINY, **bad))
     with pytest.raises(lightmesh.Error, match=r"no_such\.json"):
         lightmesh.bench(**dict(TINY, scene="no_such.json"))
 
