@@ -24,6 +24,7 @@
 #include "lightmesh/io/compare.h"
 #include "lightmesh/io/image.h"
 #include "lightmesh/render/render_job.h"
+#include "lightmesh/render/visibility_image.h"
 #include "lightmesh/scene/json_reader.h"
 #include "lightmesh/scene/scene_file.h"
 #include "lightmesh/scene/scene_load.h"
@@ -34,6 +35,9 @@
 #include "lightmesh/util/system.h"
 
 namespace py = pybind11;
+
+/// lightmesh.bench (bench_binding.cpp).
+void DefineBench(py::module_& m);
 
 namespace {
 
@@ -66,7 +70,7 @@ const Keyword* FindKeyword(const std::string& name) {
 }
 
 /// Keywords every render call takes besides the settings table's.
-const std::vector<std::string> kCallKeywords = {"threads", "strict", "progress"};
+const std::vector<std::string> kCallKeywords = {"threads", "strict", "progress", "visibility"};
 
 /// The options of one call, sorted out: the table's as a scene file's "render" object.
 struct CallOptions {
@@ -76,6 +80,7 @@ struct CallOptions {
     bool noTextures = false, noInstancing = false;
     int threads = 0;
     bool strict = false;
+    bool visibility = false;  ///< also return the per-light visibility
     py::object progress = py::none();
 };
 
@@ -108,6 +113,11 @@ CallOptions ParseOptions(const py::kwargs& kwargs, const std::string& function, 
         }
         if (callKeywords && name == "strict") {
             o.strict = py::cast<bool>(v);
+            continue;
+        }
+        if (callKeywords && name == "visibility") {
+            if (!py::isinstance<py::bool_>(v)) throw lm::Error("visibility=: expected True or False");
+            o.visibility = py::cast<bool>(v);
             continue;
         }
         if (callKeywords && name == "progress") {
@@ -220,6 +230,15 @@ lm::Image FromArray(const py::handle& h, const char* what) {
     return image;
 }
 
+/// A visibility image as a float32 (height, width, lights) array owning its values.
+py::array_t<float> VisibilityArray(lm::VisibilityImage visibility) {
+    auto* values = new std::vector<float>(std::move(visibility.values));
+    py::capsule owner(values, [](void* p) { delete static_cast<std::vector<float>*>(p); });
+    const py::ssize_t w = visibility.width, h = visibility.height, l = static_cast<py::ssize_t>(visibility.lights);
+    const py::ssize_t f = sizeof(float);
+    return py::array_t<float>({h, w, l}, {w * l * f, l * f, f}, values->data(), owner);
+}
+
 /// An image argument: a path (read) or an array.
 lm::Image ImageArg(const py::object& x, const char* what) {
     if (py::isinstance<py::str>(x) || py::hasattr(x, "__fspath__")) {
@@ -235,7 +254,8 @@ lm::Image ImageArg(const py::object& x, const char* what) {
 /// Runs `job` on a worker thread while this (Python) thread, the GIL released between
 /// looks, checks for signals (KeyboardInterrupt stops the render: the tile renderers stop
 /// at their next tile) and calls `progress(fraction)`. Returns the result, or raises.
-lm::RenderResult RunJob(const lm::RenderJob& job, const py::object& progressCallback, int threads) {
+lm::RenderResult RunJob(const lm::RenderJob& job, const py::object& progressCallback, int threads,
+                        lm::VisibilityImage* visibility) {
     lm::ProgressReporter progress(job.Renderer().TileCount(), "Rendering", false);
     std::mutex mutex;
     std::condition_variable finished;
@@ -251,7 +271,7 @@ lm::RenderResult RunJob(const lm::RenderJob& job, const py::object& progressCall
                 if (threads > 0)
                     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                                   static_cast<size_t>(threads));
-                result = job.Render(&progress);
+                result = job.Render(&progress, visibility);
             } catch (...) {
                 failure = std::current_exception();
             }
@@ -300,7 +320,7 @@ class PyScene {
     PyScene(lm::Scene scene, lm::RenderOptions options, std::vector<std::string> given, std::string spec)
         : scene_(std::move(scene)), options_(std::move(options)), given_(std::move(given)), spec_(std::move(spec)) {}
 
-    py::array_t<float> Render(const py::kwargs& kwargs) {
+    py::object Render(const py::kwargs& kwargs) {
         CallOptions o = ParseOptions(kwargs, "Scene.render");
         if (o.noTextures || o.noInstancing)
             throw lm::Error("no_textures= and no_instancing= are load options: give them to lightmesh.load()");
@@ -337,7 +357,14 @@ class PyScene {
             py::gil_scoped_release release;
             job = std::make_unique<lm::RenderJob>(scene_, options, accel_.get());
         }
-        return ToArray(RunJob(*job, o.progress, o.threads).image);
+        if (!o.visibility) return ToArray(RunJob(*job, o.progress, o.threads, nullptr).image);
+        std::optional<lm::VisibilityImage> visibility;
+        {
+            py::gil_scoped_release release;
+            visibility.emplace(job->MakeVisibility());
+        }
+        py::array_t<float> image = ToArray(RunJob(*job, o.progress, o.threads, &*visibility).image);
+        return py::make_tuple(image, VisibilityArray(std::move(*visibility)));
     }
 
     lm::Scene& Get() { return scene_; }
@@ -365,10 +392,11 @@ std::shared_ptr<PyScene> Load(const py::object& sceneArg, const py::kwargs& kwar
     return std::make_shared<PyScene>(std::move(scene), std::move(options), o.given, spec.spec);
 }
 
-py::array_t<float> Render(const py::object& sceneArg, const py::kwargs& kwargs) {
-    // threads= and progress= are the render's; strict= the load's (Load reads them all).
+py::object Render(const py::object& sceneArg, const py::kwargs& kwargs) {
+    // threads=, progress= and visibility= are the render's; strict= the load's (Load reads
+    // them all).
     py::kwargs renderOnly;
-    for (const char* k : {"threads", "progress"})
+    for (const char* k : {"threads", "progress", "visibility"})
         if (kwargs.contains(k)) renderOnly[k] = kwargs[k];
     const std::shared_ptr<PyScene> scene = Load(sceneArg, kwargs, "render");
     return scene->Render(renderOnly);
@@ -433,7 +461,11 @@ std::string OptionsDoc() {
     }
     doc += "    threads (int): worker threads (default 0: all cores)\n"
            "    strict (bool): unknown keys in the scene file are errors, not warnings\n"
-           "    progress (callable): called with the fraction done (0..1) from the calling thread\n";
+           "    progress (callable): called with the fraction done (0..1) from the calling thread\n"
+           "    visibility (bool): also return the per-light visibility: (image, visibility), visibility a float32 "
+           "(height, width, lights) array of the fraction of each light seen at each pixel's camera hits, as the "
+           "shadow method shaded them (the mean over the pixel's samples that hit; NaN where none hit; 0 for a light "
+           "behind the surface or out of range)\n";
     return doc;
 }
 
@@ -459,11 +491,13 @@ PYBIND11_MODULE(lightmesh, m) {
 
     const std::string options = OptionsDoc();
     m.def("render", &Render, py::arg("scene"),
-          ("render(scene, **options) -> numpy.ndarray\n\n"
+          ("render(scene, **options) -> numpy.ndarray, or (image, visibility) with visibility=True\n\n"
            "Renders `scene` (a path to a .json scene file or a mesh file, \"builtin:NAME\", or a dict in the scene "
            "file format, its mesh paths relative to the current folder) and returns the linear image as a float32 "
            "array of shape (height, width, 3): the pixels `lightmesh render SCENE -o x.exr` writes with the same "
-           "options. The GIL is released while rendering; Ctrl-C (KeyboardInterrupt) stops the render. Raises "
+           "options. With visibility=True it returns (image, visibility), visibility a float32 (height, width, "
+           "lights) array: each light's visibility at each pixel's camera hits, as the shadow method shaded them "
+           "(the image is the same). The GIL is released while rendering; Ctrl-C (KeyboardInterrupt) stops the render. Raises "
            "lightmesh.Error with the CLI's message.\n\n" +
            options)
               .c_str());
@@ -479,8 +513,9 @@ PYBIND11_MODULE(lightmesh, m) {
 
     py::class_<PyScene, std::shared_ptr<PyScene>>(m, "Scene", "A loaded scene (lightmesh.load).")
         .def("render", &PyScene::Render,
-             ("render(**options) -> numpy.ndarray\n\nRenders the scene as it is now, with the load's options "
-              "replaced by these for this render; the image as lightmesh.render() returns it.\n\n" +
+             ("render(**options) -> numpy.ndarray, or (image, visibility) with visibility=True\n\nRenders the "
+              "scene as it is now, with the load's options replaced by these for this render; the image (and the "
+              "visibility) as lightmesh.render() returns it.\n\n" +
               options)
                  .c_str())
         .def_property_readonly("camera", [](const std::shared_ptr<PyScene>& s) { return PyCamera{s}; })
@@ -588,6 +623,8 @@ PYBIND11_MODULE(lightmesh, m) {
         "display values), rmse_linear, pixels compared, nonfinite_a, nonfinite_b, identical. With a mask, only "
         "where it is not black. With no_shadows (the render with shadows='none'): shadow_total_a, shadow_total_b "
         "(sum of no-shadow minus image, linear luminance) and shadow_ratio (B's over A's).");
+
+    DefineBench(m);
 
     py::list names;
     for (const Keyword& k : Keywords()) names.append(k.name);

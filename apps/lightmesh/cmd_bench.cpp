@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "lightmesh/bench/bench_options.h"
 #include "lightmesh/util/log.h"
 
 namespace lm::cli {
@@ -32,57 +33,22 @@ std::string BenchRepoDir(const std::string& argv0) {
 int RunBench(BenchCommand& cmd) {
     lm::SetLogLevel(cmd.quiet ? lm::LogLevel::Error : lm::LogLevel::Warning);
     lm::InstallInterruptCleanup();
-    // An empty list, or an empty name in it, is refused like the other empty values
-    // (`--variants ""` ran the default variant).
-    if (cmd.variantsOption && cmd.variantsOption->count()) {
-        const auto& v = cmd.matrix.variants;
-        if (v.empty() || std::any_of(v.begin(), v.end(), [](const std::string& s) { return s.empty(); }))
-            lm::ThrowError("--variants: %s (list LMM variants, comma-separated, or leave the option out for the "
-                           "default)",
-                           v.size() > 1 ? "an empty name in the list" : "must not be empty");
-    }
-    // Where CC and kI came from, for the light mesh's messages (a CC too large for memory).
-    if (cmd.ccOption && cmd.ccOption->count())
-        cmd.matrix.ccOrigins.assign(cmd.matrix.cc.size(), lm::SourceLoc::Option("--cc"));
-    if (cmd.kiOption && cmd.kiOption->count())
-        cmd.matrix.kiOrigins.assign(cmd.matrix.ki.size(), lm::SourceLoc::Option("--ki"));
-    if (!cmd.sizes.empty()) {
-        cmd.matrix.sizes.clear();
-        for (const std::string& s : cmd.sizes) {
-            int w = 0, h = 0;
-            char x = 0;
-            if (std::sscanf(s.c_str(), "%d%c%d", &w, &x, &h) != 3 || (x != 'x' && x != 'X') || w < 1 || h < 1 ||
-                w > 16384 || h > 16384)
-                lm::ThrowError("--size %s: expected WIDTHxHEIGHT, e.g. 1024x768", s.c_str());
-            cmd.matrix.sizes.push_back({w, h});
-        }
-    }
-    // --table / --matrix replace the scenes, sizes, CC, kI and variants (CLI11 rejects them
-    // together); the other options still apply.
-    if (cmd.table || !cmd.matrixFile.empty()) {
-        lm::BenchMatrix preset = cmd.table ? lm::BenchTablePreset(cmd.table, cmd.quick, BenchRepoDir(cmd.argv0))
-                                           : lm::LoadBenchMatrix(cmd.matrixFile);
-        const lm::BenchMatrix& given = cmd.matrix;
-        if (cmd.repeatOption->count()) preset.repeat = given.repeat;
-        if (!cmd.matrixFile.empty() && cmd.accelsOption->count()) preset.accels = given.accels;
-        // The paper's tables run on its nested grid unless --accels says otherwise.
-        if (cmd.table) preset.accels = cmd.accelsOption->count() ? given.accels : std::vector<std::string>{"grid"};
-        preset.imageDir = given.imageDir;
-        preset.quality = given.quality;
-        preset.refSamples = given.refSamples;
-        preset.lightRadius = given.lightRadius;
-        if (cmd.table) {
-            const lm::SourceLoc table = lm::SourceLoc::Option(lm::StringPrintf("bench --table %d", cmd.table));
-            preset.ccOrigins.assign(preset.cc.size(), table);
-            preset.kiOrigins.assign(preset.ki.size(), table);
-        }
-        cmd.matrix = preset;
-    } else if (cmd.quick) {
-        for (auto& s : cmd.matrix.sizes) s = {std::max(1, s.first / 4), std::max(1, s.second / 4)};
-        if (!cmd.repeatOption->count()) cmd.matrix.repeat = 1;
-    }
-    cmd.matrix.noShadows = !cmd.noNone;
-    cmd.matrix.maxSeconds = cmd.force ? 0 : lm::kBenchLimitSeconds;
+    // The matrix from the options, as lightmesh.bench() makes it (bench/bench_options.h).
+    lm::BenchOptions options;
+    options.matrix = cmd.matrix;
+    options.sizes = cmd.sizes;
+    options.matrixFile = cmd.matrixFile;
+    options.table = cmd.table;
+    options.quick = cmd.quick;
+    options.noNone = cmd.noNone;
+    options.force = cmd.force;
+    const std::pair<const char*, CLI::Option*> given[] = {{"variants", cmd.variantsOption}, {"cc", cmd.ccOption},
+                                                          {"ki", cmd.kiOption},             {"repeat", cmd.repeatOption},
+                                                          {"accels", cmd.accelsOption}};
+    for (const auto& [key, option] : given)
+        if (option && option->count()) options.given.push_back(key);
+    if (cmd.table) options.repoDir = BenchRepoDir(cmd.argv0);
+    cmd.matrix = lm::MakeBenchMatrix(options);
     if (cmd.matrix.lightRadius && !cmd.matrix.quality)
         lm::LogWarning("bench: --light-radius is ignored without --quality (it sizes the competitors' table)");
     for (const std::string& path : {cmd.csv, cmd.markdown, cmd.html, cmd.json})

@@ -16,7 +16,9 @@
 #endif
 #include "lightmesh/geometry/instances.h"
 #include "lightmesh/io/image.h"
+#include "lightmesh/io/channels_exr.h"
 #include "lightmesh/render/render_job.h"
+#include "lightmesh/render/visibility_image.h"
 #include "lightmesh/render/whitted.h"
 #include "lightmesh/shadow/area_light.h"
 #include "lightmesh/shadow/light_mesh.h"
@@ -112,6 +114,16 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
     if (output.back() == '/') lm::ThrowErrorAt({output}, "names a folder, not a file");
     lm::ImageFormatFor(output);
     lm::CheckWritableFolder(output);
+    if (!cmd.visibility.empty()) {
+        const std::string& vis = cmd.visibility;
+        if (std::filesystem::is_directory(vis, folderError) || vis.back() == '/')
+            lm::ThrowErrorAt({vis}, "--visibility: names a folder, not a file");
+        if (lm::ImageFormatFor(vis) != lm::ImageFormat::Exr)
+            lm::ThrowErrorAt({vis}, "--visibility: must be an .exr file (one float channel per light)");
+        if (std::filesystem::absolute(vis).lexically_normal() == std::filesystem::absolute(output).lexically_normal())
+            lm::ThrowErrorAt({vis}, "--visibility: the same file as the image (-o)");
+        lm::CheckWritableFolder(vis);
+    }
     lm::PrepareSceneForRender(&scene, options, cmd.common.scene);
     prepared->job = std::make_unique<lm::RenderJob>(scene, options);
     return prepared;
@@ -187,6 +199,8 @@ int RunRender(const RenderCommand& cmd) {
     const std::unique_ptr<PreparedRender> p = PrepareRender(cmd);
     lm::SetInterruptMessage(InterruptNote(p->output));
     lm::RenderResult result;
+    std::optional<lm::VisibilityImage> visibility;
+    if (!cmd.visibility.empty()) visibility.emplace(p->job->MakeVisibility());
     {
         lm::ProgressReporter progress(p->job->Renderer().TileCount(), "Rendering",
                                       !cmd.common.quiet && lm::ProgressReporter::StderrIsTerminal());
@@ -195,11 +209,14 @@ int RunRender(const RenderCommand& cmd) {
         if (!cmd.force && !p->job->Denoiser())
             progress.RefuseIfLonger(kRefusedRenderSeconds,
                                     "; " + RenderWork(p->job->Options(), false) + "; --force renders it anyway");
-        result = p->job->Render(&progress);
+        result = p->job->Render(&progress, visibility ? &*visibility : nullptr);
         if (progress.Stopped()) lm::ThrowErrorAt({p->output}, "not rendered: %s", progress.StopReason().c_str());
     }
     const auto t3 = Clock::now();
     lm::WriteImage(p->output, result.image);
+    if (visibility)
+        lm::WriteChannelsExr(cmd.visibility, visibility->width, visibility->height,
+                             lm::LightChannelNames(visibility->lights), visibility->values);
     lm::SetInterruptMessage("");
     PrintRender(cmd, *p, result, SecondsSince(t3), nullptr);
     return 0;
@@ -220,6 +237,8 @@ int RunRenderMpi(const RenderCommand& cmd, const lm::MpiSession& session) {
                          rank > 0 ? lm::StringPrintf(" (rank %d of %d)", rank, session.Size()).c_str() : "");
         return 1;
     };
+    if (!cmd.visibility.empty())
+        return fail("--visibility: not available under mpirun (render in one process to write it)", 0);
     std::unique_ptr<PreparedRender> p;
     std::string error, message;
     int failedRank = -1;

@@ -95,6 +95,7 @@ void PrintFigures(const char* title, const std::vector<std::pair<std::string, st
 struct RenderCommand {
     CommonOptions common;
     std::string output;
+    std::string visibility;  ///< --visibility FILE.exr: the per-light visibility too ("": none)
     std::optional<int> width, height, aa, maxDepth, grid, cc, ns;
     std::optional<float> ki, lightRadius;
     std::optional<int> samples;

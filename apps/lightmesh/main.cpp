@@ -54,6 +54,9 @@ int main(int argc, char** argv) {
     renderCmd->add_flag(lm::RenderSettingFor("textures").flag, render.noTextures, lm::RenderSettingFor("textures").help);
     renderCmd->add_flag(lm::RenderSettingFor("instancing").flag, render.noInstancing,
                         lm::RenderSettingFor("instancing").help);
+    renderCmd->add_option("--visibility", render.visibility,
+                          "Also write each light's visibility at each pixel's camera hits to this .exr: one float "
+                          "channel per light (light0, light1, ...), NaN where no camera ray hit the scene");
     renderCmd->add_flag("--stats", render.stats, "Print rays by kind, time by phase, back-end figures, peak memory");
     renderCmd->add_flag("--force", render.force,
                         "Render even when its first tiles estimate more than an hour (refused otherwise)");

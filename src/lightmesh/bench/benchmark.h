@@ -2,6 +2,7 @@
 // methods side by side in one run, with a warm-up and the median of several runs.
 #pragma once
 
+#include <atomic>
 #include <functional>
 #include <limits>
 #include <optional>
@@ -63,6 +64,9 @@ struct BenchMatrix {
     /// Refuse a matrix estimated to take longer than this many seconds (0: no limit; the
     /// CLI's default is kBenchLimitSeconds, --force lifts it).
     double maxSeconds = 0;
+    /// Once *stop is true (a front end's Ctrl-C), no further render starts: RunBenchmarkReport
+    /// throws Error ("bench: stopped") before its next one. Null: never.
+    const std::atomic<bool>* stop = nullptr;
 };
 
 /// `bench` refuses a matrix estimated above this (one hour) unless --force is given.

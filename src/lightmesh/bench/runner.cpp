@@ -338,6 +338,7 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
     // One render on the scene's shared back-end; *job keeps the shadow method for its figures.
     auto render = [&](const Scene& scene, const Accelerator& accel, const RenderOptions& options, double* setup,
                       std::unique_ptr<RenderJob>* job) {
+        if (m.stop && m.stop->load()) ThrowError("bench: stopped");
         *job = std::make_unique<RenderJob>(scene, options, &accel);
         if (setup) *setup = (*job)->ShadowSetupSeconds();
         return (*job)->Render();

@@ -17,11 +17,14 @@ class BandRenderer {
     /// what they read of the rows around them. Any band gets the whole image's bytes (a
     /// pixel depends on a fixed neighbourhood, never on the band), so MPI ranks render bands.
     /// `progress` gets one unit per WhittedRenderer tile of the band; once it is Stopped(),
-    /// the soft frame leaves its remaining rows undone.
+    /// the soft frame leaves its remaining rows undone. With `visibility` (of the render's
+    /// size and light count), the rows' per-light visibility at the camera hits goes there
+    /// too (VisibilityImage).
     virtual void RenderRows(int y0, int y1, Image* image, RenderCounters& counters,
-                            ProgressReporter* progress = nullptr) const = 0;
+                            ProgressReporter* progress = nullptr, VisibilityImage* visibility = nullptr) const = 0;
     /// The whole image as one band, timed.
-    RenderResult Render(int width, int height, ProgressReporter* progress = nullptr) const;
+    RenderResult Render(int width, int height, ProgressReporter* progress = nullptr,
+                        VisibilityImage* visibility = nullptr) const;
 };
 
 }  // namespace lm

@@ -94,7 +94,7 @@ void PrepareSceneForRender(Scene* scene, const RenderOptions& options, const std
 }
 
 RenderJob::RenderJob(const Scene& scene, const RenderOptions& options, const Accelerator* accel)
-    : options_(options), accel_(accel) {
+    : options_(options), accel_(accel), lights_(scene.lights.size()) {
     CheckSceneSpan(scene, accel ? std::string(accel->Name()) : options.accel);
     // The factories read their own knobs; an error in one names where its value came from.
     if (!accel_) {
@@ -112,6 +112,16 @@ RenderJob::RenderJob(const Scene& scene, const RenderOptions& options, const Acc
     if (options_.shadows == "soft")
         frame_ = std::make_unique<SoftFrame>(scene, *accel_, *renderer_, options_, LightRadii(scene, options_),
                                              SoftFrameSamples(options_.soft));
+}
+
+RenderResult RenderJob::Render(ProgressReporter* progress, VisibilityImage* visibility) const {
+    if (visibility && (visibility->width != options_.width || visibility->height != options_.height ||
+                       visibility->lights != lights_))
+        ThrowError("visibility image %dx%d of %zu lights for a %dx%d render of %zu lights", visibility->width,
+                   visibility->height, visibility->lights, options_.width, options_.height, lights_);
+    const BandRenderer* bands = Bands();
+    return bands ? bands->Render(options_.width, options_.height, progress, visibility)
+                 : renderer_->Render(progress, visibility);
 }
 
 }  // namespace lm

@@ -36,11 +36,12 @@ class RenderJob {
     RenderJob(const Scene& scene, const RenderOptions& options, const Accelerator* accel = nullptr);
 
     /// Renders the whole image (WhittedRenderer::Render; with "--shadows denoised",
-    /// ShadowDenoiser::Render).
-    RenderResult Render(ProgressReporter* progress = nullptr) const {
-        const BandRenderer* bands = Bands();
-        return bands ? bands->Render(options_.width, options_.height, progress) : renderer_->Render(progress);
-    }
+    /// ShadowDenoiser::Render). With `visibility` (null: none, no work), the per-light
+    /// visibility each pixel's camera hits were shaded with goes there too: the render's size
+    /// and light count (MakeVisibility), filled by whichever method renders.
+    RenderResult Render(ProgressReporter* progress = nullptr, VisibilityImage* visibility = nullptr) const;
+    /// An empty visibility image for this job's renders.
+    VisibilityImage MakeVisibility() const { return VisibilityImage(options_.width, options_.height, lights_); }
 
     const Accelerator& Accel() const { return *accel_; }
     const ShadowMethod& Shadows() const { return *shadows_; }
@@ -70,6 +71,7 @@ class RenderJob {
     std::unique_ptr<WhittedRenderer> renderer_;
     std::unique_ptr<ShadowDenoiser> denoiser_;
     std::unique_ptr<SoftFrame> frame_;
+    size_t lights_ = 0;
     double buildSeconds_ = 0, shadowSetupSeconds_ = 0;
 };
 

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -208,6 +209,32 @@ ShadowDenoiser::ShadowDenoiser(const Scene& scene, const Accelerator& accel, con
     pixelAngle_ = 2.0f * std::tan(0.5f * scene.camera.fovY * Pi / 180.0f) / static_cast<float>(options.height);
 }
 
+namespace {
+
+/// The visibility image's rows [y0, y1): 0 for every light where some camera ray of the
+/// pixel hit the scene (hit: the rows' pixels), NaN elsewhere.
+void ClearVisibilityRows(const uint8_t* hit, int y0, int y1, VisibilityImage* visibility) {
+    const int width = visibility->width;
+    for (int y = y0; y < y1; ++y)
+        for (int x = 0; x < width; ++x)
+            std::fill_n(visibility->At(x, y), visibility->lights,
+                        hit[static_cast<size_t>(y - y0) * width + x] ? 0.0f : std::numeric_limits<float>::quiet_NaN());
+}
+
+/// Light `light`'s filtered values (of rows [y0, y1)) into the visibility image where it
+/// reaches the pixel (its weight > 0); it stays 0 elsewhere, as the image leaves its term out.
+void SetVisibilityRows(size_t light, const float* weight, const float* filtered, int y0, int y1,
+                       VisibilityImage* visibility) {
+    const int width = visibility->width;
+    for (int y = y0; y < y1; ++y)
+        for (int x = 0; x < width; ++x) {
+            const size_t k = static_cast<size_t>(y - y0) * width + x;
+            if (weight[k] > 0) visibility->At(x, y)[light] = filtered[k];
+        }
+}
+
+}  // namespace
+
 size_t ShadowDenoiser::BytesPerPixel() const {
     // The frame (point, normal, footprint), the rest of the shading, then per light its
     // unshadowed term, visibility, weight and penumbra; the filter's radius and pass
@@ -216,7 +243,8 @@ size_t ShadowDenoiser::BytesPerPixel() const {
            3 * sizeof(float);
 }
 
-void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& counters, ProgressReporter* progress) const {
+void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& counters, ProgressReporter* progress,
+                                VisibilityImage* visibility) const {
     const int width = options_.width, height = options_.height, aa = options_.aa, T = WhittedRenderer::kTileSize;
     y0 = std::clamp(y0, 0, height);
     y1 = std::clamp(y1, y0, height);
@@ -240,6 +268,8 @@ void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& co
     frame.normal.assign(pixels, Vec3());
     frame.footprint.assign(pixels, 0.0f);
     std::vector<Color> rest(pixels), omega(pixels * lights);
+    // With a visibility image: the pixels some camera ray of which hit the scene.
+    std::vector<uint8_t> hitPixel(visibility ? pixels : 0, 0);
     std::vector<DenoiseLayer> layers(lights);
     for (DenoiseLayer& l : layers) {
         l.visibility.assign(pixels, 1.0f);
@@ -292,11 +322,13 @@ void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& co
                             // Per light the pixel's hits need: Σ V·w, Σ w, Σ penumbra and its
                             // count, and Σ omega, cleared when the light first turns up.
                             pixelLights.clear();
+                            int hitCount = 0;
                             for (size_t s = first; s < first + static_cast<size_t>(aa * aa); ++s) {
                                 if (hits[s].prim == UINT32_MAX) {
                                     restSum += scene_.background;
                                     continue;
                                 }
+                                ++hitCount;
                                 Color r;
                                 uint32_t litCount = 0;
                                 const ShadingPoint sp = renderer_.ShadeSplit(rays[s], hits[s], omegaBuf.data(), litIds.data(), &litCount, &r, c);
@@ -329,6 +361,7 @@ void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& co
                                 }
                             }
                             rest[i] = restSum * inv;
+                            if (visibility) hitPixel[i] = hitCount > 0;
                             for (const uint32_t l : pixelLights) {
                                 inPixel[l] = 0;
                                 omega[l * pixels + i] = omegaSum[l] * inv;
@@ -354,6 +387,7 @@ void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& co
     std::vector<Color> sum(rest.begin() + static_cast<ptrdiff_t>(static_cast<size_t>(oy0) * width),
                            rest.begin() + static_cast<ptrdiff_t>(static_cast<size_t>(oy1) * width));
     std::vector<float> filtered(outPixels);
+    if (visibility) ClearVisibilityRows(hitPixel.data() + static_cast<size_t>(oy0) * width, y0, y1, visibility);
     for (size_t l = 0; l < lights; ++l) {
         const DenoiseLayer& layer = layers[l];
         if (std::all_of(layer.weight.begin(), layer.weight.end(), [](float w) { return w <= 0; })) continue;
@@ -361,6 +395,8 @@ void ShadowDenoiser::RenderRows(int y0, int y1, Image* image, RenderCounters& co
         const Color* om = omega.data() + l * pixels + static_cast<size_t>(oy0) * width;
         for (size_t k = 0; k < outPixels; ++k)
             if (layer.weight[static_cast<size_t>(oy0) * width + k] > 0) sum[k] += om[k] * filtered[k];
+        if (visibility)
+            SetVisibilityRows(l, layer.weight.data() + static_cast<size_t>(oy0) * width, filtered.data(), y0, y1, visibility);
     }
     for (int y = y0; y < y1; ++y)
         for (int x = 0; x < width; ++x) image->At(x, y) = sum[static_cast<size_t>(y - y0) * width + x];

@@ -98,8 +98,8 @@ class ShadowDenoiser final : public BandRenderer {
     /// noisy data of rows [y0 − kDenoiseApron, y1 + kDenoiseApron) (clipped to the image).
     /// `progress` gets one unit per tile of the band's rows. Throws Error when the band's
     /// buffers would need more than half the memory budget.
-    void RenderRows(int y0, int y1, Image* image, RenderCounters& counters,
-                    ProgressReporter* progress = nullptr) const override;
+    void RenderRows(int y0, int y1, Image* image, RenderCounters& counters, ProgressReporter* progress = nullptr,
+                    VisibilityImage* visibility = nullptr) const override;
 
     /// Bytes of buffers per pixel of a band (and its apron).
     size_t BytesPerPixel() const;

@@ -257,7 +257,7 @@ void SoftFrame::SampleTile(Window& w, int row, int col, RenderCounters& c) const
     }
 }
 
-void SoftFrame::ComposeTile(Window& w, int row, int col, int y0, int y1, Image* image, RenderCounters& /*c*/) const {
+void SoftFrame::ComposeTile(Window& w, int row, int col, int y0, int y1, Image* image, VisibilityImage* visibility) const {
     Tile& t = w.At(row, col);
     const int ts = tileSamples_, aa = options_.aa;
     // The interpolated pairs: bilinear in their anchors' values.
@@ -293,11 +293,29 @@ void SoftFrame::ComposeTile(Window& w, int row, int col, int y0, int y1, Image* 
                     sum += colour;
                 }
             image->At(px, py) = sum * inv;
+            if (visibility) RecordVisibility(t, px, py, visibility);
         }
     }
 }
 
-void SoftFrame::RenderRows(int y0, int y1, Image* image, RenderCounters& counters, ProgressReporter* progress) const {
+void SoftFrame::RecordVisibility(const Tile& t, int px, int py, VisibilityImage* visibility) const {
+    // The pixel's samples' values, as ComposeTile weighs their lights' terms by them.
+    const int ts = tileSamples_, aa = options_.aa;
+    float* out = visibility->At(px, py);
+    std::fill_n(out, visibility->lights, 0.0f);
+    int hits = 0;
+    for (int sy = 0; sy < aa; ++sy)
+        for (int sx = 0; sx < aa; ++sx) {
+            const Sample& s = t.samples[static_cast<size_t>(py * aa + sy - t.y0) * ts + (px * aa + sx - t.x0)];
+            if (!s.hit) continue;
+            ++hits;
+            for (uint32_t e = s.first; e < s.first + s.count; ++e) out[t.entries[e].light] += t.entries[e].v;
+        }
+    FinishVisibility(out, visibility->lights, hits);
+}
+
+void SoftFrame::RenderRows(int y0, int y1, Image* image, RenderCounters& counters, ProgressReporter* progress,
+                           VisibilityImage* visibility) const {
     const int height = options_.height;
     y0 = std::clamp(y0, 0, height);
     y1 = std::clamp(y1, y0, height);
@@ -356,7 +374,7 @@ void SoftFrame::RenderRows(int y0, int y1, Image* image, RenderCounters& counter
                         case 1: SeedTile(w, row, col, c); break;
                         case 2: MarkTile(w, row, col, c); break;
                         case 3: SampleTile(w, row, col, c); break;
-                        default: ComposeTile(w, row, col, y0, y1, image, c); break;
+                        default: ComposeTile(w, row, col, y0, y1, image, visibility); break;
                     }
                 }
             });

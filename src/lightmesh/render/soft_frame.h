@@ -50,8 +50,8 @@ class SoftFrame final : public BandRenderer {
     RenderResult Render(ProgressReporter* progress = nullptr) const {
         return BandRenderer::Render(options_.width, options_.height, progress);
     }
-    void RenderRows(int y0, int y1, Image* image, RenderCounters& counters,
-                    ProgressReporter* progress = nullptr) const override;
+    void RenderRows(int y0, int y1, Image* image, RenderCounters& counters, ProgressReporter* progress = nullptr,
+                    VisibilityImage* visibility = nullptr) const override;
 
     /// The farthest a silhouette point found at one sample marks others, in samples.
     static constexpr int kReach = 64;
@@ -69,7 +69,8 @@ class SoftFrame final : public BandRenderer {
     void SeedTile(Window& w, int row, int col, RenderCounters& c) const;
     void MarkTile(Window& w, int row, int col, RenderCounters& c) const;
     void SampleTile(Window& w, int row, int col, RenderCounters& c) const;
-    void ComposeTile(Window& w, int row, int col, int y0, int y1, Image* image, RenderCounters& c) const;
+    void ComposeTile(Window& w, int row, int col, int y0, int y1, Image* image, VisibilityImage* visibility) const;
+    void RecordVisibility(const Tile& t, int px, int py, VisibilityImage* visibility) const;
     void CheckMemory(Window& w) const;
     bool Interpolable(Window& w, const Sample& s, uint32_t light, int x, int y, int spacing) const;
 

@@ -168,7 +168,8 @@ Color WhittedRenderer::Pixel(int x, int y, RenderCounters& counters) const {
     return sum * (1.0f / static_cast<float>(aa * aa));
 }
 
-void WhittedRenderer::RenderTile(int tile, Image* image, RenderCounters& counters, int originX, int originY) const {
+void WhittedRenderer::RenderTile(int tile, Image* image, RenderCounters& counters, int originX, int originY,
+                                 VisibilityImage* visibility) const {
     const int w = options_.width, h = options_.height, tilesX = TilesX(), aa = options_.aa;
     const int x0 = (tile % tilesX) * kTileSize, y0 = (tile / tilesX) * kTileSize;
     const int x1 = std::min(x0 + kTileSize, w), y1 = std::min(y0 + kTileSize, h);
@@ -207,6 +208,13 @@ void WhittedRenderer::RenderTile(int tile, Image* image, RenderCounters& counter
                             rays.push_back(camera_.Generate(SubPixel(x, sx), SubPixel(y, sy)));
             hits.resize(rays.size());
             accel_.IntersectMany(rays.data(), rays.size(), hits.data());
+            // The packet's pixels of the visibility image, accumulated sample by sample.
+            const int packetW = ex - bx, perPixel = aa * aa;
+            if (visibility) {
+                buffers.pixelHits.assign(static_cast<size_t>(packetW * (ey - by)), 0);
+                for (int y = by; y < ey; ++y)
+                    for (int x = bx; x < ex; ++x) std::fill_n(visibility->At(x, y), nLights, 0.0f);
+            }
             // Shading, kShadingBatch hits at a time: their lights' visibility for all of
             // them at once (ShadowMethod::VisibilityMany: hard shadows trace the batch's
             // rays to one light as a packet), then each hit's colour as Shade gives it.
@@ -226,6 +234,15 @@ void WhittedRenderer::RenderTile(int tile, Image* image, RenderCounters& counter
                     ++count;
                 }
                 if (shaded) shadows_.VisibilityMany(points.data(), buffers.lists.data(), buffers.visOut.data(), shaded, counters);
+                if (visibility)
+                    for (size_t k = first, j = 0; k < end; ++k) {
+                        if (hits[k].prim == UINT32_MAX) continue;
+                        const int p = static_cast<int>(k) / perPixel;
+                        AddVisibility(visibility->At(bx + p % packetW, by + p / packetW), batch[j].lit, buffers.Vis(j),
+                                      batch[j].litCount);
+                        ++buffers.pixelHits[static_cast<size_t>(p)];
+                        ++j;
+                    }
                 for (size_t k = first, j = 0; k < end; ++k) {
                     if (hits[k].prim == UINT32_MAX) {
                         colors[k] = scene_.background;
@@ -244,6 +261,9 @@ void WhittedRenderer::RenderTile(int tile, Image* image, RenderCounters& counter
                         sum += colors[k];
                     }
                     image->At(x - originX, y - originY) = sum * (1.0f / static_cast<float>(aa * aa));
+                    if (visibility)
+                        FinishVisibility(visibility->At(x, y), nLights,
+                                         buffers.pixelHits[static_cast<size_t>((y - by) * packetW + (x - bx))]);
                 }
         }
 }
@@ -276,7 +296,11 @@ double WhittedRenderer::EstimateSeconds(int samples, double maxSeconds) const {
     return perTile * static_cast<double>(tiles);
 }
 
-RenderResult WhittedRenderer::Render(ProgressReporter* progress) const {
+RenderResult WhittedRenderer::Render(ProgressReporter* progress, VisibilityImage* visibility) const {
+    if (visibility && (visibility->width != options_.width || visibility->height != options_.height ||
+                       visibility->lights != scene_.lights.size()))
+        ThrowError("visibility image %dx%d of %zu lights for a %dx%d render of %zu lights", visibility->width,
+                   visibility->height, visibility->lights, options_.width, options_.height, scene_.lights.size());
     RenderResult result;
     result.image = Image(options_.width, options_.height);
     std::vector<RenderCounters> tileCounters(static_cast<size_t>(TileCount()));
@@ -295,14 +319,14 @@ RenderResult WhittedRenderer::Render(ProgressReporter* progress) const {
     ParallelFor(tbb::blocked_range<int>(0, static_cast<int>(sample.size()), 1), [&](const tbb::blocked_range<int>& range) {
         for (int i = range.begin(); i != range.end() && !progress->Stopped(); ++i) {
             const int tile = static_cast<int>(sample[static_cast<size_t>(i)]);
-            RenderTile(tile, &result.image, tileCounters[tile]);
+            RenderTile(tile, &result.image, tileCounters[tile], 0, 0, visibility);
             progress->Update(1);
         }
     });
     ParallelFor(tbb::blocked_range<int>(0, TileCount(), 1), [&](const tbb::blocked_range<int>& range) {
         for (int tile = range.begin(); tile != range.end(); ++tile) {
             if (!sampled.empty() && (sampled[static_cast<size_t>(tile)] || progress->Stopped())) continue;
-            RenderTile(tile, &result.image, tileCounters[tile]);
+            RenderTile(tile, &result.image, tileCounters[tile], 0, 0, visibility);
             if (progress) progress->Update(1);
         }
     });

@@ -10,6 +10,7 @@
 #include "lightmesh/io/image.h"
 #include "lightmesh/render/light_lists.h"
 #include "lightmesh/render/light_terms.h"
+#include "lightmesh/render/visibility_image.h"
 #include "lightmesh/util/counters.h"
 #include "lightmesh/settings/options.h"
 #include "lightmesh/scene/camera.h"
@@ -47,8 +48,10 @@ class WhittedRenderer {
     /// RenderTile renders any subset of the tiles into the same pixels). With `progress`,
     /// kEstimateTiles tiles spread over the image (SpreadOverGrid) are rendered first, the
     /// reporter's sample for its estimate (ProgressReporter::BeginWork); once it says
-    /// Stopped() (its RefuseIfLonger limit passed), no more tiles are rendered.
-    RenderResult Render(ProgressReporter* progress = nullptr) const;
+    /// Stopped() (its RefuseIfLonger limit passed), no more tiles are rendered. With
+    /// `visibility` (of the render's size and light count), each pixel's lights' visibility
+    /// at its camera hits goes there too (VisibilityImage).
+    RenderResult Render(ProgressReporter* progress = nullptr, VisibilityImage* visibility = nullptr) const;
     static constexpr int kEstimateTiles = 64;
     /// Tiles of the image, row by row: tile t covers the pixels from
     /// ((t % tilesX)·kTileSize, (t / tilesX)·kTileSize), clipped to the image.
@@ -62,8 +65,10 @@ class WhittedRenderer {
     /// The pixels of one tile into *image (of the render's size): Pixel()'s values, with the
     /// camera rays of kPacketSize × kPacketSize pixels traced together (IntersectMany).
     /// With an origin, pixel (x, y) goes to image->At(x - originX, y - originY) instead
-    /// (a tile-sized scratch image).
-    void RenderTile(int tile, Image* image, RenderCounters& counters, int originX = 0, int originY = 0) const;
+    /// (a tile-sized scratch image). With `visibility` (the render's size, no origin), the
+    /// tile's pixels of it are written as well.
+    void RenderTile(int tile, Image* image, RenderCounters& counters, int originX = 0, int originY = 0,
+                    VisibilityImage* visibility = nullptr) const;
     /// The seconds the whole render would take, from `samples` of its tiles spread evenly
     /// over the image (SpreadOverGrid; all of them if it has no more), rendered in parallel into scratch
     /// images in two interleaved halves: the faster half's wall time per tile × tiles.
@@ -119,6 +124,7 @@ class WhittedRenderer {
         std::vector<ShadingPoint> points;
         std::vector<LightIndices> lists;
         std::vector<float*> visOut;
+        std::vector<int> pixelHits;  // with a visibility image: the packet's pixels' camera hits
         size_t roomLights = 0;
         // The batch's Lighting terms and values: room for kShadingBatch × lights each
         // (Lighting points into them); only the entries of the lights lit are touched.
