@@ -30,7 +30,7 @@ std::string BenchRepoDir(const std::string& argv0) {
 }  // namespace
 
 int RunBench(BenchCommand& cmd) {
-    lm::SetLogLevel(cmd.quiet ? lm::LogLevel::Error : lm::LogLevel::Warning);
+    lm::SetLogLevel(cmd.quiet ? lm::LogLevel::Error : (cmd.verbose ? lm::LogLevel::Info : lm::LogLevel::Warning));
     lm::InstallInterruptCleanup();
     // An empty list, or an empty name in it, is refused like the other empty values
     // (`--variants ""` ran the default variant).
@@ -40,6 +40,7 @@ int RunBench(BenchCommand& cmd) {
             lm::ThrowError("--variants: %s (list LMM variants, comma-separated, or leave the option out for the "
                            "default)",
                            v.size() > 1 ? "an empty name in the list" : "must not be empty");
+        lm::TakeSoftFromVariants(&cmd.matrix);  // "soft": the default shadow method, timed too
     }
     // Where CC and kI came from, for the light mesh's messages (a CC too large for memory).
     if (cmd.ccOption && cmd.ccOption->count())

@@ -39,6 +39,8 @@ lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth, int frameHeig
     load.strict = o.strict;
     load.textures = o.textures;
     load.instancing = o.instancing;
+    load.upAxis = o.upAxis;
+    load.frameFovY = o.frameFovY;
     load.frameWidth = frameWidth;
     load.frameHeight = frameHeight;
     std::vector<std::string> warnings;
@@ -147,8 +149,8 @@ std::string CommandLineMistake(const CLI::App& app, const CLI::ParseError& e, in
             return "";
         }
         if (!first.empty() && first[0] == '-')
-            return lm::Printable(first) + ": not an option of lightmesh; the options go after the command (" +
-                   "lightmesh render SCENE --shadows rt, ...)";
+            return lm::Printable(first) + ": not an option of lightmesh; a command's options go after it (" +
+                   "lightmesh render SCENE --shadows rt, ...); only -t, -q and -v may also come before it";
         const std::string near = Nearest(first, commands);
         return "unknown command \"" + lm::Printable(first) + "\"" +
                (near.empty() ? " (the commands: " + JoinOr(commands) + ")" : "; did you mean " + near + "?");
@@ -163,6 +165,19 @@ std::string CommandLineMistake(const CLI::App& app, const CLI::ParseError& e, in
         if (std::find(extras.begin(), extras.end(), argv[i]) != extras.end()) given.push_back(argv[i]);
     if (given.empty()) return "";
     const std::string where = parsed.empty() ? "lightmesh" : "`" + cmd.get_name() + "`";
+    // An option before the command that is not one of those every command takes.
+    int commandAt = argc;
+    for (int i = 1; i < argc && !parsed.empty(); ++i)
+        if (argv[i] == cmd.get_name()) {
+            commandAt = i;
+            break;
+        }
+    for (int i = 1; i < commandAt; ++i) {
+        const std::string arg = argv[i];
+        if (arg.size() > 1 && arg[0] == '-' && std::find(extras.begin(), extras.end(), arg) != extras.end())
+            return lm::Printable(arg.substr(0, arg.find('='))) + ": not an option of lightmesh; a command's options go "
+                   "after it (lightmesh render SCENE --shadows rt, ...); only -t, -q and -v may also come before it";
+    }
     for (const std::string& arg : given) {
         if (arg.size() < 2 || arg[0] != '-') continue;
         const std::string name = arg.substr(0, arg.find('='));
@@ -173,6 +188,34 @@ std::string CommandLineMistake(const CLI::App& app, const CLI::ParseError& e, in
     std::string list;
     for (const std::string& arg : given) list += (list.empty() ? "" : " ") + lm::Printable(arg);
     return (given.size() == 1 ? "unexpected argument for " : "unexpected arguments for ") + where + ": " + list;
+}
+
+std::vector<std::string> CommandNamesOf(const CLI::App& app) { return CommandNames(app); }
+
+std::vector<std::string> GlobalOptionsAfterCommand(int argc, char** argv, const std::vector<std::string>& commands) {
+    std::vector<std::string> args(argv, argv + argc);
+    std::vector<std::string> moved;
+    size_t i = 1;
+    while (i < args.size()) {
+        const std::string& a = args[i];
+        if (a == "-q" || a == "--quiet" || a == "-v" || a == "--verbose" || a.rfind("--threads=", 0) == 0 ||
+            (a.rfind("-t", 0) == 0 && a.size() > 2 && a[2] != '-')) {
+            moved.push_back(a);
+            ++i;
+        } else if ((a == "-t" || a == "--threads") && i + 1 < args.size()) {
+            moved.push_back(a);
+            moved.push_back(args[i + 1]);
+            i += 2;
+        } else {
+            break;
+        }
+    }
+    if (moved.empty() || i >= args.size() || std::find(commands.begin(), commands.end(), args[i]) == commands.end())
+        return args;
+    std::vector<std::string> out = {args[0], args[i]};
+    out.insert(out.end(), moved.begin(), moved.end());
+    out.insert(out.end(), args.begin() + static_cast<std::ptrdiff_t>(i) + 1, args.end());
+    return out;
 }
 
 void PrintFigures(const char* title, const std::vector<std::pair<std::string, std::string>>& figures) {

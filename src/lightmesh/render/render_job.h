@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "lightmesh/io/tonemap.h"
 #include "lightmesh/render/shadow_denoiser.h"
 #include "lightmesh/render/soft_frame.h"
 #include "lightmesh/render/whitted.h"
@@ -36,10 +37,13 @@ class RenderJob {
     RenderJob(const Scene& scene, const RenderOptions& options, const Accelerator* accel = nullptr);
 
     /// Renders the whole image (WhittedRenderer::Render; with "--shadows denoised",
-    /// ShadowDenoiser::Render).
+    /// ShadowDenoiser::Render), times 2^exposure (RenderOptions::exposure).
     RenderResult Render(ProgressReporter* progress = nullptr) const {
         const BandRenderer* bands = Bands();
-        return bands ? bands->Render(options_.width, options_.height, progress) : renderer_->Render(progress);
+        RenderResult result =
+            bands ? bands->Render(options_.width, options_.height, progress) : renderer_->Render(progress);
+        ApplyExposure(&result.image, options_.exposure);
+        return result;
     }
 
     const Accelerator& Accel() const { return *accel_; }

@@ -302,6 +302,8 @@ void ReadRender(const Reader& r, const Json& j, RenderOptions* ro, const std::st
     if (const Json* v = o.Find("soft_samples")) ro->soft.samples = integer(*v, "soft_samples");
     if (const Json* v = o.Find("textures")) ro->textures = Bool(r, *v, o.Child("textures"));
     if (const Json* v = o.Find("instancing")) ro->instancing = Bool(r, *v, o.Child("instancing"));
+    if (const Json* v = o.Find("exposure")) ro->exposure = number(*v, "exposure");
+    if (const Json* v = o.Find("tonemap")) ro->tonemap = choice(*v, "tonemap");
     // Where each value came from, for the messages of the factories that read it.
     for (const RenderSetting& s : RenderSettings())
         if (o.Find(s.key)) ro->origins[s.key] = SourceLoc(r.File(), 0, 0, o.Child(s.key));

@@ -78,6 +78,13 @@ const std::vector<RenderSetting>& RenderSettings() {
          "Copy every reference to a mesh file into the scene's triangles instead of placing a file referenced "
          "many times as instances of one import (default: instancing on)",
          nullptr, {}},
+        // ---- The image's exposure and tone curve (io/tonemap.h) ----
+        {"exposure", "--exposure", K::Float, -32, 32, {},
+         "Exposure in stops: the linear radiance times 2^EV, in EXR and PNG alike (default 0)", nullptr, {}},
+        {"tonemap", "--tonemap", K::Choice, 0, 0, {"clamp", "reinhard", "aces"},
+         "PNG tone curve: clamp (values above 1 are white), reinhard (x/(1+x)) or aces (Narkowicz's filmic "
+         "fit); EXR stays linear (default clamp)",
+         nullptr, {}},
     };
     return rows;
 }
