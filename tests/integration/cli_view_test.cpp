@@ -264,3 +264,24 @@ TEST(CliView, CompareNamesBothFilesInItsSizeError) {
 }
 
 }  // namespace
+
+namespace {
+
+// bench times the default shadow method by default, and --variants soft times it alone
+// against RT.
+TEST(CliView, BenchTimesTheDefault) {
+    const CliRun soft = Lightmesh("bench --variants soft --size 32x24 --repeat 1 --no-none -q");
+    ASSERT_EQ(soft.exitCode, 0) << soft.output;
+    EXPECT_NE(soft.output.find("RT ("), std::string::npos) << soft.output;
+    EXPECT_NE(soft.output.find("; soft shadows (the default) "), std::string::npos) << soft.output;
+    EXPECT_EQ(soft.output.find("| CC | kI |"), std::string::npos) << soft.output;  // no light mesh cell
+    const CliRun all = Lightmesh("bench --size 16x12 --repeat 1 --cc 10 --no-none -q");
+    ASSERT_EQ(all.exitCode, 0) << all.output;
+    EXPECT_NE(all.output.find("; soft shadows (the default) "), std::string::npos) << all.output;
+    EXPECT_NE(all.output.find("ОТ+consensus (consensus)"), std::string::npos) << all.output;
+    const CliRun lmm = Lightmesh("bench --variants consensus --size 16x12 --repeat 1 --cc 10 --no-none -q");
+    ASSERT_EQ(lmm.exitCode, 0) << lmm.output;
+    EXPECT_EQ(lmm.output.find("soft shadows"), std::string::npos) << lmm.output;
+}
+
+}  // namespace

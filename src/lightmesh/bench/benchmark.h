@@ -23,10 +23,11 @@ struct BenchMatrix {
     std::vector<float> ki{2.0f};
     std::vector<std::string> variants{"grid", "templates", "reduced", "none", "inside", "object", "consensus"};
     /// The default shadow method ("soft", what `render` does without options) timed once per
-    /// scene and size beside RT: "soft" in a variants list (--variants soft, a matrix file's
-    /// "variants") asks for it, a list without it leaves it out (TakeSoftFromVariants); the
-    /// paper's tables leave it out; with --quality its competitors' table times it instead.
-    bool soft = true;
+    /// scene and size beside RT. `lightmesh bench` and a matrix file turn it on unless their
+    /// variants list leaves "soft" out (TakeSoftFromVariants: --variants soft asks for it
+    /// alone); the paper's tables leave it out; with --quality its competitors' table times
+    /// it instead. Off for a matrix built in code.
+    bool soft = false;
     std::string cellSummaries = "auto";  ///< LightMeshOptions::cellSummaries for every LMM cell
     /// Back-ends for RT; the first one also serves "none" and the LMM variants, so a
     /// matrix with one back-end compares every method on the same one. Default: the

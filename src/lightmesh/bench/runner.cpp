@@ -865,6 +865,7 @@ BenchMatrix LoadBenchMatrix(const std::string& path) {
     for (std::string& s : m.scenes)
         if (s.rfind("builtin:", 0) != 0 && std::filesystem::path(s).is_relative()) s = (folder / s).string();
     strings("variants", &m.variants);
+    m.soft = true;  // as `lightmesh bench`: the default method timed too, unless "variants" leaves it out
     if (o.Find("variants")) TakeSoftFromVariants(&m);
     for (size_t i = 0; i < m.variants.size(); ++i) {
         // "" would be the default variant: refused like --variants "".

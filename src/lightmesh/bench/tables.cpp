@@ -95,6 +95,10 @@ std::string BenchMarkdown(const std::vector<BenchResult>& rs) {
                 out += "\n";
             }
         };
+        if (variants.empty()) {  // no light mesh cell (--variants soft): the line above is all
+            out += "\n";
+            continue;
+        }
         // Seconds.
         variantTable(true, " %.3f |", [](const BenchResult& r) { return r.median; });
         // Ratios.

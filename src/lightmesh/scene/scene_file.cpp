@@ -46,7 +46,8 @@
 //                "shadows": "area"; only this key turns on and sizes the contact-hardening
 //                penumbrae of "lmm", the lights' own radii do not), "thin_check" ("off" |
 //                "lit" | "all": with a light radius, P's own ray checks the nodes), "samples"
-//                (1..4096, shadow rays per light).
+//                (1..4096, shadow rays per light), "exposure" (-32..32 stops: the radiance
+//                times 2^exposure), "tonemap" ("clamp" | "reinhard" | "aces": PNG only).
 //                The ranges and choices are the settings table's (settings/render_settings.cpp).
 //
 // A colour is a number (grey) or [r, g, b]; all numbers must be finite and colours ≥ 0.
