@@ -11,9 +11,9 @@ const std::vector<RenderSetting>& RenderSettings() {
     using K = RenderSetting::Kind;
     constexpr double kNoLimit = std::numeric_limits<double>::infinity();
     static const std::vector<RenderSetting> rows = {
-        {"width", "--width", K::Int, 1, 16384, {}, "Image width in pixels (default 640, or the scene file's)",
+        {"width", "--width", K::Int, 1, 16384, {}, "Image width in pixels (default 640, or the scene file's); given alone, the height keeps the aspect ratio",
          nullptr, {}},
-        {"height", "--height", K::Int, 1, 16384, {}, "Image height in pixels (default 480, or the scene file's)",
+        {"height", "--height", K::Int, 1, 16384, {}, "Image height in pixels (default 480, or the scene file's); given alone, the width keeps the aspect ratio",
          nullptr, {}},
         {"aa", "--aa", K::Int, 1, 16, {}, "Anti-aliasing: N x N camera rays per pixel (default 1)", nullptr, {}},
         {"max_depth", "--max-depth", K::Int, 1, 64, {}, "Mirror recursion limit (1: no reflections; default 5)",
