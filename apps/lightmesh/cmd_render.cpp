@@ -53,7 +53,7 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
     if (!cmd.saveScene.empty()) lm::CheckSceneSaveable(cmd.saveScene, prepared->source, "--save-scene");
     scene = LoadWithWarnings(common, cmd.width.value_or(0), cmd.height.value_or(0));
     prepared->loadSeconds = SecondsSince(t0);
-    lm::ApplyCameraOverrides(camera, &scene.camera);
+    lm::ApplyCameraOverrides(camera, &scene);
 
     lm::RenderOptions options = scene.render;
     if (cmd.width) options.width = *cmd.width;

@@ -85,4 +85,10 @@ void ApplyCameraOverrides(const CameraOverrides& o, Camera* camera) {
     ThrowError("%s: %s", flag, problem.c_str());
 }
 
+void ApplyCameraOverrides(const CameraOverrides& o, Scene* scene) {
+    ApplyCameraOverrides(o, &scene->camera);
+    if (o.position)
+        if (const std::string p = scene_load::SpanProblem(*scene); !p.empty()) ThrowError("--camera-position: %s", p.c_str());
+}
+
 }  // namespace lm

@@ -45,5 +45,8 @@ Affine UpAxisToY(int axis);
 /// checked; an error names the option that made the camera unusable ("--look-at: equals the
 /// camera position, so the camera has no view direction").
 void ApplyCameraOverrides(const CameraOverrides& o, Camera* camera);
+/// The same on a loaded scene, whose span (meshes, lights and the moved camera) is then
+/// checked as the loader checks it ("--camera-position: the scene ... spans ...").
+void ApplyCameraOverrides(const CameraOverrides& o, Scene* scene);
 
 }  // namespace lm

@@ -68,3 +68,26 @@ TEST(CameraOverrides, UpAxisTurnsThatAxisToY) {
 
 }  // namespace
 }  // namespace lm
+
+namespace lm {
+namespace {
+
+// A camera moved so far that the scene's span passes what single-precision rays allow.
+TEST(CameraOverrides, TheMovedCameraKeepsTheSpanUsable) {
+    Scene scene;
+    scene.mesh.positions = {Vec3(-1e18f, 0, 0), Vec3(-1e18f, 1, 0), Vec3(-1e18f, 0, 1)};
+    scene.mesh.triangles = {{0, 1, 2}};
+    scene.lights.push_back(PointLight{});
+    scene.camera.position = Vec3(0, 0, 5);
+    CameraOverrides near;
+    near.position = Vec3(0, 0, 10);
+    ApplyCameraOverrides(near, &scene);
+    EXPECT_EQ(scene.camera.position, Vec3(0, 0, 10));
+    CameraOverrides far;
+    far.position = Vec3(1e18f, 0, 0);
+    EXPECT_NE(ErrorOf([&] { ApplyCameraOverrides(far, &scene); }).find("--camera-position: the scene"),
+              std::string::npos);
+}
+
+}  // namespace
+}  // namespace lm
