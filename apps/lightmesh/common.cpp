@@ -104,6 +104,23 @@ std::string Nearest(const std::string& word, const std::vector<std::string>& can
 
 namespace {
 
+// How many of args[from...] are options every command takes (-t N, -q, -v), from the start.
+size_t LeadingGlobalOptions(const std::vector<std::string>& args, size_t from) {
+    size_t i = from;
+    while (i < args.size()) {
+        const std::string& a = args[i];
+        if (a == "-q" || a == "--quiet" || a == "-v" || a == "--verbose" || a.rfind("--threads=", 0) == 0 ||
+            (a.rfind("-t", 0) == 0 && a.size() > 2 && a[2] != '-'))
+            ++i;
+        else if ((a == "-t" || a == "--threads") && i + 1 < args.size())
+            i += 2;
+        else
+            break;
+    }
+    return i - from;
+}
+
+
 // The names of a command's options as typed: "--shadows", "-q".
 std::vector<std::string> OptionNames(const CLI::App& cmd) {
     std::vector<std::string> names;
@@ -137,8 +154,9 @@ std::string CommandLineMistake(const CLI::App& app, const CLI::ParseError& e, in
     const auto parsed = app.get_subcommands();
     // No command: `lightmesh`, `lightmesh rendr x`, `lightmesh help [render]`.
     if (parsed.empty() && dynamic_cast<const CLI::RequiredError*>(&e)) {
-        std::vector<std::string> words;
-        for (int i = 1; i < argc; ++i) words.push_back(argv[i]);
+        std::vector<std::string> words(argv, argv + argc);
+        // (-t, -q and -v before the command are not the mistake.)
+        words.erase(words.begin(), words.begin() + 1 + static_cast<std::ptrdiff_t>(LeadingGlobalOptions(words, 1)));
         if (words.empty()) return "a command is required: " + JoinOr(commands);
         const std::string& first = words.front();
         if (first == "help") {
@@ -192,24 +210,11 @@ std::string CommandLineMistake(const CLI::App& app, const CLI::ParseError& e, in
 
 std::vector<std::string> CommandNamesOf(const CLI::App& app) { return CommandNames(app); }
 
+
 std::vector<std::string> GlobalOptionsAfterCommand(int argc, char** argv, const std::vector<std::string>& commands) {
     std::vector<std::string> args(argv, argv + argc);
-    std::vector<std::string> moved;
-    size_t i = 1;
-    while (i < args.size()) {
-        const std::string& a = args[i];
-        if (a == "-q" || a == "--quiet" || a == "-v" || a == "--verbose" || a.rfind("--threads=", 0) == 0 ||
-            (a.rfind("-t", 0) == 0 && a.size() > 2 && a[2] != '-')) {
-            moved.push_back(a);
-            ++i;
-        } else if ((a == "-t" || a == "--threads") && i + 1 < args.size()) {
-            moved.push_back(a);
-            moved.push_back(args[i + 1]);
-            i += 2;
-        } else {
-            break;
-        }
-    }
+    const size_t i = 1 + LeadingGlobalOptions(args, 1);
+    const std::vector<std::string> moved(args.begin() + 1, args.begin() + static_cast<std::ptrdiff_t>(i));
     if (moved.empty() || i >= args.size() || std::find(commands.begin(), commands.end(), args[i]) == commands.end())
         return args;
     std::vector<std::string> out = {args[0], args[i]};

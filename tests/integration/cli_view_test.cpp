@@ -171,6 +171,9 @@ TEST(CliView, RepeatedOptionTakesTheLastValueAndGlobalsMayComeFirst) {
     const CliRun bad = Lightmesh("--shadows rt render builtin:gazebo");
     EXPECT_EQ(bad.exitCode, 1);
     EXPECT_NE(bad.output.find("only -t, -q and -v may also come before it"), std::string::npos) << bad.output;
+    // Leading -t, -q, -v are not what a missing or mistyped command is blamed on.
+    EXPECT_EQ(Lightmesh("--threads 2").output.rfind("lightmesh: error: a command is required: render", 0), 0u);
+    EXPECT_NE(Lightmesh("-q rendr x").output.find("unknown command \"rendr\"; did you mean render?"), std::string::npos);
 }
 
 // -t, -q and -v mean the same in every command.
