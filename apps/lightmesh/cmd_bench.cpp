@@ -31,7 +31,7 @@ std::string BenchRepoDir(const std::string& argv0) {
 }  // namespace
 
 int RunBench(BenchCommand& cmd) {
-    lm::SetLogLevel(cmd.quiet ? lm::LogLevel::Error : lm::LogLevel::Warning);
+    lm::SetLogLevel(cmd.quiet ? lm::LogLevel::Error : (cmd.verbose ? lm::LogLevel::Info : lm::LogLevel::Warning));
     lm::InstallInterruptCleanup();
     // The matrix from the options, as lightmesh.bench() makes it (bench/bench_options.h).
     lm::BenchOptions options;

@@ -23,6 +23,12 @@ int RunCompare(const CompareCommand& cmd) {
     if (sa.width != sb.width || sa.height != sb.height)
         lm::ThrowError("%s is %dx%d and %s is %dx%d: images of different sizes cannot be compared",
                        cmd.a.c_str(), sa.width, sa.height, cmd.b.c_str(), sb.width, sb.height);
+    if (!cmd.mask.empty()) {
+        const lm::ImageSize sm = lm::ReadImageSize(cmd.mask);
+        if (sm.width != sa.width || sm.height != sa.height)
+            lm::ThrowError("--mask %s is %dx%d and the images are %dx%d: the mask needs their size", cmd.mask.c_str(),
+                           sm.width, sm.height, sa.width, sa.height);
+    }
     if (!cmd.none.empty()) {
         const lm::ImageSize sn = lm::ReadImageSize(cmd.none);
         if (sn.width != sa.width || sn.height != sa.height)

@@ -17,9 +17,11 @@
 #include "lightmesh/geometry/instances.h"
 #include "lightmesh/io/image.h"
 #include "lightmesh/io/channels_exr.h"
+#include "lightmesh/io/tonemap.h"
 #include "lightmesh/render/render_job.h"
 #include "lightmesh/render/visibility_image.h"
 #include "lightmesh/render/whitted.h"
+#include "lightmesh/scene/scene_writer.h"
 #include "lightmesh/shadow/area_light.h"
 #include "lightmesh/shadow/light_mesh.h"
 #include "lightmesh/settings/render_settings.h"
@@ -36,6 +38,7 @@ struct PreparedRender {
     std::string output;
     std::unique_ptr<lm::RenderJob> job;
     double loadSeconds = 0;
+    lm::SceneSource source;  ///< for --save-scene
 };
 
 std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
@@ -45,12 +48,21 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
     CommonOptions common = cmd.common;
     common.textures = !cmd.noTextures;
     common.instancing = !cmd.noInstancing;
+    // The camera options, checked before the scene is read (a bare mesh's --up x|z and
+    // --fov reach its framing).
+    const lm::CameraOverrides camera = CameraFromCommand(cmd, &common);
+    prepared->source = {cmd.common.scene, common.upAxis, common.textures, common.instancing};
+    if (!cmd.saveScene.empty()) lm::CheckSceneSaveable(cmd.saveScene, prepared->source, "--save-scene");
     scene = LoadWithWarnings(common, cmd.width.value_or(0), cmd.height.value_or(0));
     prepared->loadSeconds = SecondsSince(t0);
+    lm::ApplyCameraOverrides(camera, &scene);
 
     lm::RenderOptions options = scene.render;
     if (cmd.width) options.width = *cmd.width;
     if (cmd.height) options.height = *cmd.height;
+    KeepAspectRatio(cmd, scene.render, &options);  // --width or --height alone
+    if (cmd.exposure) options.exposure = *cmd.exposure;
+    if (cmd.tonemap) options.tonemap = *cmd.tonemap;
     if (cmd.aa) options.aa = *cmd.aa;
     if (cmd.maxDepth) options.maxDepth = *cmd.maxDepth;
     if (cmd.shadows) options.shadows = *cmd.shadows;
@@ -90,6 +102,8 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
         {"grid", cmd.grid.has_value()},
         {"textures", cmd.noTextures},
         {"instancing", cmd.noInstancing},
+        {"exposure", cmd.exposure.has_value()},
+        {"tonemap", cmd.tonemap.has_value()},
     };
     std::vector<std::string> given;
     for (const auto& [key, isGiven] : flags) {
@@ -187,6 +201,12 @@ void PrintRender(const RenderCommand& cmd, const PreparedRender& p, const lm::Re
     std::printf("memory    peak %s%s\n", lm::FormatBytes(lm::PeakMemoryBytes()).c_str(), ranks ? " (rank 0)" : "");
 }
 
+// The rendered image written: a PNG through the tone curve (--tonemap; EXR stays linear).
+void WriteRendered(const std::string& output, lm::Image* image, const lm::RenderOptions& options) {
+    if (lm::ImageFormatFor(output) == lm::ImageFormat::Png) lm::ApplyToneCurve(image, options.tonemap);
+    lm::WriteImage(output, *image);
+}
+
 // What an interrupted render leaves: the interrupt handler's line ends with it.
 std::string InterruptNote(const std::string& output) {
     std::error_code ec;
@@ -213,10 +233,11 @@ int RunRender(const RenderCommand& cmd) {
         if (progress.Stopped()) lm::ThrowErrorAt({p->output}, "not rendered: %s", progress.StopReason().c_str());
     }
     const auto t3 = Clock::now();
-    lm::WriteImage(p->output, result.image);
+    WriteRendered(p->output, &result.image, p->job->Options());
     if (visibility)
         lm::WriteChannelsExr(cmd.visibility, visibility->width, visibility->height,
                              lm::LightChannelNames(visibility->lights), visibility->values);
+    if (!cmd.saveScene.empty()) lm::WriteSceneFile(cmd.saveScene, p->scene, p->job->Options(), p->source);
     lm::SetInterruptMessage("");
     PrintRender(cmd, *p, result, SecondsSince(t3), nullptr);
     return 0;
@@ -271,7 +292,9 @@ int RunRenderMpi(const RenderCommand& cmd, const lm::MpiSession& session) {
     if (d.errorRank >= 0) return fail(d.error, d.errorRank);
     if (!root) return 0;
     const auto t3 = Clock::now();
-    lm::WriteImage(p->output, d.result.image);
+    lm::ApplyExposure(&d.result.image, p->job->Options().exposure);  // (RenderJob::Render's, for the ranks' image)
+    WriteRendered(p->output, &d.result.image, p->job->Options());
+    if (!cmd.saveScene.empty()) lm::WriteSceneFile(cmd.saveScene, p->scene, p->job->Options(), p->source);
     lm::SetInterruptMessage("");
     PrintRender(cmd, *p, d.result, SecondsSince(t3), &d.ranks);
     return 0;

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "lightmesh/bench/benchmark.h"
+#include "lightmesh/scene/camera_overrides.h"
 #include "lightmesh/scene/scene.h"
 #include "lightmesh/settings/render_settings.h"
 #include "lightmesh/util/error.h"
@@ -51,6 +52,8 @@ struct CommonOptions {
     int threads = 0;
     bool textures = true;  ///< false: --no-textures (SceneLoadOptions::textures)
     bool instancing = true;  ///< false: --no-instancing (SceneLoadOptions::instancing)
+    int upAxis = 1;          ///< a bare mesh's up axis: --up x|y|z (SceneLoadOptions::upAxis)
+    float frameFovY = 0;     ///< a bare mesh framed for --fov (SceneLoadOptions::frameFovY)
 };
 void AddCommonOptions(CLI::App* cmd, CommonOptions* o);
 lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth = 0, int frameHeight = 0);
@@ -89,6 +92,13 @@ std::string Nearest(const std::string& word, const std::vector<std::string>& can
 std::string CommandLineMistake(const CLI::App& app, const CLI::ParseError& e, int argc, char** argv,
                                const CLI::App** printHelp);
 
+/// The names of `app`'s commands.
+std::vector<std::string> CommandNamesOf(const CLI::App& app);
+/// argv as strings, with the options every command takes (-t/--threads N, -q/--quiet,
+/// -v/--verbose) given before the command moved after it: `lightmesh -t 2 render x` is
+/// `lightmesh render -t 2 x`. Unchanged when what follows them is not a command.
+std::vector<std::string> GlobalOptionsAfterCommand(int argc, char** argv, const std::vector<std::string>& commands);
+
 void PrintFigures(const char* title, const std::vector<std::pair<std::string, std::string>>& figures);
 
 /// `lightmesh render`: options as given on the command line; unset ones keep the scene's.
@@ -105,7 +115,26 @@ struct RenderCommand {
     bool noTextures = false;
     bool noInstancing = false;
     bool force = false;  ///< render one estimated past an hour
+    // ---- The camera from the command line (render_view.cpp): each as given, parsed when
+    // the render is prepared, so a mistake is one line naming the option.
+    std::optional<std::string> cameraPosition, lookAt, up, fov;
+    // ---- The image's exposure and tone curve (settings table rows).
+    std::optional<float> exposure;
+    std::optional<std::string> tonemap;
+    // ---- --save-scene: the scene as rendered, as a scene file (scene/scene_writer.h).
+    std::string saveScene;
 };
+// ---- render_view.cpp: the camera options, --save-scene, and --width/--height alone.
+/// Adds --camera-position, --look-at, --up, --fov and --save-scene to `render`.
+void AddViewOptions(CLI::App* cmd, RenderCommand* render);
+/// The camera options parsed; a letter --up for a bare mesh file becomes load->upAxis (the
+/// model is turned, not the camera) and --fov also load->frameFovY. Throws Error naming
+/// the option.
+lm::CameraOverrides CameraFromCommand(const RenderCommand& cmd, CommonOptions* load);
+/// --width alone (or --height alone): the other side from the scene's aspect ratio
+/// (`sceneOptions`, the file's or the defaults), written to *options with the flag as its
+/// origin. Throws Error when it falls outside 1..16384.
+void KeepAspectRatio(const RenderCommand& cmd, const lm::RenderOptions& sceneOptions, lm::RenderOptions* options);
 int RunRender(const RenderCommand& cmd);
 /// `mpirun -np N lightmesh render …` (built with MPI only).
 int RunRenderMpi(const RenderCommand& cmd, const lm::MpiSession& session);
@@ -123,6 +152,7 @@ struct BenchCommand {
     int table = 0;
     bool quick = false;
     bool quiet = false;
+    bool verbose = false;
     bool noNone = false;
     bool force = false;  ///< run a matrix estimated above kBenchLimitSeconds
     CLI::Option* repeatOption = nullptr;

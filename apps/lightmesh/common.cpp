@@ -39,6 +39,8 @@ lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth, int frameHeig
     load.strict = o.strict;
     load.textures = o.textures;
     load.instancing = o.instancing;
+    load.upAxis = o.upAxis;
+    load.frameFovY = o.frameFovY;
     load.frameWidth = frameWidth;
     load.frameHeight = frameHeight;
     std::vector<std::string> warnings;
@@ -102,6 +104,23 @@ std::string Nearest(const std::string& word, const std::vector<std::string>& can
 
 namespace {
 
+// How many of args[from...] are options every command takes (-t N, -q, -v), from the start.
+size_t LeadingGlobalOptions(const std::vector<std::string>& args, size_t from) {
+    size_t i = from;
+    while (i < args.size()) {
+        const std::string& a = args[i];
+        if (a == "-q" || a == "--quiet" || a == "-v" || a == "--verbose" || a.rfind("--threads=", 0) == 0 ||
+            (a.rfind("-t", 0) == 0 && a.size() > 2 && a[2] != '-'))
+            ++i;
+        else if ((a == "-t" || a == "--threads") && i + 1 < args.size())
+            i += 2;
+        else
+            break;
+    }
+    return i - from;
+}
+
+
 // The names of a command's options as typed: "--shadows", "-q".
 std::vector<std::string> OptionNames(const CLI::App& cmd) {
     std::vector<std::string> names;
@@ -135,8 +154,9 @@ std::string CommandLineMistake(const CLI::App& app, const CLI::ParseError& e, in
     const auto parsed = app.get_subcommands();
     // No command: `lightmesh`, `lightmesh rendr x`, `lightmesh help [render]`.
     if (parsed.empty() && dynamic_cast<const CLI::RequiredError*>(&e)) {
-        std::vector<std::string> words;
-        for (int i = 1; i < argc; ++i) words.push_back(argv[i]);
+        std::vector<std::string> words(argv, argv + argc);
+        // (-t, -q and -v before the command are not the mistake.)
+        words.erase(words.begin(), words.begin() + 1 + static_cast<std::ptrdiff_t>(LeadingGlobalOptions(words, 1)));
         if (words.empty()) return "a command is required: " + JoinOr(commands);
         const std::string& first = words.front();
         if (first == "help") {
@@ -147,8 +167,8 @@ std::string CommandLineMistake(const CLI::App& app, const CLI::ParseError& e, in
             return "";
         }
         if (!first.empty() && first[0] == '-')
-            return lm::Printable(first) + ": not an option of lightmesh; the options go after the command (" +
-                   "lightmesh render SCENE --shadows rt, ...)";
+            return lm::Printable(first) + ": not an option of lightmesh; a command's options go after it (" +
+                   "lightmesh render SCENE --shadows rt, ...); only -t, -q and -v may also come before it";
         const std::string near = Nearest(first, commands);
         return "unknown command \"" + lm::Printable(first) + "\"" +
                (near.empty() ? " (the commands: " + JoinOr(commands) + ")" : "; did you mean " + near + "?");
@@ -163,6 +183,19 @@ std::string CommandLineMistake(const CLI::App& app, const CLI::ParseError& e, in
         if (std::find(extras.begin(), extras.end(), argv[i]) != extras.end()) given.push_back(argv[i]);
     if (given.empty()) return "";
     const std::string where = parsed.empty() ? "lightmesh" : "`" + cmd.get_name() + "`";
+    // An option before the command that is not one of those every command takes.
+    int commandAt = argc;
+    for (int i = 1; i < argc && !parsed.empty(); ++i)
+        if (argv[i] == cmd.get_name()) {
+            commandAt = i;
+            break;
+        }
+    for (int i = 1; i < commandAt; ++i) {
+        const std::string arg = argv[i];
+        if (arg.size() > 1 && arg[0] == '-' && std::find(extras.begin(), extras.end(), arg) != extras.end())
+            return lm::Printable(arg.substr(0, arg.find('='))) + ": not an option of lightmesh; a command's options go "
+                   "after it (lightmesh render SCENE --shadows rt, ...); only -t, -q and -v may also come before it";
+    }
     for (const std::string& arg : given) {
         if (arg.size() < 2 || arg[0] != '-') continue;
         const std::string name = arg.substr(0, arg.find('='));
@@ -173,6 +206,21 @@ std::string CommandLineMistake(const CLI::App& app, const CLI::ParseError& e, in
     std::string list;
     for (const std::string& arg : given) list += (list.empty() ? "" : " ") + lm::Printable(arg);
     return (given.size() == 1 ? "unexpected argument for " : "unexpected arguments for ") + where + ": " + list;
+}
+
+std::vector<std::string> CommandNamesOf(const CLI::App& app) { return CommandNames(app); }
+
+
+std::vector<std::string> GlobalOptionsAfterCommand(int argc, char** argv, const std::vector<std::string>& commands) {
+    std::vector<std::string> args(argv, argv + argc);
+    const size_t i = 1 + LeadingGlobalOptions(args, 1);
+    const std::vector<std::string> moved(args.begin() + 1, args.begin() + static_cast<std::ptrdiff_t>(i));
+    if (moved.empty() || i >= args.size() || std::find(commands.begin(), commands.end(), args[i]) == commands.end())
+        return args;
+    std::vector<std::string> out = {args[0], args[i]};
+    out.insert(out.end(), moved.begin(), moved.end());
+    out.insert(out.end(), args.begin() + static_cast<std::ptrdiff_t>(i) + 1, args.end());
+    return out;
 }
 
 void PrintFigures(const char* title, const std::vector<std::pair<std::string, std::string>>& figures) {

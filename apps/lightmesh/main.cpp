@@ -17,7 +17,8 @@
 using namespace lm::cli;
 
 int main(int argc, char** argv) {
-    CLI::App app{"lightmesh: soft shadows from point lights by the light mesh method"};
+    CLI::App app{"lightmesh: soft shadows of lights the size of spheres; the default is --shadows soft, the "
+                 "paper's light mesh method is --shadows lmm"};
     app.require_subcommand(1);
     app.set_version_flag("--version", "lightmesh 0.1.0");
     // Command-line mistakes read like every other error ("lightmesh: error: ...").
@@ -41,14 +42,16 @@ int main(int argc, char** argv) {
     AddSetting(renderCmd, "shadows", &render.shadows);
     AddSetting(renderCmd, "accel", &render.accel);
     AddSetting(renderCmd, "grid", &render.grid);
-    AddSetting(renderCmd, "cc", &render.cc);
-    AddSetting(renderCmd, "ki", &render.ki);
-    AddSetting(renderCmd, "variant", &render.variant);
-    AddSetting(renderCmd, "ns", &render.ns);
-    AddSetting(renderCmd, "template_dir", &render.templateDir);
-    AddSetting(renderCmd, "cell_summaries", &render.cellSummaries);
+    // The paper's method's knobs under their own heading in the help.
+    const char* paper = "The paper's light mesh method (--shadows lmm; --cc also for exact)";
+    AddSetting(renderCmd, "cc", &render.cc)->group(paper);
+    AddSetting(renderCmd, "ki", &render.ki)->group(paper);
+    AddSetting(renderCmd, "variant", &render.variant)->group(paper);
+    AddSetting(renderCmd, "ns", &render.ns)->group(paper);
+    AddSetting(renderCmd, "template_dir", &render.templateDir)->group(paper);
+    AddSetting(renderCmd, "cell_summaries", &render.cellSummaries)->group(paper);
     AddSetting(renderCmd, "light_radius", &render.lightRadius);
-    AddSetting(renderCmd, "thin_check", &render.thinCheck);
+    AddSetting(renderCmd, "thin_check", &render.thinCheck)->group(paper);
     AddSetting(renderCmd, "samples", &render.samples);
     AddSetting(renderCmd, "soft_samples", &render.softSamples);
     renderCmd->add_flag(lm::RenderSettingFor("textures").flag, render.noTextures, lm::RenderSettingFor("textures").help);
@@ -57,6 +60,11 @@ int main(int argc, char** argv) {
     renderCmd->add_option("--visibility", render.visibility,
                           "Also write each light's visibility at each pixel's camera hits to this .exr: one float "
                           "channel per light (light0, light1, ...), NaN where no camera ray hit the scene");
+    // The image's exposure and tone curve (settings table rows; io/tonemap.h).
+    AddSetting(renderCmd, "exposure", &render.exposure);
+    AddSetting(renderCmd, "tonemap", &render.tonemap);
+    // The camera options and --save-scene (render_view.cpp).
+    AddViewOptions(renderCmd, &render);
     renderCmd->add_flag("--stats", render.stats, "Print rays by kind, time by phase, back-end figures, peak memory");
     renderCmd->add_flag("--force", render.force,
                         "Render even when its first tiles estimate more than an hour (refused otherwise)");
@@ -85,6 +93,12 @@ int main(int argc, char** argv) {
                            "Also print, for ns = 1 … 32, how many nodes snapping P to a sub-position gets wrong");
     templatesCmd->add_flag("-q,--quiet", [](int64_t) { lm::SetLogLevel(lm::LogLevel::Error); },
                            "No warnings or notes: errors and the result line only");
+    // -t and -v mean in every command what they mean in render.
+    int templatesThreads = 0;
+    templatesCmd->add_option("-t,--threads", templatesThreads, "Worker threads (default: all cores)")
+        ->check(InRange(1, 1024, true));
+    templatesCmd->add_flag("-v,--verbose", [](int64_t) { lm::SetLogLevel(lm::LogLevel::Debug); },
+                           "Print more about what is done");
 
     CompareCommand compare;
     CLI::App* compareCmd = app.add_subcommand(
@@ -102,8 +116,17 @@ int main(int argc, char** argv) {
                            "(sum of no-shadow minus image, linear luminance) and B's over A's");
     compareCmd->add_flag("--json", compare.json, "Print one JSON line (psnr is null for identical images)");
     compareCmd->add_option("--threshold-psnr", compare.thresholdPsnr, "Exit with 3 if the PSNR (dB) is lower");
+    // -t, -q and -v mean in every command what they mean in render.
+    int compareThreads = 0;
+    compareCmd->add_option("-t,--threads", compareThreads, "Worker threads (default: all cores)")
+        ->check(InRange(1, 1024, true));
+    compareCmd->add_flag("-q,--quiet", [](int64_t) { lm::SetLogLevel(lm::LogLevel::Error); },
+                         "No warnings: errors and the figures only");
+    compareCmd->add_flag("-v,--verbose", [](int64_t) { lm::SetLogLevel(lm::LogLevel::Debug); },
+                         "Print more about what is done");
 
     BenchCommand bench;
+    bench.matrix.soft = true;  // the default shadow method timed too, unless --variants leaves it out
     CLI::App* benchCmd = app.add_subcommand(
         "bench", "Time shadow methods side by side: scenes x sizes x CC x kI x variants, plus RT and no shadows");
     bench.argv0 = argc > 0 ? argv[0] : "";
@@ -116,7 +139,8 @@ int main(int argc, char** argv) {
     CLI::Option* benchKi = benchCmd->add_option("--ki", bench.matrix.ki, "Light mesh kI values, comma-separated; default 2")
         ->delimiter(',')->check(SettingRange("ki"));
     CLI::Option* benchVariants = benchCmd->add_option("--variants", bench.matrix.variants,
-                         "LMM variants, comma-separated; default grid,templates,reduced,none,inside,object,consensus")
+                         "What to time besides RT and no shadows, comma-separated: soft (the default shadow method) "
+                         "and LMM variants; default soft,grid,templates,reduced,none,inside,object,consensus")
         ->delimiter(',');
     benchCmd->add_option("--cell-summaries", bench.matrix.cellSummaries,
                          "Light mesh cell summaries for every LMM cell: auto (consensus only, where the image is fine enough), "
@@ -180,6 +204,14 @@ int main(int argc, char** argv) {
     benchCmd->add_option("-t,--threads", render.common.threads, "Worker threads (default: all cores)")
         ->check(InRange(1, 1024, true));
     benchCmd->add_flag("-q,--quiet", bench.quiet, "No progress lines or warnings: errors and the tables only");
+    benchCmd->add_flag("-v,--verbose", bench.verbose, "Print more about what is done (the scenes' notes too)");
+
+    // A repeated option takes its last value (`--threads 1 -t 2` is 2), as in most tools;
+    // lists (--scene, --size, comma-separated values) still gather every value.
+    for (CLI::App* cmd : {renderCmd, infoCmd, templatesCmd, compareCmd, benchCmd})
+        for (CLI::Option* o : cmd->get_options())
+            if (o->nonpositional() && o->get_items_expected_max() <= 1 && o->get_type_size_max() <= 1)
+                o->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
 
     // `lightmesh help [COMMAND]`: the help, as --help.
     if (argc >= 2 && std::string(argv[1]) == "help" && argc <= 3) {
@@ -191,6 +223,13 @@ int main(int argc, char** argv) {
         std::printf("%s", shown == &app ? app.help().c_str() : shown->help(argv[0]).c_str());
         return 0;
     }
+    // Options every command takes (-t, -q, -v) may come before the command too:
+    // `lightmesh --threads 2 render ...` is `lightmesh render --threads 2 ...`.
+    std::vector<std::string> args = GlobalOptionsAfterCommand(argc, argv, CommandNamesOf(app));
+    std::vector<char*> argvMoved;
+    for (std::string& a : args) argvMoved.push_back(a.data());
+    argvMoved.push_back(nullptr);
+    argv = argvMoved.data();
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -276,12 +315,18 @@ int main(int argc, char** argv) {
                                                           static_cast<size_t>(render.common.threads));
         return Guarded([&] { return RunBench(bench); });
     }
-    if (compareCmd->parsed()) {
-        compare.diffScaleGiven = diffScale->count() > 0;
-        return Guarded([&] { return RunCompare(compare); });
-    }
-    if (templatesCmd->parsed())
+    if (templatesCmd->parsed() || compareCmd->parsed()) {
+        const int threads = templatesCmd->parsed() ? templatesThreads : compareThreads;
+        std::unique_ptr<tbb::global_control> limit;
+        if (threads > 0)
+            limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                          static_cast<size_t>(threads));
+        if (compareCmd->parsed()) {
+            compare.diffScaleGiven = diffScale->count() > 0;
+            return Guarded([&] { return RunCompare(compare); });
+        }
         return Guarded([&] { return RunTemplates(templatesNs, templatesKi, templatesDir, templatesMeasure); });
+    }
     const CommonOptions& common = renderCmd->parsed() ? render.common : info;
     std::unique_ptr<tbb::global_control> threadLimit;
     if (common.threads > 0)

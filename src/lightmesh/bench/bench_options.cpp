@@ -87,6 +87,7 @@ BenchMatrix MakeBenchMatrix(const BenchOptions& o) {
             ThrowError("%s: %s (list LMM variants, comma-separated, or leave the option out for the default)",
                        BenchOptionName(o, "variants").c_str(),
                        v.size() > 1 ? "an empty name in the list" : "must not be empty");
+        TakeSoftFromVariants(&matrix);  // "soft": the default shadow method, timed too
     }
     // Where CC and kI came from, for the light mesh's messages (a CC too large for memory).
     if (o.Given("cc")) matrix.ccOrigins.assign(matrix.cc.size(), SourceLoc::Option(BenchOptionName(o, "cc")));

@@ -23,6 +23,12 @@ struct BenchMatrix {
     std::vector<int> cc{100};
     std::vector<float> ki{2.0f};
     std::vector<std::string> variants{"grid", "templates", "reduced", "none", "inside", "object", "consensus"};
+    /// The default shadow method ("soft", what `render` does without options) timed once per
+    /// scene and size beside RT. `lightmesh bench` and a matrix file turn it on unless their
+    /// variants list leaves "soft" out (TakeSoftFromVariants: --variants soft asks for it
+    /// alone); the paper's tables leave it out; with --quality its competitors' table times
+    /// it instead. Off for a matrix built in code.
+    bool soft = false;
     std::string cellSummaries = "auto";  ///< LightMeshOptions::cellSummaries for every LMM cell
     /// Back-ends for RT; the first one also serves "none" and the LMM variants, so a
     /// matrix with one back-end compares every method on the same one. Default: the
@@ -258,6 +264,10 @@ std::vector<BenchResult> RunBenchmark(
 /// note §6) on the scenes of `repoDir`/scenes/real. `quick` divides every size by 4 in
 /// each dimension and sets repeat to 1. Throws Error for another N or a missing scene file.
 BenchMatrix BenchTablePreset(int table, bool quick, const std::string& repoDir);
+
+/// A variants list given by the user: "soft" taken out of it into m->soft (true when the
+/// list names it, false when it does not); the rest are light-mesh variants.
+void TakeSoftFromVariants(BenchMatrix* m);
 
 /// Reads a matrix from JSON: {"scenes": [...], "sizes": [[w,h],...], "cc": [...],
 /// "ki": [...], "variants": [...], "accels": [...], "repeat": N}; every key optional (the

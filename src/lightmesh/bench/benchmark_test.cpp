@@ -49,6 +49,18 @@ TEST(LoadBenchMatrix, ReadsEveryKey) {
     EXPECT_EQ(LoadBenchMatrix(WriteTemp("empty.json", "{}").string()).repeat, BenchMatrix().repeat);
 }
 
+// A matrix file times the default shadow method (soft) as `lightmesh bench` does, unless its
+// "variants" leave "soft" out; "soft" is not taken for a light-mesh variant.
+TEST(LoadBenchMatrix, SoftIsTimedUnlessTheVariantsLeaveItOut) {
+    EXPECT_TRUE(LoadBenchMatrix(WriteTemp("d.json", "{}").string()).soft);
+    const BenchMatrix both = LoadBenchMatrix(WriteTemp("s.json", R"({"variants": ["soft", "grid"]})").string());
+    EXPECT_TRUE(both.soft);
+    EXPECT_EQ(both.variants, (std::vector<std::string>{"grid"}));
+    const BenchMatrix lmm = LoadBenchMatrix(WriteTemp("l.json", R"({"variants": ["grid"]})").string());
+    EXPECT_FALSE(lmm.soft);
+    EXPECT_FALSE(BenchMatrix().soft);  // built in code: the cells asked for only
+}
+
 TEST(LoadBenchMatrix, ErrorsNameTheJsonPath) {
     EXPECT_NE(ErrorOf(R"({"sizes": [[64, 48], [32]]})").find("/sizes/1: expected [width, height]"), std::string::npos);
     EXPECT_NE(ErrorOf(R"({"sizes": [[64, "a"]]})").find("/sizes/0/1: expected an integer"), std::string::npos);

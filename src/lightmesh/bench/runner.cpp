@@ -299,13 +299,14 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                                                 static_cast<int>(m.competitorSamples.size() + m.denoisedSamples.size()) +
                                                 1  // + the reference
                                           : 0;
-    const int perSize = (m.noShadows ? 1 : 0) + static_cast<int>(m.accels.size()) +
+    const int softCells = m.soft && !m.quality ? 1 : 0;
+    const int perSize = (m.noShadows ? 1 : 0) + static_cast<int>(m.accels.size()) + softCells +
                         static_cast<int>(m.cc.size() * m.ki.size() *
                                          (m.variants.size() + (m.quality && m.penumbrae ? 1 : 0))) +
                         competitorCells;
     // Counted wide: a matrix file's lists multiply (10^10 cells overflowed an int).
     const double cellCount = static_cast<double>(m.scenes.size()) * static_cast<double>(m.sizes.size()) *
-                             ((m.noShadows ? 1.0 : 0.0) + static_cast<double>(m.accels.size()) +
+                             ((m.noShadows ? 1.0 : 0.0) + static_cast<double>(m.accels.size()) + softCells +
                               static_cast<double>(m.cc.size()) * static_cast<double>(m.ki.size()) *
                                   static_cast<double>(m.variants.size() + (m.quality && m.penumbrae ? 1 : 0)) +
                               competitorCells);
@@ -371,7 +372,8 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
             for (const auto& size : m.sizes) {
                 const double pixelRatio = static_cast<double>(size.first) * size.second / px0;
                 const double unit = rt * pixelRatio * (m.repeat + 1);
-                double cells = (m.noShadows ? 0.5 : 0.0) + static_cast<double>(m.accels.size());
+                // soft ≈ 3×RT (measured 3–7× on the gazebo, as for the competitors below).
+                double cells = (m.noShadows ? 0.5 : 0.0) + static_cast<double>(m.accels.size()) + 3.0 * softCells;
                 const double lmmCells = static_cast<double>(m.variants.size()) + (m.quality && m.penumbrae ? 1.0 : 0.0);
                 seconds += lmmCells * (m.repeat + 1) * lmm.SumSeconds(m.cc, m.ki, pixelRatio);
                 seconds += unit * cells;
@@ -440,6 +442,13 @@ BenchReport RunBenchmarkReport(const BenchMatrix& m,
                 r.method = "rt";
                 r.paperName = "RT";
                 add(r, *accels[a], base);
+            }
+            // The default shadow method, as `render` runs it (--quality times it among the competitors).
+            if (m.soft && !m.quality) {
+                BenchResult r;
+                r.method = "soft";
+                r.paperName = "soft";
+                add(r, lmmAccel, base);
             }
             // An LMM cell: a variant at (CC, kI), with a light radius for the penumbra mode.
             auto addLmm = [&](const char* method, const std::string& name, int cc, float ki, float lightRadius,
@@ -823,6 +832,7 @@ BenchMatrix BenchTablePreset(int table, bool quick, const std::string& repoDir) 
             break;
         default: ThrowError("bench --table %d: expected 1, 2, 3 or 4 (the paper's tables)", table);
     }
+    m.soft = false;  // the paper's tables: its methods only
     if (quick) {
         for (auto& s : m.sizes) s = {std::max(1, s.first / 4), std::max(1, s.second / 4)};
         m.repeat = 1;
@@ -856,6 +866,8 @@ BenchMatrix LoadBenchMatrix(const std::string& path) {
     for (std::string& s : m.scenes)
         if (s.rfind("builtin:", 0) != 0 && std::filesystem::path(s).is_relative()) s = (folder / s).string();
     strings("variants", &m.variants);
+    m.soft = true;  // as `lightmesh bench`: the default method timed too, unless "variants" leaves it out
+    if (o.Find("variants")) TakeSoftFromVariants(&m);
     for (size_t i = 0; i < m.variants.size(); ++i) {
         // "" would be the default variant: refused like --variants "".
         if (m.variants[i].empty()) r.Fail(json::Index("/variants", i), "must not be empty (leave the key out for the default)");
@@ -900,6 +912,13 @@ BenchMatrix LoadBenchMatrix(const std::string& path) {
         m.thinCheck = json::SettingChoice(r, *v, "/thin_check", RenderSettingFor("thin_check"));
     o.Finish();
     return m;
+}
+
+void TakeSoftFromVariants(BenchMatrix* m) {
+    auto& v = m->variants;
+    const auto soft = std::remove(v.begin(), v.end(), std::string("soft"));
+    m->soft = soft != v.end();
+    v.erase(soft, v.end());
 }
 
 }  // namespace lm

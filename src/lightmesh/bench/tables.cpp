@@ -66,7 +66,13 @@ std::string BenchMarkdown(const std::vector<BenchResult>& rs) {
         }
         out += StringPrintf("### %s, %dx%d\n\n", g->scene.c_str(), g->width, g->height);
         if (none) out += StringPrintf("No shadows %.3f s; ", none->median);
-        out += rtLine + StringPrintf(" (median of %zu runs after a warm-up).\n\n", g->seconds.size());
+        out += rtLine;
+        for (const BenchResult& r : rs)
+            if (r.method == "soft" && r.role.empty() && r.scene == g->scene && r.width == g->width &&
+                r.height == g->height)
+                out += StringPrintf("; soft shadows (the default) %.3f s%s", r.median,
+                                    rt && rt->median > 0 ? StringPrintf(", %.2f× RT", r.median / rt->median).c_str() : "");
+        out += StringPrintf(" (median of %zu runs after a warm-up).\n\n", g->seconds.size());
         for (const BenchResult& r : rs)
             if (r.method == "penumbra" && r.scene == g->scene && r.width == g->width && r.height == g->height)
                 out += StringPrintf("Contact-hardening penumbrae (%s, light radius %.3g, thin check %s), CC %d kI %g: %.3f s%s.\n\n",
@@ -89,6 +95,10 @@ std::string BenchMarkdown(const std::vector<BenchResult>& rs) {
                 out += "\n";
             }
         };
+        if (variants.empty()) {  // no light mesh cell (--variants soft): the line above is all
+            out += "\n";
+            continue;
+        }
         // Seconds.
         variantTable(true, " %.3f |", [](const BenchResult& r) { return r.median; });
         // Ratios.

@@ -4,6 +4,7 @@
 #include <chrono>
 
 #include "lightmesh/geometry/instances.h"
+#include "lightmesh/io/tonemap.h"
 #include "lightmesh/settings/render_settings.h"
 #include "lightmesh/shadow/area_light.h"
 #include "lightmesh/shadow/light_mesh.h"
@@ -120,8 +121,10 @@ RenderResult RenderJob::Render(ProgressReporter* progress, VisibilityImage* visi
         ThrowError("visibility image %dx%d of %zu lights for a %dx%d render of %zu lights", visibility->width,
                    visibility->height, visibility->lights, options_.width, options_.height, lights_);
     const BandRenderer* bands = Bands();
-    return bands ? bands->Render(options_.width, options_.height, progress, visibility)
-                 : renderer_->Render(progress, visibility);
+    RenderResult result = bands ? bands->Render(options_.width, options_.height, progress, visibility)
+                                : renderer_->Render(progress, visibility);
+    ApplyExposure(&result.image, options_.exposure);
+    return result;
 }
 
 }  // namespace lm

@@ -36,7 +36,7 @@ class RenderJob {
     RenderJob(const Scene& scene, const RenderOptions& options, const Accelerator* accel = nullptr);
 
     /// Renders the whole image (WhittedRenderer::Render; with "--shadows denoised",
-    /// ShadowDenoiser::Render). With `visibility` (null: none, no work), the per-light
+    /// ShadowDenoiser::Render), times 2^exposure (RenderOptions::exposure). With `visibility` (null: none, no work), the per-light
     /// visibility each pixel's camera hits were shaded with goes there too: the render's size
     /// and light count (MakeVisibility), filled by whichever method renders.
     RenderResult Render(ProgressReporter* progress = nullptr, VisibilityImage* visibility = nullptr) const;

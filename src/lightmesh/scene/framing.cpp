@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "lightmesh/scene/camera_overrides.h"
 #include "lightmesh/scene/mesh_loader.h"
 #include "lightmesh/scene/shapes.h"
 #include "lightmesh/util/error.h"
@@ -59,6 +60,7 @@ void AddGround(Scene* scene, const Bounds3& box, int axis, float height, float s
         slab.normals.assign(slab.positions.size(), n);
     }
     scene->mesh.Append(slab);
+    scene->ground = GroundSlab{axis, height, sizeFactor, material};
 }
 
 Material GroundMaterial() {
@@ -75,6 +77,9 @@ Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options,
     const Reader r(spec, SceneLoadOptions{}.strict, warnings);
     LoadedMesh loaded = LoadMeshFile(spec);  // its errors already name the file
     for (const std::string& w : loaded.warnings) r.Warn(w);
+
+    // --up x|z: the model turned so that axis points up (+y), before anything is framed.
+    if (options.upAxis != 1) TransformMesh(&loaded.mesh, UpAxisToY(options.upAxis));
 
     Scene scene;
     scene.name = spec;
@@ -96,14 +101,15 @@ Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options,
     auto& notes = scene.report.notes;
     notes.push_back(
         "no scene file: framing the model automatically (write a .json scene to choose)");
-    notes.push_back("up axis: +y, as in OBJ and glTF");
+    notes.push_back(options.upAxis == 1 ? std::string("up axis: +y, as in OBJ and glTF")
+                                        : StringPrintf("up axis: +%c (--up), turned to +y", "xyz"[options.upAxis]));
 
     // Camera: a three-quarter view from the front (+z), a little right and above, looking
     // at the box's centre from the nearest distance at which all 8 corners of the box fall
     // inside 90% of the image (a corner c, relative to the centre, at depth d − c·back
     // projects to |c·right| / depth ≤ 0.9·tan(half field of view)).
     Camera& cam = scene.camera;
-    cam.fovY = 40.0f;
+    cam.fovY = options.frameFovY > 0 ? options.frameFovY : 40.0f;
     const bool hinted = options.frameWidth > 0 && options.frameHeight > 0;
     const float aspect =
         hinted ? static_cast<float>(options.frameWidth) / static_cast<float>(options.frameHeight)

@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -83,6 +84,15 @@ struct SceneReport {
     std::vector<std::string> notes;    ///< choices made for the user (e.g. auto framing)
 };
 
+/// The ground slab a scene got (a scene file's "ground", or the framing's), as a scene
+/// file states it: for --save-scene (scene_writer.h).
+struct GroundSlab {
+    int axis = 1;        ///< the up axis: 0 x, 1 y, 2 z
+    float height = 0;    ///< the top face's coordinate along it
+    float size = 3;      ///< the side, as a multiple of the box's longest horizontal extent
+    uint32_t material = 0;
+};
+
 struct Scene {
     std::string name;   ///< file name or builtin:NAME, used in messages
     TriangleMesh mesh;  ///< every triangle in world space, ground plane included
@@ -96,6 +106,8 @@ struct Scene {
     /// Render settings the scene asks for; command-line options override them.
     RenderOptions render;
     SceneReport report;
+    /// The ground slab added under the meshes; none when absent.
+    std::optional<GroundSlab> ground;
 };
 
 }  // namespace lm

@@ -46,7 +46,8 @@
 //                "shadows": "area"; only this key turns on and sizes the contact-hardening
 //                penumbrae of "lmm", the lights' own radii do not), "thin_check" ("off" |
 //                "lit" | "all": with a light radius, P's own ray checks the nodes), "samples"
-//                (1..4096, shadow rays per light).
+//                (1..4096, shadow rays per light), "exposure" (-32..32 stops: the radiance
+//                times 2^exposure), "tonemap" ("clamp" | "reinhard" | "aces": PNG only).
 //                The ranges and choices are the settings table's (settings/render_settings.cpp).
 //
 // A colour is a number (grey) or [r, g, b]; all numbers must be finite and colours ≥ 0.
@@ -302,6 +303,8 @@ void ReadRender(const Reader& r, const Json& j, RenderOptions* ro, const std::st
     if (const Json* v = o.Find("soft_samples")) ro->soft.samples = integer(*v, "soft_samples");
     if (const Json* v = o.Find("textures")) ro->textures = Bool(r, *v, o.Child("textures"));
     if (const Json* v = o.Find("instancing")) ro->instancing = Bool(r, *v, o.Child("instancing"));
+    if (const Json* v = o.Find("exposure")) ro->exposure = number(*v, "exposure");
+    if (const Json* v = o.Find("tonemap")) ro->tonemap = choice(*v, "tonemap");
     // Where each value came from, for the messages of the factories that read it.
     for (const RenderSetting& s : RenderSettings())
         if (o.Find(s.key)) ro->origins[s.key] = SourceLoc(r.File(), 0, 0, o.Child(s.key));

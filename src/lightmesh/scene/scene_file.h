@@ -24,6 +24,13 @@ struct SceneLoadOptions {
     /// --width/--height); 0 means the scene's own. Only used to frame bare meshes, so the
     /// whole model is in view whatever the aspect ratio.
     int frameWidth = 0, frameHeight = 0;
+    /// Bare meshes only: the model's up axis (0 x, 1 y, 2 z; --up x|y|z). The model is
+    /// turned so that axis points up (+y, UpAxisToY in camera_overrides.h) before it is
+    /// framed, so a Z-up STL stands on the ground. Scene files place their meshes themselves.
+    int upAxis = 1;
+    /// Bare meshes only: the vertical field of view the framing fits the model into
+    /// (--fov); 0: the framing's own (40 degrees).
+    float frameFovY = 0;
     /// For tests and fuzzing (fuzz/fuzz_entry_points.cpp): the text of a JSON scene file,
     /// parsed instead of reading `spec`, which still names it in messages and locates its
     /// mesh files.

@@ -121,6 +121,11 @@ struct RenderOptions {
     /// Whether mesh files referenced many times become instances (a scene file's
     /// "instancing"; --no-instancing reaches the loader: SceneLoadOptions::instancing).
     bool instancing = true;
+    /// Exposure in stops: the rendered linear radiance is multiplied by 2^exposure before it
+    /// is written, EXR and PNG alike (io/tonemap.h); 0 leaves it as rendered.
+    float exposure = 0.0f;
+    /// The tone curve of PNG output (io/tonemap.h: clamp, reinhard, aces); EXR stays linear.
+    std::string tonemap = "clamp";
     /// Where each knob's value came from, by scene-file key: "scene.json /render/ki" or
     /// "--ki" (the CLI's value replaces the file's); a knob left at its default is absent.
     std::map<std::string, SourceLoc> origins;

@@ -11,9 +11,9 @@ const std::vector<RenderSetting>& RenderSettings() {
     using K = RenderSetting::Kind;
     constexpr double kNoLimit = std::numeric_limits<double>::infinity();
     static const std::vector<RenderSetting> rows = {
-        {"width", "--width", K::Int, 1, 16384, {}, "Image width in pixels (default 640, or the scene file's)",
+        {"width", "--width", K::Int, 1, 16384, {}, "Image width in pixels (default 640, or the scene file's); given alone, the height keeps the aspect ratio",
          nullptr, {}},
-        {"height", "--height", K::Int, 1, 16384, {}, "Image height in pixels (default 480, or the scene file's)",
+        {"height", "--height", K::Int, 1, 16384, {}, "Image height in pixels (default 480, or the scene file's); given alone, the width keeps the aspect ratio",
          nullptr, {}},
         {"aa", "--aa", K::Int, 1, 16, {}, "Anti-aliasing: N x N camera rays per pixel (default 1)", nullptr, {}},
         {"max_depth", "--max-depth", K::Int, 1, 64, {}, "Mirror recursion limit (1: no reflections; default 5)",
@@ -77,6 +77,13 @@ const std::vector<RenderSetting>& RenderSettings() {
         {"instancing", "--no-instancing", K::Bool, 0, 0, {},
          "Copy every reference to a mesh file into the scene's triangles instead of placing a file referenced "
          "many times as instances of one import (default: instancing on)",
+         nullptr, {}},
+        // ---- The image's exposure and tone curve (io/tonemap.h) ----
+        {"exposure", "--exposure", K::Float, -32, 32, {},
+         "Exposure in stops: the linear radiance times 2^EV, in EXR and PNG alike (default 0)", nullptr, {}},
+        {"tonemap", "--tonemap", K::Choice, 0, 0, {"clamp", "reinhard", "aces"},
+         "PNG tone curve: clamp (values above 1 are white), reinhard (x/(1+x)) or aces (Narkowicz's filmic "
+         "fit); EXR stays linear (default clamp)",
          nullptr, {}},
     };
     return rows;

@@ -67,6 +67,12 @@ std::vector<int64_t> SpreadOverGrid(int64_t cols, int64_t rows, int64_t n) {
     return cells;
 }
 
+double ProgressSecondsLeft(double workSeconds, double fraction) {
+    if (!(fraction >= kProgressEstimateShare) || !(workSeconds >= kProgressEstimateSeconds) || !(fraction < 1))
+        return fraction >= 1 ? 0.0 : -1.0;
+    return workSeconds * (1.0 - fraction) / fraction;
+}
+
 ProgressReporter::~ProgressReporter() { Done(); }
 
 bool ProgressReporter::StderrIsTerminal() { return isatty(STDERR_FILENO) == 1; }
@@ -165,9 +171,12 @@ void ProgressReporter::Draw(int64_t done, bool final) {
         SetInterruptLineOpen(false);
     } else {
         SetInterruptLineOpen(true);
-        const double left = fraction > 0 ? elapsed * (1.0 - fraction) / fraction : 0.0;
-        std::fprintf(stderr, "\r%s [%s] %3d%% %.1fs, %s left   ", title_.c_str(), bar,
-                     static_cast<int>(fraction * 100), elapsed, FormatDuration(left).c_str());
+        // The time left from the work's own rate, set-up apart (it is behind us), and only
+        // once enough is done for the rate to mean something.
+        const double work = std::chrono::duration<double>(std::chrono::steady_clock::now() - workStart_).count();
+        const double left = ProgressSecondsLeft(work, fraction);
+        std::fprintf(stderr, "\r%s [%s] %3d%% %.1fs, %s   ", title_.c_str(), bar, static_cast<int>(fraction * 100),
+                     elapsed, left < 0 ? "estimating the time left" : (FormatDuration(left) + " left").c_str());
     }
     std::fflush(stderr);
 }

@@ -80,6 +80,15 @@ class ProgressReporter {
     std::chrono::steady_clock::time_point start_, lastDraw_, workStart_;
 };
 
+/// The bar's "time left" is shown once the work (set-up apart) has run this long and done
+/// this share: the first tiles of a frame (sky, or a sample spread over it) are not its
+/// average, and an estimate from a tenth of a second promised 0.5 s for a 5 s render.
+inline constexpr double kProgressEstimateSeconds = 1.0, kProgressEstimateShare = 0.05;
+/// The seconds left of a work that has run `workSeconds` (set-up apart) and done `fraction`
+/// of itself, at its measured rate; -1 (not shown: "estimating") before
+/// kProgressEstimateSeconds and kProgressEstimateShare; 0 when done.
+double ProgressSecondsLeft(double workSeconds, double fraction);
+
 /// `n` cells of a cols × rows grid (index row·cols + col) spread over it in both directions:
 /// the centre cell of each of about n strata of the grid's shape, ordered so that every
 /// prefix is spread too (the strata in bit-reversed order). All cells if n ≥ cols × rows.
