@@ -22,8 +22,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// A folder of the running test's own: ctest runs the tests of this file side by side.
 std::string Temp(const std::string& name) {
-    const fs::path dir = fs::path(::testing::TempDir()) / "lm_visibility_cli";
+    const fs::path dir = fs::path(::testing::TempDir()) /
+                         ("lm_visibility_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::create_directories(dir);
     return (dir / name).string();
 }

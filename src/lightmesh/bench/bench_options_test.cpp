@@ -104,7 +104,7 @@ TEST(BenchOptions, KeywordsAreTheClisOptions) {
         std::replace(key.begin(), key.end(), '-', '_');
         cli.insert(key);
     }
-    for (const char* own : {"help", "csv", "markdown", "html", "json", "quiet", "threads"}) cli.erase(own);
+    for (const char* own : {"help", "csv", "markdown", "html", "json", "quiet", "verbose", "threads"}) cli.erase(own);
     std::set<std::string> keywords;
     for (const BenchOptionInfo& info : BenchOptionTable()) keywords.insert(info.key);
     EXPECT_EQ(keywords, cli);
