@@ -51,6 +51,8 @@ struct CommonOptions {
     int threads = 0;
     bool textures = true;  ///< false: --no-textures (SceneLoadOptions::textures)
     bool instancing = true;  ///< false: --no-instancing (SceneLoadOptions::instancing)
+    /// --camera NAME|INDEX: which of a mesh file's own cameras (SceneLoadOptions::camera).
+    std::string camera;
 };
 void AddCommonOptions(CLI::App* cmd, CommonOptions* o);
 lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth = 0, int frameHeight = 0);

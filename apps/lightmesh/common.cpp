@@ -32,6 +32,10 @@ void AddCommonOptions(CLI::App* cmd, CommonOptions* o) {
     cmd->add_flag("-v,--verbose", o->verbose, "Print more about what is done");
     cmd->add_option("-t,--threads", o->threads, "Worker threads (default: all cores)")
         ->check(InRange(1, 1024, true));
+    // A mesh file's own cameras (glTF, COLLADA, FBX, .blend): the first frames it by default.
+    cmd->add_option("--camera", o->camera,
+                    "Which of the mesh file's own cameras to render from: its name or its index from 0 (default: "
+                    "the first; a file without cameras is framed automatically)");
 }
 
 lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth, int frameHeight) {
@@ -39,6 +43,7 @@ lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth, int frameHeig
     load.strict = o.strict;
     load.textures = o.textures;
     load.instancing = o.instancing;
+    load.camera = o.camera;
     load.frameWidth = frameWidth;
     load.frameHeight = frameHeight;
     std::vector<std::string> warnings;

@@ -223,6 +223,17 @@ class SceneWalker {
                 Refuse(StringPrintf("the node hierarchy is more than %u levels deep (the limit)",
                                     budget_.depth));
             const aiMatrix4x4 transform = f.parent * node.mTransformation;
+            if (wanted_ && !wanted_->empty()) {
+                const auto it = wanted_->find(node.mName.C_Str());
+                if (it != wanted_->end() && !it->second) {
+                    mesh_import::NodeTransform t;
+                    const aiMatrix4x4& a = transform;
+                    const float rows[16] = {a.a1, a.a2, a.a3, a.a4, a.b1, a.b2, a.b3, a.b4,
+                                            a.c1, a.c2, a.c3, a.c4, a.d1, a.d2, a.d3, a.d4};
+                    std::memcpy(t.m, rows, sizeof rows);
+                    it->second = t;
+                }
+            }
             const bool excluded = MatchesAny(options_.excludeNames, node.mName.C_Str(),
                                              &out_->excludeNamesMatched) ||
                                   f.excludedByAncestor;
@@ -239,6 +250,8 @@ class SceneWalker {
     }
 
     size_t nonTriangleMeshes = 0;  ///< meshes of points or lines seen (and dropped)
+    /// Nodes whose global transform the walk records (cameras' and lights'), or null.
+    mesh_import::NodeTransforms* wanted_ = nullptr;
 
   private:
     [[noreturn]] void Refuse(const std::string& reason) const {
@@ -481,7 +494,11 @@ LoadedMesh ImportMeshInProcess(const std::string& path, const MeshLoadOptions& o
         if (!scene->mRootNode)
             throw MeshFileError(path, "the file has no scene graph (no meshes)", true);
         SceneWalker walker(path, *scene, options, budget, &out);
+        mesh_import::NodeTransforms placed;
+        mesh_import::WantedNodeNames(*scene, &placed);
+        walker.wanted_ = &placed;
         walker.Walk(*scene->mRootNode);
+        mesh_import::ReadCamerasAndLights(*scene, path, placed, &out);
         if (out.mesh.TriangleCount() == 0 && out.meshesExcluded == 0) {
             throw MeshFileError(
                 path,

@@ -7,6 +7,7 @@
 
 #include "lightmesh/geometry/affine.h"  // Affine, TransformMesh: for this header's users
 #include "lightmesh/geometry/mesh.h"
+#include "lightmesh/scene/file_cameras_lights.h"
 #include "lightmesh/scene/scene.h"
 #include "lightmesh/texture/texture_cache.h"
 #include "lightmesh/util/error.h"
@@ -72,6 +73,10 @@ struct LoadedMesh {
     std::vector<bool> excludeMaterialsMatched, excludeNamesMatched;
     /// The importer's warnings (e.g. a missing .mtl file), each prefixed with the path.
     std::vector<std::string> warnings;
+    /// The file's cameras and lights that a node places, in the file's order, in world
+    /// space (file_cameras_lights.h).
+    std::vector<FileCamera> cameras;
+    std::vector<FileLight> lights;
 };
 
 /// Reads a mesh file in any format Assimp knows (OBJ+MTL, glTF 2, PLY, STL, FBX, …):
