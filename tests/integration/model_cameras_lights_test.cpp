@@ -151,17 +151,17 @@ TEST(ModelCamerasLights, BadCameraChoiceIsOneErrorLine) {
 TEST(ModelCamerasLights, HostileCamerasAndLightsAreOneErrorLine) {
     const std::string out = Temp("hostile.exr");
     for (const auto& [file, text] : std::vector<std::pair<std::string, std::string>>{
-             {"camera_zero_fov.gltf", "camera 0 \"Bad\" cannot be used: its vertical field of view is 0°"},
-             {"camera_wide_fov.gltf", "camera 0 \"Bad\" cannot be used: its vertical field of view is 189"},
-             {"camera_zero_scale.gltf", "camera 0 \"Bad\" cannot be used: it has no view direction"},
-             {"spot_inner_outer.gltf", "light 0 \"S\" cannot be used: its inner cone angle 34.3775° is not between 0"},
-             {"spot_wide.gltf", "light 0 \"S\" cannot be used: its outer cone angle is 97.4028°"},
-             {"light_negative.gltf", "light 0 \"S\" cannot be used: its colour (-5, -5, -5) is negative"},
-             {"sun_zero_scale.gltf", "light 0 \"S\" cannot be used: it has no direction"},
+             {"camera_zero_fov.gltf", "the file's camera 0 \"Bad\" cannot be used: its vertical field of view is 0°"},
+             {"camera_wide_fov.gltf", "the file's camera 0 \"Bad\" cannot be used: its vertical field of view is 189"},
+             {"camera_zero_scale.gltf", "the file's camera 0 \"Bad\" cannot be used: it has no view direction"},
+             {"spot_inner_outer.gltf", "malformed or truncated (Assimp: aiLight::mAngleInnerCone is larger than aiLight::mAngleOuterCone)"},
+             {"spot_wide.gltf", "the file's light 0 \"S\" cannot be used: its outer cone angle is 97.4028°"},
+             {"light_negative.gltf", "the file's light 0 \"S\" cannot be used: its colour (-5, -5, -5) is negative"},
+             {"sun_zero_scale.gltf", "the file's light 0 \"S\" cannot be used: it has no direction"},
          }) {
         const CliResult r = Render(file, out);
         EXPECT_EQ(r.exitCode, 1) << file << "\n" << r.output;
-        EXPECT_NE(r.output.find(kData + file + ": the file's " + text), std::string::npos) << r.output;
+        EXPECT_NE(r.output.find(kData + file + ": " + text), std::string::npos) << r.output;
         EXPECT_EQ(Lines(r.output), 1u) << r.output;
         EXPECT_FALSE(fs::exists(out)) << file;
     }
@@ -197,11 +197,14 @@ TEST(ModelCamerasLights, TenThousandLightsRender) {
     std::ofstream(file) << text;
     const std::string out = Temp("many.exr");
     fs::remove(out);
-    const CliResult r = lm::testing::RunLightmesh("render " + file + " --width 48 --height 32 -o " + out);
+    // RT: the import and the lights are what is tested (Assimp's validation compares the
+    // names pairwise: about 4 s here); soft shadows of 10,000 unranged lights cost what a
+    // scene file's do.
+    const CliResult r = lm::testing::RunLightmesh("render " + file + " --width 32 --height 24 --shadows rt -o " + out);
     ASSERT_EQ(r.exitCode, 0) << r.output.substr(0, 2000);
     EXPECT_NE(r.output.find("the file's lights: 10000 point"), std::string::npos) << r.output.substr(0, 2000);
     const lm::Image img = lm::ReadImage(out);
-    EXPECT_GT(Luminance(img.At(24, 16)), 0.05f);
+    EXPECT_GT(Luminance(img.At(16, 12)), 0.05f);
 }
 
 }  // namespace

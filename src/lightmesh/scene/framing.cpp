@@ -17,6 +17,9 @@ using namespace json;  // Reader
 
 namespace {
 
+/// How far below a flat level model its ground goes, in the model's largest extent.
+constexpr float kFlatModelGroundDrop = 0.1f;
+
 /// The area of the triangles lying in the plane y = box.lo.y (within 1e-5 of the model's
 /// size) and facing up (+y by their winding): a floor the model brings along.
 float UpwardAreaAtBase(const TriangleMesh& mesh, const Bounds3& box) {
@@ -253,7 +256,17 @@ Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options,
     } else {
         const uint32_t groundMaterial = static_cast<uint32_t>(scene.materials.size());
         scene.materials.push_back(GroundMaterial());
-        if (floorShare > 0) {
+        // A flat model lying level (a card, a leaf facing down: under 0.1 % of its size
+        // high): a ground at its height would coincide with it, so it goes below.
+        const bool flat = box.Diagonal().y <= 1e-3f * box.MaxExtent();
+        if (flat) {
+            const float height = box.lo.y - kFlatModelGroundDrop * box.MaxExtent();
+            AddGround(&scene, box, 1, height, 3.0f, groundMaterial);
+            notes.push_back(StringPrintf(
+                "ground plane at y = %g, %g %% of the model's width below it (the model is flat and level: a "
+                "ground at its height would coincide with it), 3x the model's width",
+                height, 100.0 * kFlatModelGroundDrop));
+        } else if (floorShare > 0) {
             // Some of the model's base faces up: sink the slab a little below it.
             const float height = box.lo.y - 0.002f * box.MaxExtent();
             AddGround(&scene, box, 1, height, 3.0f, groundMaterial);

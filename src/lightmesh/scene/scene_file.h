@@ -41,7 +41,7 @@ struct SceneLoadOptions {
     /// Which of a mesh file's own cameras frames it (--camera): "" the first, digits an
     /// index from 0, else a camera's name. Files without cameras are framed automatically
     /// (then a non-empty value is an error), and so are scene files (their "camera").
-    std::string camera;
+    std::string camera = "";
     /// For tests and fuzzing: loads the mesh files of a JSON scene instead of LoadMeshFile.
     std::function<LoadedMesh(const std::string& path, const MeshLoadOptions&)> loadMesh = nullptr;
 };
