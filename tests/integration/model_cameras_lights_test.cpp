@@ -42,6 +42,21 @@ lm::Color TopViewFloor(const lm::Image& img, float x, float z) {
     return img.At(px, py);
 }
 
+// The pixel that sees (x, y, z) from the file's "Main" camera: at (0, 3, 6) looking at
+// (0, 0.5, 0), 40° vertical field of view, up +y.
+lm::Color MainView(const lm::Image& img, float x, float y, float z) {
+    const float fy = std::tan(20.0f * 3.14159265f / 180.0f);
+    const float fx = fy * static_cast<float>(img.width) / static_cast<float>(img.height);
+    const float len = std::sqrt(2.5f * 2.5f + 36.0f);
+    const float f[3] = {0, -2.5f / len, -6.0f / len};  // forward
+    const float u[3] = {0, -f[2], f[1]};               // up = right × forward, right = +x
+    const float d[3] = {x, y - 3.0f, z - 6.0f};
+    const float depth = d[0] * f[0] + d[1] * f[1] + d[2] * f[2];
+    const float sx = d[0] / depth, sy = (d[1] * u[1] + d[2] * u[2]) / depth;
+    return img.At(static_cast<int>((sx / fx + 1) * 0.5f * static_cast<float>(img.width)),
+                  static_cast<int>((1 - sy / fy) * 0.5f * static_cast<float>(img.height)));
+}
+
 size_t Lines(const std::string& s) {
     size_t n = 0;
     for (char c : s) n += c == '\n';
@@ -107,23 +122,32 @@ TEST(ModelCamerasLights, TheSunsShadowInEveryMethod) {
                                                       out + " --shadows " + method);
         ASSERT_EQ(r.exitCode, 0) << method << "\n" << r.output;
         const lm::Image img = lm::ReadImage(out);
-        // From the front camera: the floor behind the cube on its +x side is in its shadow.
-        // The shadow of the cube reaches 1 unit along +x: project its middle, (1, 0, 0).
-        // Main: at (0, 3, 6) looking at (0, 0.5, 0), 40° vertical.
-        const float fy = std::tan(20.0f * 3.14159265f / 180.0f), fx = fy * 160.0f / 120.0f;
-        const auto project = [&](float x, float y, float z) {
-            const float d[3] = {x - 0.0f, y - 3.0f, z - 6.0f};
-            const float f[3] = {0, -2.5f / std::sqrt(42.25f), -6.0f / std::sqrt(42.25f)};
-            const float u[3] = {0, f[2] * -1.0f, -f[1] * -1.0f};  // up: (right × forward), right = +x
-            const float depth = d[0] * f[0] + d[1] * f[1] + d[2] * f[2];
-            const float sx = d[0] / depth, sy = (d[1] * u[1] + d[2] * u[2]) / depth;
-            return img.At(static_cast<int>((sx / fx + 1) * 80), static_cast<int>((1 - sy / fy) * 60));
-        };
+        // From the front camera, the floor in the cube's shadow and beside it.
+        const auto project = [&](float x, float y, float z) { return MainView(img, x, y, z); };
         const float shadow = Luminance(project(1.0f, 0.0f, 0.0f));
         const float lit = Luminance(project(-1.5f, 0.0f, 0.0f));
         EXPECT_LT(shadow, 0.1f) << method;
         EXPECT_NEAR(lit, 0.4525f + 0.04f, 0.02f) << method;
     }
+}
+
+TEST(ModelCamerasLights, ColladaCameraAndLightsFollowItsConventions) {
+    // COLLADA's xfov is the full horizontal angle (57.2° at aspect 1.5: 40° vertical), the
+    // camera sits at its node (no position of its own), the bulb's quadratic attenuation
+    // makes it inverse square.
+    const std::string out = Temp("dae.exr");
+    const CliResult r = Render("lit_scene.dae", out);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("the file's camera 0 \"Main\" (of 1) at (0, 3, 6) looking towards (0, 2.615, 5.077), 40° "
+                            "vertical field of view"),
+              std::string::npos)
+        << r.output;
+    EXPECT_NE(r.output.find("the file's lights: 1 point, 0 spot, 1 directional"), std::string::npos) << r.output;
+    const lm::Image img = lm::ReadImage(out);
+    const float shadow = Luminance(MainView(img, 1.0f, 0.0f, 0.0f)), lit = Luminance(MainView(img, -1.5f, 0.0f, 0.0f));
+    EXPECT_LT(shadow, 0.75f * lit) << shadow << " " << lit;
+    // The cube's front, lit by the bulb at (0, 4, 4): 10 / 24.5 × cos 45° × 0.8 + ambient.
+    EXPECT_NEAR(Luminance(MainView(img, 0.0f, 0.6f, 0.5f)), 10 / 24.5f * 0.7071f * 0.8f + 0.04f, 0.04f);
 }
 
 TEST(ModelCamerasLights, BadCameraChoiceIsOneErrorLine) {

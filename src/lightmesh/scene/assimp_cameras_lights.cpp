@@ -27,10 +27,18 @@ Vec3 TransformDirection(const aiMatrix4x4& m, const aiVector3D& d) {
                 m.c1 * d.x + m.c2 * d.y + m.c3 * d.z);
 }
 
-bool IsGltf(const std::string& path) {
-    std::string ext = path.substr(path.find_last_of('.') == std::string::npos ? path.size() : path.find_last_of('.'));
+std::string Extension(const std::string& path) {
+    const size_t dot = path.find_last_of('.');
+    std::string ext = dot == std::string::npos || path.find('/', dot) != std::string::npos ? "" : path.substr(dot);
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-    return ext == ".gltf" || ext == ".glb";
+    return ext;
+}
+
+/// What Assimp 5.2's reader for this format stores in mHorizontalFOV (FileCamera::Fov).
+FileCamera::Fov FovConvention(const std::string& ext) {
+    if (ext == ".gltf" || ext == ".glb") return FileCamera::Fov::GltfYfovTimesAspect;
+    if (ext == ".dae" || ext == ".fbx") return FileCamera::Fov::FullHorizontal;
+    return FileCamera::Fov::HalfHorizontal;
 }
 
 }  // namespace
@@ -44,7 +52,8 @@ void WantedNodeNames(const aiScene& scene, NodeTransforms* wanted) {
 
 void ReadCamerasAndLights(const aiScene& scene, const std::string& path, const NodeTransforms& placed,
                           LoadedMesh* out) {
-    const bool gltf = IsGltf(path);
+    const std::string ext = Extension(path);
+    const bool gltf = ext == ".gltf" || ext == ".glb";
     for (unsigned i = 0; scene.mCameras && i < scene.mNumCameras; ++i) {
         const aiCamera* c = scene.mCameras[i];
         if (!c) continue;
@@ -60,7 +69,7 @@ void ReadCamerasAndLights(const aiScene& scene, const std::string& path, const N
         fc.up = TransformDirection(m, c->mUp);
         fc.horizontalFov = c->mHorizontalFOV;
         fc.aspect = c->mAspect;
-        fc.gltf = gltf;
+        fc.fov = FovConvention(ext);
         out->cameras.push_back(std::move(fc));
     }
     for (unsigned i = 0; scene.mLights && i < scene.mNumLights; ++i) {

@@ -67,14 +67,13 @@ std::string CameraFromFile(const FileCamera& fc, float imageAspect, Camera* out)
     // The file's aspect where it states a usable one, else the image's.
     const float aspect = std::isfinite(fc.aspect) && fc.aspect > 0 ? fc.aspect : imageAspect;
     double fovY = 0;
-    if (fc.gltf) {
+    const double half = fc.fov == FileCamera::Fov::FullHorizontal ? 0.5 * fc.horizontalFov : fc.horizontalFov;
+    if (fc.fov == FileCamera::Fov::GltfYfovTimesAspect) {
         fovY = fc.horizontalFov / (std::isfinite(fc.aspect) && fc.aspect > 0 ? fc.aspect : 1.0f) * kDegrees;
-    } else if (std::isfinite(fc.horizontalFov) && fc.horizontalFov > 0 && fc.horizontalFov < 0.5 * 3.14159265358979323846) {
-        fovY = 2.0 * std::atan(std::tan(double(fc.horizontalFov)) / aspect) * kDegrees;
+    } else if (std::isfinite(half) && half > 0 && half < 0.5 * 3.14159265358979323846) {
+        fovY = 2.0 * std::atan(std::tan(half) / aspect) * kDegrees;
     } else {
-        return StringPrintf("its horizontal field of view is %g° (Assimp's half-angle %g rad): must be between 0 "
-                            "and 180°",
-                            2.0 * fc.horizontalFov * kDegrees, double(fc.horizontalFov));
+        return StringPrintf("its horizontal field of view is %g°: must be between 0 and 180°", 2.0 * half * kDegrees);
     }
     if (!(fovY > 0 && fovY < 180))
         return StringPrintf("its vertical field of view is %g°: must be between 0 and 180°", fovY);

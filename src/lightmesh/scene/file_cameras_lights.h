@@ -18,9 +18,12 @@ struct FileCamera {
     /// The field of view as Assimp gives it (aiCamera::mHorizontalFOV, radians) and the
     /// file's aspect ratio (width / height; 0, negative or NaN: the image's).
     float horizontalFov = 0, aspect = 0;
-    /// glTF's yfov read back (Assimp 5.2's glTF reader stores yfov × aspect, with aspect 1
-    /// when the file gives none, in mHorizontalFOV, not the half horizontal angle).
-    bool gltf = false;
+    /// What Assimp 5.2's reader of the file's format puts in mHorizontalFOV: its documented
+    /// half horizontal angle (Blender, and formats not listed), the full horizontal angle
+    /// (COLLADA's xfov, FBX's FieldOfView), or glTF's yfov × aspect (aspect 1 when the file
+    /// gives none), which is read back as the vertical angle.
+    enum class Fov : uint8_t { HalfHorizontal, FullHorizontal, GltfYfovTimesAspect };
+    Fov fov = Fov::HalfHorizontal;
 };
 
 /// A light of the file, its node's global transform applied.

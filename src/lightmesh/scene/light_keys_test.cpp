@@ -128,12 +128,16 @@ TEST(FileCamerasLights, HorizontalHalfAngleAndAspectGiveTheVerticalFieldOfView) 
         ASSERT_EQ(CameraFromFile(fc, 4.0f, &c), "");
         EXPECT_NEAR(c.fovY, 2 * std::atan(std::tan(0.5) / 4) * 180 / Pi, 1e-4f);
     }
+    // COLLADA, FBX: the full horizontal angle.
+    fc.fov = FileCamera::Fov::FullHorizontal, fc.horizontalFov = 1.0f, fc.aspect = 2.0f;
+    ASSERT_EQ(CameraFromFile(fc, 1.0f, &c), "");
+    EXPECT_NEAR(c.fovY, 2 * std::atan(std::tan(0.5) / 2) * 180 / Pi, 1e-4f);
     // glTF: yfov × aspect read back.
-    fc.gltf = true, fc.horizontalFov = 0.6f, fc.aspect = 1.5f;
+    fc.fov = FileCamera::Fov::GltfYfovTimesAspect, fc.horizontalFov = 0.6f, fc.aspect = 1.5f;
     ASSERT_EQ(CameraFromFile(fc, 1.0f, &c), "");
     EXPECT_NEAR(c.fovY, 0.4f * 180 / Pi, 1e-4f);
     // Hostile: NaN field of view, an up along the view, no view direction.
-    fc.gltf = false, fc.horizontalFov = NAN;
+    fc.fov = FileCamera::Fov::HalfHorizontal, fc.horizontalFov = NAN;
     EXPECT_NE(CameraFromFile(fc, 1.0f, &c).find("horizontal field of view"), std::string::npos);
     fc.horizontalFov = 0.5f, fc.up = Vec3(0, 0, 2);
     EXPECT_EQ(CameraFromFile(fc, 1.0f, &c), "its up direction is zero or parallel to its view direction");

@@ -162,6 +162,56 @@ def write(name, gltf):
         f.write("\n")
 
 
+def collada():
+    """lit_scene.dae: the floor and the cube of lit_scene.gltf in COLLADA, with its camera
+    "Main" (xfov: COLLADA's full horizontal angle, 2 atan(1.5 tan 20°) = 57.2°, aspect 1.5:
+    the same view as the glTF's) and its point light (quadratic attenuation 1: inverse
+    square, 10) and sun (directional, 0.8); nodes place them with matrices."""
+    floor_pos, floor_idx, cube_pos, cube_idx = geometry()
+    pos = list(floor_pos) + list(cube_pos)
+    idx = list(floor_idx) + [i + 4 for i in cube_idx]
+
+    def matrix(translation, rotation):
+        x, y, z, w = rotation
+        r = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+             [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+             [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
+        rows = [r[i] + [translation[i]] for i in range(3)] + [[0, 0, 0, 1]]
+        return " ".join("%.9g" % v for row in rows for v in row)
+
+    xfov = math.degrees(2 * math.atan(1.5 * math.tan(math.radians(20))))
+    cam = matrix((0, 3, 6), look_rotation((0, 3, 6), (0, 0.5, 0)))
+    bulb = matrix((0, 4, 4), (0, 0, 0, 1))
+    sun = matrix((0, 0, 0), direction_rotation((1, -1, 0)))
+    return f"""<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><up_axis>Y_UP</up_axis></asset>
+  <library_cameras><camera id="cam" name="Main"><optics><technique_common><perspective>
+    <xfov>{xfov:.6f}</xfov><aspect_ratio>1.5</aspect_ratio><znear>0.1</znear><zfar>100</zfar>
+  </perspective></technique_common></optics></camera></library_cameras>
+  <library_lights>
+    <light id="bulb" name="Bulb"><technique_common><point><color>10 10 10</color>
+      <constant_attenuation>0</constant_attenuation><linear_attenuation>0</linear_attenuation>
+      <quadratic_attenuation>1</quadratic_attenuation></point></technique_common></light>
+    <light id="sun" name="Sun"><technique_common><directional><color>0.8 0.8 0.8</color></directional></technique_common></light>
+  </library_lights>
+  <library_geometries><geometry id="geo" name="Scene"><mesh>
+    <source id="pos"><float_array id="pos-a" count="{3 * len(pos)}">{" ".join("%g" % c for p in pos for c in p)}</float_array>
+      <technique_common><accessor source="#pos-a" count="{len(pos)}" stride="3"><param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/></accessor></technique_common></source>
+    <vertices id="verts"><input semantic="POSITION" source="#pos"/></vertices>
+    <triangles count="{len(idx) // 3}"><input semantic="VERTEX" source="#verts" offset="0"/><p>{" ".join(str(i) for i in idx)}</p></triangles>
+  </mesh></geometry></library_geometries>
+  <library_visual_scenes><visual_scene id="scene">
+    <node id="model" name="Model"><instance_geometry url="#geo"/></node>
+    <node id="Main" name="Main"><matrix>{cam}</matrix><instance_camera url="#cam"/></node>
+    <node id="Bulb" name="Bulb"><matrix>{bulb}</matrix><instance_light url="#bulb"/></node>
+    <node id="Sun" name="Sun"><matrix>{sun}</matrix><instance_light url="#sun"/></node>
+  </visual_scene></library_visual_scenes>
+  <scene><instance_visual_scene url="#scene"/></scene>
+</COLLADA>
+"""
+
+
 def main():
     write("lit_scene.gltf", build(CAMERAS, LIGHTS, CAMERA_NODES, LIGHT_NODES))
     # The sun alone, for the shadow methods' comparison.
@@ -189,6 +239,9 @@ def main():
     sun_node["scale"] = [0, 0, 0]
     write("sun_zero_scale.gltf", build(CAMERAS[:1], LIGHTS[2:], CAMERA_NODES[:1], [sun_node]))
     # (10,000 lights: the test writes that file itself, tests/integration/model_cameras_lights_test.cpp.)
+    with open("lit_scene.dae", "w") as f:
+        f.write(collada())
 
 if __name__ == "__main__":
     main()
+
