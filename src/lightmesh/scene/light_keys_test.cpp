@@ -6,6 +6,7 @@
 
 #include "lightmesh/scene/file_cameras_lights.h"
 #include "lightmesh/scene/scene_file.h"
+#include "lightmesh/shadow/shadow.h"
 #include "lightmesh/util/error.h"
 
 namespace lm {
@@ -84,6 +85,18 @@ TEST(LightKeys, TheSunIsAFarSphereSubtendingItsAngle) {
     EXPECT_NEAR(std::asin(l.radius / distance) * 180 / Pi, kSunAngleDegrees, 1e-4f);
     const Scene hard = Load(R"({"sun": {"direction": [0, -1, 0], "angle": 0}})");
     EXPECT_EQ(hard.lights[0].radius, 0.0f);
+}
+
+TEST(LightKeys, LightRadiusOverridesLeaveTheSunsSizeExceptZero) {
+    const Scene s = Load(R"({"sun": {"direction": [1, -1, 0]}}, {"position": [0, 5, 0], "radius": 0.3})");
+    RenderOptions o;
+    o.areaLight.radius = 0.5f;
+    const std::vector<float> r = LightRadii(s, o);
+    EXPECT_EQ(r[0], s.lights[0].radius);
+    EXPECT_GT(r[0], 1.0f);
+    EXPECT_EQ(r[1], 0.5f);
+    o.areaLight.radius = 0.0f;
+    EXPECT_EQ(LightRadii(s, o), std::vector<float>({0.0f, 0.0f}));
 }
 
 TEST(LightKeys, BadSunsAreErrorsNamingTheKey) {
