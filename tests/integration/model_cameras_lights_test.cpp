@@ -172,6 +172,22 @@ TEST(ModelCamerasLights, BadCameraChoiceIsOneErrorLine) {
     EXPECT_NE(json.output.find("picks one of a mesh file's own cameras"), std::string::npos) << json.output;
 }
 
+TEST(ModelCamerasLights, OrthographicCamerasArePassedOver) {
+    // The file's first camera is orthographic: the default takes its perspective "Main";
+    // --camera naming the orthographic one is one error line.
+    const std::string out = Temp("ortho.exr"), main = Temp("ortho_main.exr");
+    const CliResult r = Render("camera_orthographic.gltf", out);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("the file's camera 1 \"Main\" (of 2;"), std::string::npos) << r.output;
+    ASSERT_EQ(Render("camera_orthographic.gltf", main, "--camera Main").exitCode, 0);
+    EXPECT_EQ(lm::testing::FileBytes(out), lm::testing::FileBytes(main));
+    const CliResult bad = Render("camera_orthographic.gltf", out, "--camera Ortho");
+    EXPECT_EQ(bad.exitCode, 1);
+    EXPECT_NE(bad.output.find("camera 0 \"Ortho\" cannot be used: it is orthographic"), std::string::npos) << bad.output;
+    EXPECT_EQ(Lines(bad.output), 1u) << bad.output;
+    EXPECT_FALSE(fs::exists(out));
+}
+
 TEST(ModelCamerasLights, HostileCamerasAndLightsAreOneErrorLine) {
     const std::string out = Temp("hostile.exr");
     for (const auto& [file, text] : std::vector<std::pair<std::string, std::string>>{

@@ -70,6 +70,7 @@ void ReadCamerasAndLights(const aiScene& scene, const std::string& path, const N
         fc.horizontalFov = c->mHorizontalFOV;
         fc.aspect = c->mAspect;
         fc.fov = FovConvention(ext);
+        fc.orthographic = c->mOrthographicWidth > 0;
         out->cameras.push_back(std::move(fc));
     }
     for (unsigned i = 0; scene.mLights && i < scene.mNumLights; ++i) {

@@ -38,7 +38,12 @@ int SelectFileCamera(const std::vector<FileCamera>& cameras, const std::string& 
         *problem = "the file has no cameras";
         return -1;
     }
-    if (select.empty()) return 0;
+    if (select.empty()) {
+        for (size_t i = 0; i < cameras.size(); ++i)
+            if (!cameras[i].orthographic) return static_cast<int>(i);
+        problem->clear();
+        return -1;
+    }
     for (size_t i = 0; i < cameras.size(); ++i)
         if (cameras[i].name == select) return static_cast<int>(i);
     const bool digits = select.find_first_not_of("0123456789") == std::string::npos;
@@ -59,6 +64,7 @@ int SelectFileCamera(const std::vector<FileCamera>& cameras, const std::string& 
 }
 
 std::string CameraFromFile(const FileCamera& fc, float imageAspect, Camera* out) {
+    if (fc.orthographic) return "it is orthographic (lightmesh renders perspective cameras)";
     if (!IsFinite(fc.position)) return "its position is not finite";
     if (!IsFinite(fc.lookAt) || !(LengthSquared(fc.lookAt) > 0))
         return "it has no view direction (its node's transform is singular or not finite)";

@@ -24,6 +24,9 @@ struct FileCamera {
     /// gives none), which is read back as the vertical angle.
     enum class Fov : uint8_t { HalfHorizontal, FullHorizontal, GltfYfovTimesAspect };
     Fov fov = Fov::HalfHorizontal;
+    /// An orthographic camera (aiCamera::mOrthographicWidth > 0), which lightmesh does not
+    /// render: the default choice passes over it, --camera naming it is an error.
+    bool orthographic = false;
 };
 
 /// A light of the file, its node's global transform applied.
@@ -55,8 +58,9 @@ inline constexpr float kSunDistanceFactor = 1e4f;
 /// exactly the angle from c), falloff none.
 void PlaceSuns(Scene* scene, const Bounds3& bounds);
 
-/// The camera `select` names among `cameras` ("" the first; digits an index from 0; else
-/// a name), or -1 and *problem (one line, no file name) when there is none such.
+/// The camera `select` names among `cameras` ("" the first perspective one; digits an
+/// index from 0; else a name), or -1 and *problem (one line, no file name) when there is
+/// none such ("" with only orthographic cameras: -1 and an empty *problem).
 int SelectFileCamera(const std::vector<FileCamera>& cameras, const std::string& select, std::string* problem);
 
 /// The file's camera as the scene's, for an image of aspect `imageAspect`. "" or why it

@@ -47,6 +47,12 @@ bool UseFileCamera(const Reader& r, const LoadedMesh& loaded, const SceneLoadOpt
     }
     std::string problem;
     const int index = SelectFileCamera(loaded.cameras, options.camera, &problem);
+    if (index < 0 && options.camera.empty()) {
+        scene->report.notes.push_back(StringPrintf(
+            "the file's %zu camera%s orthographic (lightmesh renders perspective cameras): framing it instead",
+            loaded.cameras.size(), loaded.cameras.size() == 1 ? " is" : "s are"));
+        return false;
+    }
     if (index < 0) r.Fail("", "--camera " + options.camera + ": " + problem);
     const FileCamera& fc = loaded.cameras[static_cast<size_t>(index)];
     const std::string which =

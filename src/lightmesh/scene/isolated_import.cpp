@@ -90,7 +90,7 @@ void WriteMeshResult(int fd, const LoadedMesh& m) {
     for (const FileCamera& c : m.cameras) {
         w.Str(c.name);
         w.Pod(c.position), w.Pod(c.lookAt), w.Pod(c.up);
-        w.Pod(c.horizontalFov), w.Pod(c.aspect), w.Pod(c.fov);
+        w.Pod(c.horizontalFov), w.Pod(c.aspect), w.Pod(c.fov), w.Pod<uint8_t>(c.orthographic);
     }
     w.Pod<uint64_t>(m.lights.size());
     for (const FileLight& l : m.lights) {
@@ -164,6 +164,7 @@ LoadedMesh ReadResult(const std::string& path, std::string_view bytes) {
         c.horizontalFov = r.Pod<float>(), c.aspect = r.Pod<float>(), c.fov = r.Pod<FileCamera::Fov>();
         if (static_cast<uint8_t>(c.fov) > static_cast<uint8_t>(FileCamera::Fov::GltfYfovTimesAspect))
             throw std::runtime_error("bad camera convention");
+        c.orthographic = r.Pod<uint8_t>() != 0;
         m.cameras.push_back(std::move(c));
     }
     const uint64_t lights = r.Pod<uint64_t>();

@@ -125,6 +125,12 @@ TEST(FileCamerasLights, SelectByNameOrIndex) {
     EXPECT_EQ(SelectFileCamera(cams, "top", &problem), -1);
     EXPECT_EQ(problem, "the file has no camera named \"top\" (its cameras: \"Main\", \"Top\")");
     EXPECT_EQ(SelectFileCamera({}, "", &problem), -1);
+    cams[0].orthographic = true;  // passed over by default, still chosen by name
+    EXPECT_EQ(SelectFileCamera(cams, "", &problem), 1);
+    EXPECT_EQ(SelectFileCamera(cams, "Main", &problem), 0);
+    cams[1].orthographic = true;
+    EXPECT_EQ(SelectFileCamera(cams, "", &problem), -1);
+    EXPECT_EQ(problem, "");
 }
 
 TEST(FileCamerasLights, HorizontalHalfAngleAndAspectGiveTheVerticalFieldOfView) {

@@ -235,6 +235,12 @@ def main():
         ("light_negative", {"name": "S", "type": "point", "intensity": -5}),
     ):
         write(name + ".gltf", build(CAMERAS[:1], [light], CAMERA_NODES[:1], [light_node("S", 0, (4, 5, 0), (0, -1, 0))]))
+    # An orthographic camera first: the default passes over it to the perspective one.
+    ortho = [{"name": "Ortho", "type": "orthographic", "orthographic": {"xmag": 3, "ymag": 2, "znear": 0.1,
+                                                                          "zfar": 50}}] + CAMERAS[:1]
+    write("camera_orthographic.gltf",
+          build(ortho, LIGHTS[:1], [camera_node("Ortho", 0, (0, 12, 0), (0, 0, 0), up=(0, 0, -1)),
+                                    camera_node("Main", 1, (0, 3, 6), (0, 0.5, 0))], LIGHT_NODES[:1]))
     sun_node = light_node("S", 0, (0, 0, 0), (1, -1, 0))
     sun_node["scale"] = [0, 0, 0]
     write("sun_zero_scale.gltf", build(CAMERAS[:1], LIGHTS[2:], CAMERA_NODES[:1], [sun_node]))
