@@ -53,6 +53,8 @@ struct CommonOptions {
     bool instancing = true;  ///< false: --no-instancing (SceneLoadOptions::instancing)
     /// --camera NAME|INDEX: which of a mesh file's own cameras (SceneLoadOptions::camera).
     std::string camera;
+    /// --smooth-normals DEG: smooth normals for meshes without (SceneLoadOptions::smoothNormals).
+    float smoothNormals = -1.0f;
 };
 void AddCommonOptions(CLI::App* cmd, CommonOptions* o);
 lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth = 0, int frameHeight = 0);

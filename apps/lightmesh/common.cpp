@@ -36,6 +36,10 @@ void AddCommonOptions(CLI::App* cmd, CommonOptions* o) {
     cmd->add_option("--camera", o->camera,
                     "Which of the mesh file's own cameras to render from: its name or its index from 0 (default: "
                     "the first; a file without cameras is framed automatically)");
+    cmd->add_option("--smooth-normals", o->smoothNormals,
+                    "Give the meshes of mesh files that have no normals smooth ones, keeping edges sharper than DEG "
+                    "degrees as creases (0 to 180; default: none, flat faces)")
+        ->check(InRange(0, 180, false));
 }
 
 lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth, int frameHeight) {
@@ -44,6 +48,7 @@ lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth, int frameHeig
     load.textures = o.textures;
     load.instancing = o.instancing;
     load.camera = o.camera;
+    load.smoothNormals = o.smoothNormals;
     load.frameWidth = frameWidth;
     load.frameHeight = frameHeight;
     std::vector<std::string> warnings;

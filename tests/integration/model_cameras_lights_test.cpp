@@ -247,4 +247,47 @@ TEST(ModelCamerasLights, TenThousandLightsRender) {
     EXPECT_GT(Luminance(img.At(16, 12)), 0.05f);
 }
 
+// --smooth-normals: a low-poly sphere without normals, shaded smoothly: the brightness steps
+// at its facets' edges (flat shading) give way to a gradient. Without the option the
+// faces stay flat (today's images).
+TEST(ModelCamerasLights, SmoothNormalsSmoothALowPolySphere) {
+    std::string obj;
+    const int rings = 8, segments = 12;
+    for (int i = 0; i <= rings; ++i)
+        for (int j = 0; j < segments; ++j) {
+            const double th = 3.14159265358979 * i / rings, ph = 2 * 3.14159265358979 * j / segments;
+            obj += lm::StringPrintf("v %.6f %.6f %.6f\n", std::sin(th) * std::cos(ph), 1 + std::cos(th),
+                                    std::sin(th) * std::sin(ph));
+        }
+    auto at = [&](int i, int j) { return i * segments + j % segments + 1; };
+    for (int i = 0; i < rings; ++i)
+        for (int j = 0; j < segments; ++j) {
+            if (i > 0) obj += lm::StringPrintf("f %d %d %d\n", at(i, j), at(i + 1, j), at(i, j + 1));
+            if (i + 1 < rings) obj += lm::StringPrintf("f %d %d %d\n", at(i, j + 1), at(i + 1, j), at(i + 1, j + 1));
+        }
+    const std::string file = Temp("sphere.obj");
+    std::ofstream(file) << obj;
+    // The largest step in brightness between neighbouring pixels along a row across the
+    // sphere's lit upper half.
+    auto largestStep = [&](const std::string& extra) {
+        const std::string out = Temp("sphere.exr");
+        fs::remove(out);
+        const CliResult r = lm::testing::RunLightmesh("render " + file + " --width 200 --height 150 --shadows none -q -o " +
+                                                      out + " " + extra);
+        EXPECT_EQ(r.exitCode, 0) << r.output;
+        const lm::Image img = lm::ReadImage(out);
+        float step = 0;
+        for (int y = 50; y <= 70; y += 5)
+            for (int x = 80; x < 120; ++x)
+                step = std::max(step, std::abs(Luminance(img.At(x + 1, y)) - Luminance(img.At(x, y))));
+        return step;
+    };
+    const float flat = largestStep(""), smooth = largestStep("--smooth-normals 60");
+    EXPECT_GT(flat, 0.04f);
+    EXPECT_LT(smooth, 0.5f * flat) << smooth << " " << flat;
+    // Its smooth normals do not cross a crease sharper than the angle: at 10° the 30° facet
+    // edges stay.
+    EXPECT_GT(largestStep("--smooth-normals 10"), 0.8f * flat);
+}
+
 }  // namespace

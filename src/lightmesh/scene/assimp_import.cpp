@@ -29,6 +29,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "lightmesh/geometry/smooth_normals.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/log.h"
 #include "lightmesh/util/system.h"
@@ -339,6 +340,7 @@ class SceneWalker {
             mesh.materialIds.push_back(material);
         }
 
+        if (mesh.normals.empty() && options_.smoothAngle >= 0) SmoothNormals(&mesh, options_.smoothAngle);
         const Affine affine = ToAffine(transform);
         if (!(std::abs(affine.Determinant()) > 0))
             throw MeshFileError(

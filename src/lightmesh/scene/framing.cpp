@@ -220,7 +220,9 @@ void AddKeyAndFillLights(const Reader& r, const Bounds3& box, Scene* scene) {
 Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options,
                    std::vector<std::string>* warnings) {
     const Reader r(spec, SceneLoadOptions{}.strict, warnings);
-    LoadedMesh loaded = LoadMeshFile(spec);  // its errors already name the file
+    MeshLoadOptions load;
+    load.smoothAngle = options.smoothNormals;
+    LoadedMesh loaded = LoadMeshFile(spec, load);  // its errors already name the file
     for (const std::string& w : loaded.warnings) r.Warn(w);
 
     Scene scene;

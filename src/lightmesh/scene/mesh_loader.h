@@ -37,6 +37,9 @@ struct MeshLoadOptions {
     /// Glob patterns matched against node names (a match excludes the node's whole subtree)
     /// and mesh names.
     std::vector<std::string> excludeNames;
+    /// Smooth normals for the meshes that have none (SmoothNormals, crease angle in degrees,
+    /// 0 to 180); negative: none (shading uses face normals there).
+    float smoothAngle = -1.0f;
 };
 
 /// What one import may produce; beyond it the file is refused with the figure (a small

@@ -447,6 +447,7 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
     std::vector<MeshEntry> entries;
     for (size_t i = 0; i < mj.size(); ++i) {
         MeshEntry e;
+        e.load.smoothAngle = options.smoothNormals;
         e.path = Index("/meshes", i);
         Object o(r, mj[i], e.path);
         e.file = String(r, o.Require("file"), o.Child("file"));
