@@ -5,7 +5,7 @@
 
 namespace lm {
 
-/// Above this many distinct face normals around one position, the crease angle is not
+/// Above this many faces around one position, the crease angle is not
 /// applied there (every face around it counts): a fan of 100,000 triangles would otherwise
 /// cost 10^10 comparisons.
 inline constexpr size_t kMaxSmoothedNormalsPerPosition = 4096;
