@@ -95,6 +95,7 @@ void ReadCamerasAndLights(const aiScene& scene, const std::string& path, const N
         fl.constant = l->mAttenuationConstant;
         fl.linear = l->mAttenuationLinear;
         fl.quadratic = l->mAttenuationQuadratic;
+        fl.range = it->second->lightRange;
         fl.inner = l->mAngleInnerCone;
         fl.outer = l->mAngleOuterCone;
         out->lights.push_back(std::move(fl));

@@ -125,6 +125,11 @@ std::string LightFromFile(const FileLight& fl, const Bounds3& bounds, PointLight
     }
     if (!FiniteColor(l.intensity)) return "its intensity (colour / attenuation) is not finite";
     l.radius = DefaultLightRadius(bounds, l.position);
+    if (!std::isnan(fl.range)) {
+        if (!(fl.range > 0) || !std::isfinite(fl.range))
+            return StringPrintf("its range is %g: must be a finite number above 0", double(fl.range));
+        l.range = fl.range;
+    }
     if (fl.type == FileLight::Type::Spot) {
         if (!(std::isfinite(fl.inner) && std::isfinite(fl.outer)))
             return "its cone angles are not finite";

@@ -3,6 +3,7 @@
 // camera in place of the automatic one, its lights in place of the key and fill lights.
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,8 @@ struct FileLight {
     Color color;
     float constant = 1, linear = 0, quadratic = 0;
     float inner = 0, outer = 0;  ///< a spot's cone half-angles, radians
+    /// glTF's "range" of a point light or spot (NaN: none, no limit).
+    float range = std::numeric_limits<float>::quiet_NaN();
 };
 
 /// The angular radius the sun gets when nothing states one: 0.2665°, the sun's (its
@@ -72,7 +75,8 @@ std::string CameraFromFile(const FileCamera& fc, float imageAspect, Camera* out)
 /// files"): glTF's candela (point, spot) are the intensity with inverse-square falloff,
 /// its lux (directional) the sun's irradiance; other formats' colour divided by the
 /// attenuation's quadratic term (inverse square) or, without one, its constant term (no
-/// falloff). A point light or spot gets DefaultLightRadius from `bounds`. "" or why it
+/// falloff). A point light or spot gets DefaultLightRadius from `bounds`, and glTF's
+/// "range" as its PointLight::range (a hard cut-off). "" or why it
 /// cannot be used (negative or non-finite colour, a spot's or sun's direction zero, a
 /// spot's inner cone wider than its outer, an outer cone above 90°).
 std::string LightFromFile(const FileLight& fl, const Bounds3& bounds, PointLight* out);

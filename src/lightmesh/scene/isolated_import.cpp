@@ -98,7 +98,7 @@ void WriteMeshResult(int fd, const LoadedMesh& m) {
         w.Pod(l.type);
         w.Str(l.unsupported);
         w.Pod(l.position), w.Pod(l.direction), w.Pod(l.color);
-        w.Pod(l.constant), w.Pod(l.linear), w.Pod(l.quadratic), w.Pod(l.inner), w.Pod(l.outer);
+        w.Pod(l.constant), w.Pod(l.linear), w.Pod(l.quadratic), w.Pod(l.inner), w.Pod(l.outer), w.Pod(l.range);
     }
     if (!w.WriteTo(fd)) _exit(3);
 }
@@ -177,7 +177,7 @@ LoadedMesh ReadResult(const std::string& path, std::string_view bytes) {
         l.unsupported = r.Str();
         l.position = r.Pod<Vec3>(), l.direction = r.Pod<Vec3>(), l.color = r.Pod<Color>();
         l.constant = r.Pod<float>(), l.linear = r.Pod<float>(), l.quadratic = r.Pod<float>();
-        l.inner = r.Pod<float>(), l.outer = r.Pod<float>();
+        l.inner = r.Pod<float>(), l.outer = r.Pod<float>(), l.range = r.Pod<float>();
         m.lights.push_back(std::move(l));
     }
     return m;

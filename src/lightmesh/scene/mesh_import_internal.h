@@ -47,6 +47,9 @@ extern int gResultFd;
 /// name); row-major 4x4, as aiMatrix4x4.
 struct NodeTransform {
     float m[16];
+    /// glTF's light "range" (Assimp 5.2 puts it in the node's metadata, PBR_LightRange);
+    /// NaN when the node has none.
+    float lightRange;
 };
 using NodeTransforms = std::unordered_map<std::string, std::optional<NodeTransform>>;
 /// The names of `scene`'s cameras and lights, each with no transform yet.
