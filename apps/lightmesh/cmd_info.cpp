@@ -13,6 +13,20 @@
 
 namespace lm::cli {
 
+namespace {
+// A spot's cone or the sun's direction and size, under its light's line.
+std::string LightKindLine(const lm::PointLight& l) {
+    const double deg = 180.0 / 3.14159265358979323846;
+    if (l.kind == lm::LightKind::Spot)
+        return lm::StringPrintf("           spot towards [%g %g %g], cone %g° inside %g°", l.spot.direction.x,
+                                l.spot.direction.y, l.spot.direction.z, std::acos(l.spot.cosInner) * deg,
+                                std::acos(l.spot.cosOuter) * deg);
+    return lm::StringPrintf("           the sun, shining towards [%g %g %g], angular radius %g° (a far sphere)",
+                            l.sun.direction.x, l.sun.direction.y, l.sun.direction.z, l.sun.angle * deg);
+}
+}  // namespace
+
+
 int RunInfo(const CommonOptions& common, const std::string& accelName, int grid) {
     ApplyLogLevel(common);
     lm::Scene scene = LoadWithWarnings(common);
@@ -86,6 +100,7 @@ int RunInfo(const CommonOptions& common, const std::string& accelName, int grid)
                     l.falloff == lm::Falloff::None ? "none" : "inverse_square", l.radius,
                     l.radius == 0 ? " (a point)" : "",
                     std::isfinite(l.range) ? lm::StringPrintf(", range %g", static_cast<double>(l.range)).c_str() : "");
+        if (l.kind != lm::LightKind::Point) std::printf("%s\n", LightKindLine(l).c_str());
     }
     if (listed < scene.lights.size()) {
         float rlo = INFINITY, rhi = 0, glo = INFINITY, ghi = 0;

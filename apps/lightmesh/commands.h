@@ -54,6 +54,10 @@ struct CommonOptions {
     bool instancing = true;  ///< false: --no-instancing (SceneLoadOptions::instancing)
     int upAxis = 1;          ///< a bare mesh's up axis: --up x|y|z (SceneLoadOptions::upAxis)
     float frameFovY = 0;     ///< a bare mesh framed for --fov (SceneLoadOptions::frameFovY)
+    /// --camera NAME|INDEX: which of a mesh file's own cameras (SceneLoadOptions::camera).
+    std::string camera;
+    /// --smooth-normals DEG: smooth normals for meshes without (SceneLoadOptions::smoothNormals).
+    float smoothNormals = -1.0f;
 };
 void AddCommonOptions(CLI::App* cmd, CommonOptions* o);
 lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth = 0, int frameHeight = 0);

@@ -32,6 +32,14 @@ void AddCommonOptions(CLI::App* cmd, CommonOptions* o) {
     cmd->add_flag("-v,--verbose", o->verbose, "Print more about what is done");
     cmd->add_option("-t,--threads", o->threads, "Worker threads (default: all cores)")
         ->check(InRange(1, 1024, true));
+    // A mesh file's own cameras (glTF, COLLADA, FBX, .blend): the first frames it by default.
+    cmd->add_option("--camera", o->camera,
+                    "Which of the mesh file's own cameras to render from: its name or its index from 0 (default: "
+                    "the first; a file without cameras is framed automatically)");
+    cmd->add_option("--smooth-normals", o->smoothNormals,
+                    "Give the meshes of mesh files that have no normals smooth ones, keeping edges sharper than DEG "
+                    "degrees as creases (0 to 180; default: none, flat faces)")
+        ->check(InRange(0, 180, false));
 }
 
 lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth, int frameHeight) {
@@ -41,6 +49,8 @@ lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth, int frameHeig
     load.instancing = o.instancing;
     load.upAxis = o.upAxis;
     load.frameFovY = o.frameFovY;
+    load.camera = o.camera;
+    load.smoothNormals = o.smoothNormals;
     load.frameWidth = frameWidth;
     load.frameHeight = frameHeight;
     std::vector<std::string> warnings;

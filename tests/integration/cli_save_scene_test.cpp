@@ -54,6 +54,16 @@ TEST(CliSaveScene, GltfRendersTheSameBytes) {
     ExpectRoundTrip("glb", Data("textures/checker_mask.glb"), "--width 64 --height 48 --aa 2");
 }
 
+// A model's own camera, point light, spot and sun, saved as scene-file keys ("spot", "sun"
+// with their stated directions and angles): the same bytes back, also turned by --up.
+TEST(CliSaveScene, AModelsOwnCameraAndLightsRenderTheSameBytes) {
+    ExpectRoundTrip("lit", Data("cameras_lights/lit_scene.gltf"), "--width 64 --height 48");
+    const std::string text = lm::testing::FileBytes(Temp("lit.json"));
+    for (const char* key : {"\"spot\"", "\"sun\"", "\"inner\"", "\"angle\""})
+        EXPECT_NE(text.find(key), std::string::npos) << key << "\n" << text;
+    ExpectRoundTrip("sun", Data("cameras_lights/sun_only.gltf"), "--width 48 --height 32 --up z");
+}
+
 TEST(CliSaveScene, SceneFileRendersTheSameBytes) {
     ExpectRoundTrip("json", Data("scene_file/good.json"),
                     "--width 100 --look-at 0,0.5,0 --fov 30 --shadows area --samples 4 --light-radius 0.1");

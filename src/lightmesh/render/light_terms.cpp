@@ -81,6 +81,14 @@ LightTerms::LightTerms(const std::vector<PointLight>& lights, int width) {
         a_.r[i] = l.intensity.r, a_.g[i] = l.intensity.g, a_.b[i] = l.intensity.b;
         a_.inverseSquare[i] = l.falloff == Falloff::InverseSquare ? -1 : 0;
     }
+    cones_.resize(count_);
+    isSpot_.assign(count_, 0);
+    for (size_t i = 0; i < count_; ++i) {
+        if (lights[i].kind != LightKind::Spot) continue;
+        cones_[i] = lights[i].spot;
+        isSpot_[i] = 1;
+        anySpot_ = true;
+    }
     a_.records.resize(8 * count_);
     for (size_t i = 0; i < count_; ++i) {
         float* r = &a_.records[8 * i];
@@ -92,13 +100,37 @@ LightTerms::LightTerms(const std::vector<PointLight>& lights, int width) {
 
 uint32_t LightTerms::All(const LightTermPoint& point, Color* omega, uint32_t* lit) const {
     const uint32_t n = static_cast<uint32_t>(count_);
-    return width_ == 8 ? Evaluate8(a_, n, point, nullptr, omega, lit) : lanes4::Evaluate(a_, n, point, nullptr, omega, lit);
+    const uint32_t count = width_ == 8 ? Evaluate8(a_, n, point, nullptr, omega, lit)
+                                       : lanes4::Evaluate(a_, n, point, nullptr, omega, lit);
+    return anySpot_ ? ApplyCones(point, omega, lit, count) : count;
 }
 
 uint32_t LightTerms::Listed(const LightTermPoint& point, const uint32_t* ids, uint32_t count, Color* omega,
                             uint32_t* lit) const {
     if (count == 0) return 0;
-    return width_ == 8 ? Evaluate8(a_, count, point, ids, omega, lit) : lanes4::Evaluate(a_, count, point, ids, omega, lit);
+    const uint32_t litCount = width_ == 8 ? Evaluate8(a_, count, point, ids, omega, lit)
+                                          : lanes4::Evaluate(a_, count, point, ids, omega, lit);
+    return anySpot_ ? ApplyCones(point, omega, lit, litCount) : litCount;
+}
+
+// After the lanes: only scenes with a spot pay for it, once per lit light (the direction
+// to the light recomputed as the lanes computed it).
+uint32_t LightTerms::ApplyCones(const LightTermPoint& point, Color* omega, uint32_t* lit, uint32_t count) const {
+    uint32_t kept = 0;
+    for (uint32_t k = 0; k < count; ++k) {
+        const uint32_t i = lit[k];
+        Color o = omega[k];
+        if (isSpot_[i]) {
+            const Vec3 toLight = Vec3(a_.x[i], a_.y[i], a_.z[i]) - point.p;
+            const float factor = cones_[i].Factor(toLight * (1.0f / std::sqrt(LengthSquared(toLight))));
+            if (!(factor > 0)) continue;
+            o = o * factor;
+        }
+        omega[kept] = o;
+        lit[kept] = i;
+        ++kept;
+    }
+    return kept;
 }
 
 }  // namespace lm

@@ -30,7 +30,9 @@ struct LightTermPoint {
 /// For light i with toLight = position − p, dist² = |toLight|², l = toLight / √dist²:
 /// nothing if dist² > range² or unless n·l > 0 and ns·l > 0; else
 /// Ω = intensity · (kd·(ns·l) + ks·max(0, reflect(−l, ns)·toEye)^phong) · falloff, with
-/// falloff 1/dist² (inverse square) or 1, and the light is lit where Ω is not black.
+/// falloff 1/dist² (inverse square) or 1, and the light is lit where Ω is not black. A spot's
+/// Ω is then multiplied by its cone's factor (SpotCone::Factor), and it is not lit where
+/// that is 0.
 class LightTerms {
   public:
     LightTerms() = default;
@@ -60,9 +62,17 @@ class LightTerms {
     };
 
   private:
+    /// Spots' cones applied to the lit lights' terms (a light whose factor is 0 is dropped).
+    uint32_t ApplyCones(const LightTermPoint& point, Color* omega, uint32_t* lit, uint32_t count) const;
+
     int width_ = 4;
     size_t count_ = 0;
     Arrays a_;
+    /// Per light: its cone (spots), and whether any light is a spot: without one the terms
+    /// are today's, with no pass over them.
+    std::vector<SpotCone> cones_;
+    std::vector<uint8_t> isSpot_;
+    bool anySpot_ = false;
 };
 
 }  // namespace lm

@@ -183,3 +183,49 @@ TEST(LightTerms, RangeAndFacingBoundaries) {
 
 }  // namespace
 }  // namespace lm
+
+namespace lm {
+namespace {
+
+// A spot's term is the point light's times its cone's factor: full inside the inner cone,
+// nothing outside the outer one (not lit), t² between; the other lights' terms unchanged.
+TEST(LightTerms, SpotConesScaleTheTermAndDropTheUnlit) {
+    PointLight point{{0, 5, 0}, Color(25.0f), Falloff::InverseSquare};
+    PointLight spot = point;
+    spot.kind = LightKind::Spot;
+    spot.spot.direction = Vec3(0, -1, 0);
+    spot.spot.cosInner = std::cos(10.0f * Pi / 180.0f);
+    spot.spot.cosOuter = std::cos(20.0f * Pi / 180.0f);
+    for (int width : {4, 8}) {
+        if (width == 8 && !__builtin_cpu_supports("avx2")) continue;
+        const LightTerms terms({point, spot}, width);
+        for (float x : {0.0f, 0.5f, 1.35f, 1.7f, 2.5f}) {
+            const LightTermPoint pt{Vec3(x, 0, 0), Vec3(0, 1, 0), Vec3(0, 1, 0), Vec3(0, 1, 0), Color(0.8f), Color(0.0f), 1};
+            Color omega[2];
+            uint32_t lit[2];
+            const uint32_t n = terms.All(pt, omega, lit);
+            ASSERT_GE(n, 1u);
+            EXPECT_EQ(lit[0], 0u);
+            const float angle = std::atan2(x, 5.0f) * 180.0f / Pi;
+            const float c = std::cos(angle * Pi / 180.0f);
+            const float t = std::clamp((c - spot.spot.cosOuter) / (spot.spot.cosInner - spot.spot.cosOuter), 0.0f, 1.0f);
+            if (angle >= 20.0f) {
+                EXPECT_EQ(n, 1u) << x;  // outside the outer cone: not lit
+                continue;
+            }
+            ASSERT_EQ(n, 2u) << x;
+            EXPECT_EQ(lit[1], 1u);
+            EXPECT_NEAR(omega[1].r, omega[0].r * t * t, 1e-6f * omega[0].r) << x;
+            if (angle <= 10.0f) EXPECT_EQ(omega[1].r, omega[0].r) << x;
+            // Listed gives the same.
+            const uint32_t ids[2] = {0, 1};
+            Color listed[2];
+            uint32_t litListed[2];
+            ASSERT_EQ(terms.Listed(pt, ids, 2, listed, litListed), 2u);
+            EXPECT_EQ(listed[1].r, omega[1].r);
+        }
+    }
+}
+
+}  // namespace
+}  // namespace lm

@@ -23,12 +23,14 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <mutex>
 #include <stdexcept>
 #include <string_view>
 #include <unordered_map>
 #include <vector>
 
+#include "lightmesh/geometry/smooth_normals.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/log.h"
 #include "lightmesh/util/system.h"
@@ -103,7 +105,7 @@ std::string Thousands(uint64_t n) {
 /// Whether an importer message is known noise of a file that reads well: Assimp's Blender
 /// reader logs "<add reason>" and "BlendDNA: Did not find a field named `x` in structure
 /// `Y`" for each field a newer Blender added, and
-/// complaints about textures and the file's lights, which lightmesh does not use
+/// complaints about textures lightmesh does not use and the lights' attenuation
 /// (scenes/real/garden.json: 845 messages in all).
 bool KnownImporterNoise(const std::string& message) {
     for (const char* prefix : {"<add reason>", "BlendDNA: Did not find a field named",
@@ -223,6 +225,20 @@ class SceneWalker {
                 Refuse(StringPrintf("the node hierarchy is more than %u levels deep (the limit)",
                                     budget_.depth));
             const aiMatrix4x4 transform = f.parent * node.mTransformation;
+            if (wanted_ && !wanted_->empty()) {
+                const auto it = wanted_->find(node.mName.C_Str());
+                if (it != wanted_->end() && !it->second) {
+                    mesh_import::NodeTransform t;
+                    const aiMatrix4x4& a = transform;
+                    const float rows[16] = {a.a1, a.a2, a.a3, a.a4, a.b1, a.b2, a.b3, a.b4,
+                                            a.c1, a.c2, a.c3, a.c4, a.d1, a.d2, a.d3, a.d4};
+                    std::memcpy(t.m, rows, sizeof rows);
+                    t.lightRange = std::numeric_limits<float>::quiet_NaN();
+                    if (float range = 0; node.mMetaData && node.mMetaData->Get("PBR_LightRange", range))
+                        t.lightRange = range;
+                    it->second = t;
+                }
+            }
             const bool excluded = MatchesAny(options_.excludeNames, node.mName.C_Str(),
                                              &out_->excludeNamesMatched) ||
                                   f.excludedByAncestor;
@@ -239,6 +255,8 @@ class SceneWalker {
     }
 
     size_t nonTriangleMeshes = 0;  ///< meshes of points or lines seen (and dropped)
+    /// Nodes whose global transform the walk records (cameras' and lights'), or null.
+    mesh_import::NodeTransforms* wanted_ = nullptr;
 
   private:
     [[noreturn]] void Refuse(const std::string& reason) const {
@@ -326,6 +344,7 @@ class SceneWalker {
             mesh.materialIds.push_back(material);
         }
 
+        if (mesh.normals.empty() && options_.smoothAngle >= 0) SmoothNormals(&mesh, options_.smoothAngle);
         const Affine affine = ToAffine(transform);
         if (!(std::abs(affine.Determinant()) > 0))
             throw MeshFileError(
@@ -461,8 +480,9 @@ LoadedMesh ImportMeshInProcess(const std::string& path, const MeshLoadOptions& o
         if (replacement.empty()) replacement = mesh_import::RepairAc3dTextureLayers(path);
         importer.SetIOHandler(new RegularFilesOnly(&refused, path, std::move(replacement)));
         // Triangulate polygons; split meshes by primitive type so points and lines sit in
-        // meshes of their own, which the walk skips. No normals are generated: shading
-        // uses face normals where the file has none. Instances are expanded by the walk
+        // meshes of their own, which the walk skips. Assimp generates no normals: shading
+        // uses face normals where the file has none, or the walk's SmoothNormals when
+        // asked (options.smoothAngle). Instances are expanded by the walk
         // (not aiProcess_PreTransformVertices) so node names stay available to excludes.
         // A material's texture-coordinate transform (glTF's KHR_texture_transform, 3DS and
         // ASE tiling and offsets) is applied to the coordinates themselves.
@@ -481,7 +501,11 @@ LoadedMesh ImportMeshInProcess(const std::string& path, const MeshLoadOptions& o
         if (!scene->mRootNode)
             throw MeshFileError(path, "the file has no scene graph (no meshes)", true);
         SceneWalker walker(path, *scene, options, budget, &out);
+        mesh_import::NodeTransforms placed;
+        mesh_import::WantedNodeNames(*scene, &placed);
+        walker.wanted_ = &placed;
         walker.Walk(*scene->mRootNode);
+        mesh_import::ReadCamerasAndLights(*scene, path, placed, &out);
         if (out.mesh.TriangleCount() == 0 && out.meshesExcluded == 0) {
             throw MeshFileError(
                 path,
@@ -521,7 +545,7 @@ LoadedMesh ImportMeshInProcess(const std::string& path, const MeshLoadOptions& o
                                                    mesh_import::Thousands(shown.size() - MaxLogLines).c_str()));
     if (noise)
         out.warnings.push_back(path + StringPrintf(": %s routine importer %s left out (Blender fields the reader "
-                                                   "skips, textures and lights lightmesh does not use; -v shows "
+                                                   "skips, textures lightmesh does not use, lights' attenuation; -v shows "
                                                    "them)",
                                                    mesh_import::Thousands(noise).c_str(),
                                                    noise == 1 ? "message" : "messages"));

@@ -86,6 +86,20 @@ void WriteMeshResult(int fd, const LoadedMesh& m) {
     w.Bools(m.excludeNamesMatched);
     w.Pod<uint64_t>(m.warnings.size());
     for (const std::string& s : m.warnings) w.Str(s);
+    w.Pod<uint64_t>(m.cameras.size());
+    for (const FileCamera& c : m.cameras) {
+        w.Str(c.name);
+        w.Pod(c.position), w.Pod(c.lookAt), w.Pod(c.up);
+        w.Pod(c.horizontalFov), w.Pod(c.aspect), w.Pod(c.fov), w.Pod<uint8_t>(c.orthographic);
+    }
+    w.Pod<uint64_t>(m.lights.size());
+    for (const FileLight& l : m.lights) {
+        w.Str(l.name);
+        w.Pod(l.type);
+        w.Str(l.unsupported);
+        w.Pod(l.position), w.Pod(l.direction), w.Pod(l.color);
+        w.Pod(l.constant), w.Pod(l.linear), w.Pod(l.quadratic), w.Pod(l.inner), w.Pod(l.outer), w.Pod(l.range);
+    }
     if (!w.WriteTo(fd)) _exit(3);
 }
 
@@ -142,6 +156,30 @@ LoadedMesh ReadResult(const std::string& path, std::string_view bytes) {
     m.excludeNamesMatched = r.Bools();
     const uint64_t warnings = r.Pod<uint64_t>();
     for (uint64_t i = 0; i < warnings; ++i) m.warnings.push_back(r.Str());
+    const uint64_t cameras = r.Pod<uint64_t>();
+    for (uint64_t i = 0; i < cameras; ++i) {
+        FileCamera c;
+        c.name = r.Str();
+        c.position = r.Pod<Vec3>(), c.lookAt = r.Pod<Vec3>(), c.up = r.Pod<Vec3>();
+        c.horizontalFov = r.Pod<float>(), c.aspect = r.Pod<float>(), c.fov = r.Pod<FileCamera::Fov>();
+        if (static_cast<uint8_t>(c.fov) > static_cast<uint8_t>(FileCamera::Fov::GltfYfovTimesAspect))
+            throw std::runtime_error("bad camera convention");
+        c.orthographic = r.Pod<uint8_t>() != 0;
+        m.cameras.push_back(std::move(c));
+    }
+    const uint64_t lights = r.Pod<uint64_t>();
+    for (uint64_t i = 0; i < lights; ++i) {
+        FileLight l;
+        l.name = r.Str();
+        l.type = r.Pod<FileLight::Type>();
+        if (static_cast<uint8_t>(l.type) > static_cast<uint8_t>(FileLight::Type::Unsupported))
+            throw std::runtime_error("bad light type");
+        l.unsupported = r.Str();
+        l.position = r.Pod<Vec3>(), l.direction = r.Pod<Vec3>(), l.color = r.Pod<Color>();
+        l.constant = r.Pod<float>(), l.linear = r.Pod<float>(), l.quadratic = r.Pod<float>();
+        l.inner = r.Pod<float>(), l.outer = r.Pod<float>(), l.range = r.Pod<float>();
+        m.lights.push_back(std::move(l));
+    }
     return m;
 }
 

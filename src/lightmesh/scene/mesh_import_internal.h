@@ -6,7 +6,9 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "lightmesh/scene/mesh_loader.h"
@@ -37,6 +39,25 @@ std::string ImportErrorReason(std::string err, const ImportBudget& budget);
 
 /// The child's result file while it imports (-1 in the parent and in-process imports).
 extern int gResultFd;
+
+// assimp_cameras_lights.cpp
+
+/// The global transforms of the nodes named by cameras and lights (a camera or light is
+/// placed by the node of its name): null until the walk finds the node (the first of that
+/// name); row-major 4x4, as aiMatrix4x4.
+struct NodeTransform {
+    float m[16];
+    /// glTF's light "range" (Assimp 5.2 puts it in the node's metadata, PBR_LightRange);
+    /// NaN when the node has none.
+    float lightRange;
+};
+using NodeTransforms = std::unordered_map<std::string, std::optional<NodeTransform>>;
+/// The names of `scene`'s cameras and lights, each with no transform yet.
+void WantedNodeNames(const aiScene& scene, NodeTransforms* wanted);
+/// `scene`'s cameras and lights placed by their nodes' transforms into out->cameras and
+/// out->lights (those no node places are left out).
+void ReadCamerasAndLights(const aiScene& scene, const std::string& path, const NodeTransforms& placed,
+                          LoadedMesh* out);
 
 // assimp_material.cpp
 

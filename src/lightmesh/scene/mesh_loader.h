@@ -7,6 +7,7 @@
 
 #include "lightmesh/geometry/affine.h"  // Affine, TransformMesh: for this header's users
 #include "lightmesh/geometry/mesh.h"
+#include "lightmesh/scene/file_cameras_lights.h"
 #include "lightmesh/scene/scene.h"
 #include "lightmesh/texture/texture_cache.h"
 #include "lightmesh/util/error.h"
@@ -36,6 +37,9 @@ struct MeshLoadOptions {
     /// Glob patterns matched against node names (a match excludes the node's whole subtree)
     /// and mesh names.
     std::vector<std::string> excludeNames;
+    /// Smooth normals for the meshes that have none (SmoothNormals, crease angle in degrees,
+    /// 0 to 180); negative: none (shading uses face normals there).
+    float smoothAngle = -1.0f;
 };
 
 /// What one import may produce; beyond it the file is refused with the figure (a small
@@ -72,6 +76,10 @@ struct LoadedMesh {
     std::vector<bool> excludeMaterialsMatched, excludeNamesMatched;
     /// The importer's warnings (e.g. a missing .mtl file), each prefixed with the path.
     std::vector<std::string> warnings;
+    /// The file's cameras and lights that a node places, in the file's order, in world
+    /// space (file_cameras_lights.h).
+    std::vector<FileCamera> cameras;
+    std::vector<FileLight> lights;
 };
 
 /// Reads a mesh file in any format Assimp knows (OBJ+MTL, glTF 2, PLY, STL, FBX, …):

@@ -51,6 +51,45 @@ enum class Falloff {
     InverseSquare,  ///< Ω uses intensity / d²
 };
 
+/// What a light is: a sphere shining every way (a point light, the paper's), the same within
+/// a cone (a spot), or the sun (a light at infinity, represented as a far sphere: see
+/// PointLight::sun).
+enum class LightKind : uint8_t { Point, Spot, Sun };
+
+/// A spot's cone: the light reaches a point whose direction from the light's centre makes
+/// an angle θ with `direction` with the factor t² (glTF's KHR_lights_punctual), t =
+/// clamp((cos θ − cosOuter) / max(cosInner − cosOuter, 1e-3), 0, 1): full inside the inner
+/// cone, nothing outside the outer one, smooth between.
+struct SpotCone {
+    Vec3 direction{0, -1, 0};  ///< unit, where the light shines
+    float cosInner = 1.0f;     ///< cos of the inner cone's half-angle (>= cosOuter)
+    float cosOuter = 0.0f;     ///< cos of the outer cone's half-angle (> 0: below 90°)
+    /// As stated (a scene file's "spot" keys, or the model file's in degrees): what
+    /// --save-scene writes, so the saved file derives the same bits (SetSpotCone).
+    Vec3 statedDirection{0, -1, 0};
+    float innerDegrees = 0.0f, outerDegrees = 90.0f;
+    /// The cone's factor for unit direction `l` from the point towards the light.
+    float Factor(const Vec3& l) const {
+        const float c = -(direction.x * l.x + direction.y * l.y + direction.z * l.z);
+        const float denom = cosInner - cosOuter > 1e-3f ? cosInner - cosOuter : 1e-3f;
+        float t = (c - cosOuter) / denom;
+        t = t < 0 ? 0 : (t > 1 ? 1 : t);
+        return t * t;
+    }
+};
+
+/// The sun as the scene holds it: the direction its light travels and its angular radius.
+/// It is rendered as a far sphere light (PlaceSun, scene_file.h): a PointLight whose centre
+/// lies kSunDistanceFactor times the scene's bounding radius away against `direction`,
+/// whose radius makes the sphere subtend `angle` from the scene, with no falloff, so its
+/// intensity is the irradiance it gives a surface facing it.
+struct SunLight {
+    Vec3 direction{0, -1, 0};  ///< unit, where the light travels
+    float angle = 0.0f;        ///< angular radius, radians
+    Vec3 statedDirection{0, -1, 0};  ///< as stated, for --save-scene (SetSun)
+    float angleDegrees = 0.0f;       ///< as stated, for --save-scene
+};
+
 struct PointLight {
     Vec3 position;
     Color intensity{1.0f};
@@ -65,6 +104,12 @@ struct PointLight {
     /// alike: shading skips the light there, so no shadow method is asked for it (RT traces
     /// no ray, the light mesh evaluates no bit a point in range could need).
     float range = Infinity;
+    /// A point light's kind (Point by default). A Spot's cone is `spot`; a Sun's direction
+    /// and angle `sun` (its position, radius and falloff are the far sphere's).
+    LightKind kind = LightKind::Point;
+    SpotCone spot{};
+    SunLight sun{};
+    std::string name{};  ///< the file's name for it ("" for none), for notes and `info`
 };
 
 /// A pinhole camera.

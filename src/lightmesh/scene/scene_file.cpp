@@ -72,6 +72,7 @@
 
 #include "lightmesh/geometry/instances.h"
 #include "lightmesh/scene/demo_scene.h"
+#include "lightmesh/scene/file_cameras_lights.h"
 #include "lightmesh/scene/json_reader.h"
 #include "lightmesh/scene/mesh_loader.h"
 #include "lightmesh/scene/shapes.h"
@@ -156,7 +157,22 @@ Material ReadMaterial(const Reader& r, const Json& j, const std::string& path,
 PointLight ReadLight(const Reader& r, const Json& j, const std::string& path, bool* hasRadius) {
     Object o(r, j, path);
     PointLight light;
+    if (const Json* v = o.Find("sun")) {
+        // The sun: at infinity, placed once the scene's bounds are known (PlaceSuns).
+        for (const char* key : {"position", "falloff", "radius", "range", "spot"})
+            if (o.Find(key))
+                r.Fail(o.Child(key), StringPrintf("a sun has no \"%s\" (it is a direction at infinity; its size is "
+                                                  "\"angle\" in \"sun\")",
+                                                  key));
+        ReadSunKey(r, *v, o.Child("sun"), &light);
+        if (const Json* i = o.Find("intensity")) light.intensity = ReadColor(r, *i, o.Child("intensity"));
+        if (const Json* n = o.Find("name")) light.name = String(r, *n, o.Child("name"));
+        o.Finish();
+        *hasRadius = true;
+        return light;
+    }
     light.position = ReadVec3(r, o.Require("position"), o.Child("position"));
+    if (const Json* v = o.Find("spot")) ReadSpotKey(r, *v, o.Child("spot"), &light);
     if (const Json* v = o.Find("intensity"))
         light.intensity = ReadColor(r, *v, o.Child("intensity"));
     if (const Json* v = o.Find("falloff")) {
@@ -173,7 +189,7 @@ PointLight ReadLight(const Reader& r, const Json& j, const std::string& path, bo
         light.range = Float(r, *v, o.Child("range"));
         if (!(light.range > 0)) r.Fail(o.Child("range"), "must be greater than 0, got " + NumberText(*v));
     }
-    if (const Json* v = o.Find("name")) String(r, *v, o.Child("name"));
+    if (const Json* v = o.Find("name")) light.name = String(r, *v, o.Child("name"));
     o.Finish();
     if (std::string p = CoordinateProblem(light.position, "the light"); !p.empty())
         r.Fail(o.Child("position"), p);
@@ -434,6 +450,7 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
     std::vector<MeshEntry> entries;
     for (size_t i = 0; i < mj.size(); ++i) {
         MeshEntry e;
+        e.load.smoothAngle = options.smoothNormals;
         e.path = Index("/meshes", i);
         Object o(r, mj[i], e.path);
         e.file = String(r, o.Require("file"), o.Child("file"));
@@ -709,6 +726,12 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
         }
     }
     BuildCutouts(&scene);  // before the inside test: a cut-out surface is not a wall
+    PlaceSuns(&scene, scene.mesh.Bounds());
+    for (size_t i = 0; i < scene.lights.size(); ++i)
+        if (scene.lights[i].kind == LightKind::Sun)
+            if (std::string p = CoordinateProblem(scene.lights[i].position, "the sun's far sphere"); !p.empty())
+                r.Fail(Index("/lights", i) + "/sun", p + " (the scene is too large for the sun's distance, " +
+                                                         StringPrintf("%g times its size)", double(kSunDistanceFactor)));
     if (std::string p = SpanProblem(scene); !p.empty()) r.Fail("", p);
     CheckLightsOutsideSolids(r, scene);
     SizeUnsizedLights(&scene, unsized);
@@ -753,6 +776,10 @@ Scene LoadScene(const std::string& spec, const SceneLoadOptions& options,
         ThrowError("no scene given: expected builtin:NAME, a .json scene file or a mesh file");
     try {
         Scene scene;
+        const bool bare = spec.rfind("builtin:", 0) != 0 && Lower(fs::path(spec).extension().string()) != ".json";
+        if (!options.camera.empty() && !bare)
+            throw Error(spec + ": --camera " + options.camera +
+                        ": picks one of a mesh file's own cameras; a scene file or builtin scene has its camera");
         if (spec.rfind("builtin:", 0) == 0)
             scene = LoadBuiltin(spec, warnings);
         else if (Lower(fs::path(spec).extension().string()) == ".json")

@@ -45,6 +45,13 @@ struct SceneLoadOptions {
     /// Who turned instancing off, for the message that refuses copies past the memory
     /// budget ("--no-instancing"; bench names itself).
     std::string noInstancingBy = "--no-instancing";
+    /// Which of a mesh file's own cameras frames it (--camera): "" the first, digits an
+    /// index from 0, else a camera's name. Files without cameras are framed automatically
+    /// (then a non-empty value is an error), and so are scene files (their "camera").
+    std::string camera = "";
+    /// Smooth normals, with this crease angle in degrees (0 to 180), for the meshes of mesh
+    /// files that have none (--smooth-normals); negative: none, face normals (the default).
+    float smoothNormals = -1.0f;
     /// For tests and fuzzing: loads the mesh files of a JSON scene instead of LoadMeshFile.
     std::function<LoadedMesh(const std::string& path, const MeshLoadOptions&)> loadMesh = nullptr;
 };

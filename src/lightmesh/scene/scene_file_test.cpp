@@ -1029,6 +1029,28 @@ TEST(SceneFile, BareMeshFramingHoldsForAFlatWideModel) {
         EXPECT_TRUE(InView(tall.camera, 300, 1000, p));
 }
 
+TEST(SceneFile, BareFlatLevelModelGetsItsGroundBelowIt) {
+    // A card lying level, facing down: a ground at its height would coincide with it.
+    const std::string folder = TempFolder();
+    const Scene card = LoadScene(WriteFile(folder, "card.obj", "v -1 0.5 -1\nv 1 0.5 -1\nv 1 0.5 1\nv -1 0.5 1\nf 1 2 3 4\n"),
+                                 {}, nullptr);
+    ASSERT_EQ(card.mesh.TriangleCount(), 14u);  // the card's 2 and the slab's 12
+    float slabTop = -1e30f;
+    for (uint32_t t = 2; t < 14; ++t)
+        for (int k = 0; k < 3; ++k) slabTop = std::max(slabTop, card.mesh.Vertex(t, k).y);
+    EXPECT_FLOAT_EQ(slabTop, 0.5f - 0.2f);  // 10 % of its width (2) below
+    bool noted = false;
+    for (const std::string& n : card.report.notes) noted = noted || n.find("the model is flat and level") != std::string::npos;
+    EXPECT_TRUE(noted);
+    // A card standing upright keeps its ground at its lowest point.
+    const Scene upright = LoadScene(
+        WriteFile(folder, "upright.obj", "v -1 0 0\nv 1 0 0\nv 1 2 0\nv -1 2 0\nf 1 2 3 4\n"), {}, nullptr);
+    float top = -1e30f;
+    for (uint32_t t = 2; t < upright.mesh.TriangleCount(); ++t)
+        for (int k = 0; k < 3; ++k) top = std::max(top, upright.mesh.Vertex(t, k).y);
+    EXPECT_EQ(top, 0.0f);
+}
+
 TEST(SceneFile, ExampleScenesLoad) {
     // The scenes/ folder for humans must keep loading without warnings.
     const fs::path scenes = fs::path(LIGHTMESH_TEST_DATA).parent_path().parent_path() / "scenes";

@@ -57,6 +57,17 @@ void BuildCutouts(Scene* scene);
 std::shared_ptr<const CutoutMask> MakeCutouts(const TriangleMesh& mesh, const Scene& scene,
                                               std::shared_ptr<const InstancedMeshes> instances);
 
+// ---- Spots and the sun in scene files (light_keys.cpp) ---------------------------------
+/// The largest angular radius a scene file's sun may have, degrees.
+inline constexpr float kMaxSunAngleDegrees = 45.0f;
+/// A light's "spot" object at `path`: {"direction" (required, non-zero), "outer" (degrees,
+/// (0, 90], default 45), "inner" (degrees, [0, outer], default 0)} into light->spot.
+void ReadSpotKey(const json::Reader& r, const Json& j, const std::string& path, PointLight* light);
+/// A light's "sun" object at `path`: {"direction" (required, non-zero: where the light
+/// travels), "angle" (angular radius, degrees, [0, kMaxSunAngleDegrees], default
+/// kSunAngleDegrees)} into light->sun; the light becomes a Sun (placed by PlaceSuns).
+void ReadSunKey(const json::Reader& r, const Json& j, const std::string& path, PointLight* light);
+
 // ---- Ground slab and framing (framing.cpp) ---------------------------------------------
 /// A thin closed slab under `box` whose top face is the ground at `height` along `axis`.
 void AddGround(Scene* scene, const Bounds3& box, int axis, float height, float sizeFactor, uint32_t material);

@@ -68,8 +68,20 @@ OJson CameraJson(const Camera& c) {
 
 // One light, over `j` (a scene file's own light object, whose other keys, a name, stay).
 OJson LightJson(const PointLight& l, OJson j) {
-    j["position"] = Vec(l.position);
     j["intensity"] = Col(l.intensity);
+    if (l.kind == LightKind::Sun) {  // at infinity: its far sphere is placed again on loading
+        for (const char* key : {"position", "falloff", "radius", "range", "spot"}) j.erase(key);
+        j["sun"] = OJson{{"direction", Vec(l.sun.statedDirection)}, {"angle", Num(l.sun.angleDegrees)}};
+        return j;
+    }
+    j.erase("sun");
+    if (l.kind == LightKind::Spot)
+        j["spot"] = OJson{{"direction", Vec(l.spot.statedDirection)},
+                          {"inner", Num(l.spot.innerDegrees)},
+                          {"outer", Num(l.spot.outerDegrees)}};
+    else
+        j.erase("spot");
+    j["position"] = Vec(l.position);
     j["falloff"] = l.falloff == Falloff::None ? "none" : "inverse_square";
     j["radius"] = Num(l.radius);
     if (std::isfinite(l.range)) j["range"] = Num(l.range);

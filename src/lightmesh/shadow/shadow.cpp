@@ -169,7 +169,12 @@ std::vector<std::string> ShadowMethodNames() { return {"soft", "exact", "none", 
 std::vector<float> LightRadii(const Scene& scene, const RenderOptions& options) {
     std::vector<float> radii;
     radii.reserve(scene.lights.size());
-    for (const PointLight& light : scene.lights) radii.push_back(options.areaLight.radius.value_or(light.radius));
+    for (const PointLight& light : scene.lights) {
+        // A sun's radius is its far sphere's, set by its angle: an override in scene units
+        // would mean nothing there, except 0, a point (its hard shadow).
+        const bool keep = light.kind == LightKind::Sun && options.areaLight.radius && *options.areaLight.radius > 0;
+        radii.push_back(keep ? light.radius : options.areaLight.radius.value_or(light.radius));
+    }
     return radii;
 }
 

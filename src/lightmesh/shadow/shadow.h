@@ -76,7 +76,8 @@ std::vector<std::string> ShadowMethodNames();
 /// The radius of each light's sphere (one per scene.lights entry, in scene units): the
 /// override options.areaLight.radius for every light when it is set (--light-radius, a
 /// scene file's "render": {"light_radius"}, or code), else the light's own
-/// PointLight::radius. Every method that uses the lights' sizes takes them from here, so
+/// PointLight::radius. A sun (LightKind::Sun) keeps its far sphere's radius under an
+/// override other than 0. Every method that uses the lights' sizes takes them from here, so
 /// the override means the same to all of them. (The light mesh's contact-hardening mode
 /// is the exception by design: only the override turns it on; LightMeshOptions::lightRadius.)
 std::vector<float> LightRadii(const Scene& scene, const RenderOptions& options);
