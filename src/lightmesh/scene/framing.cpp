@@ -259,8 +259,10 @@ Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options,
 
     const Bounds3 box = scene.mesh.Bounds();
     auto& notes = scene.report.notes;
-    notes.push_back(
-        "no scene file: framing the model automatically (write a .json scene to choose)");
+    notes.push_back(loaded.cameras.empty() && loaded.lights.empty()
+                        ? "no scene file: framing the model automatically (write a .json scene to choose)"
+                        : "no scene file: the model's own cameras and lights where it has them, framing and a "
+                          "ground for the rest (--save-scene writes a .json scene to edit)");
     notes.push_back(options.upAxis == 1 ? std::string("up axis: +y, as in OBJ and glTF")
                                         : StringPrintf("up axis: +%c (--up), turned to +y", "xyz"[options.upAxis]));
 
