@@ -23,6 +23,16 @@ struct CliResult {
     std::string output;  ///< stdout and stderr together
 };
 
+/// `name` in a temporary folder of the running test's own (`prefix`_TestName): ctest runs a
+/// file's tests side by side, so fixed paths shared between tests would race.
+inline std::string TestTempPath(const std::string& prefix, const std::string& name) {
+    const std::filesystem::path dir =
+        std::filesystem::path(::testing::TempDir()) /
+        (prefix + "_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    std::filesystem::create_directories(dir);
+    return (dir / name).string();
+}
+
 /// Runs `prefix lightmesh args` through the shell and waits for it. `prefix` goes before the
 /// executable (environment variables, setpriv), `args` after it.
 inline CliResult RunLightmesh(const std::string& args, const std::string& prefix = "") {

@@ -15,13 +15,7 @@ using CliRun = lm::testing::CliResult;
 
 CliRun Lightmesh(const std::string& args) { return lm::testing::RunLightmesh(args); }
 
-// A folder of the running test's own: ctest runs the tests of this file side by side.
-std::string Temp(const std::string& name) {
-    const fs::path dir = fs::path(::testing::TempDir()) /
-                         ("lm_cli_save_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::create_directories(dir);
-    return (dir / name).string();
-}
+std::string Temp(const std::string& name) { return lm::testing::TestTempPath("lm_cli_save", name); }
 
 std::string Data(const std::string& path) { return std::string(LIGHTMESH_TEST_DATA) + "/" + path; }
 

@@ -18,13 +18,7 @@ using CliRun = lm::testing::CliResult;
 
 CliRun Lightmesh(const std::string& args) { return lm::testing::RunLightmesh(args); }
 
-// A folder of the running test's own: ctest runs the tests of this file side by side.
-std::string Temp(const std::string& name) {
-    const fs::path dir = fs::path(::testing::TempDir()) /
-                         ("lm_cli_view_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::create_directories(dir);
-    return (dir / name).string();
-}
+std::string Temp(const std::string& name) { return lm::testing::TestTempPath("lm_cli_view", name); }
 
 // A red box 1 x 1 x 4, tall along z (a Z-up model standing), beside a grey ground: its
 // pixels are the only ones with red and no green (the lights are white, the ground grey).

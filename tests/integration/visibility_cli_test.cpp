@@ -22,13 +22,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A folder of the running test's own: ctest runs the tests of this file side by side.
-std::string Temp(const std::string& name) {
-    const fs::path dir = fs::path(::testing::TempDir()) /
-                         ("lm_visibility_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::create_directories(dir);
-    return (dir / name).string();
-}
+std::string Temp(const std::string& name) { return lm::testing::TestTempPath("lm_visibility_cli", name); }
 
 /// The file's channel names (in the file's order: by name) and its values, interleaved in
 /// that order.
