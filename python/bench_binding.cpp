@@ -5,17 +5,11 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
-#include <condition_variable>
 #include <memory>
-#include <mutex>
-#include <optional>
 #include <string>
-#include <thread>
 #include <type_traits>
 #include <vector>
 
@@ -24,6 +18,7 @@
 #include "lightmesh/scene/json_reader.h"
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/log.h"
+#include "off_gil.h"
 
 namespace py = pybind11;
 
@@ -158,60 +153,24 @@ py::object Bench(const py::kwargs& kwargs) {
     // The matrix on a worker thread; this thread looks for signals and reports progress
     // between waits of 50 ms. Ctrl-C stops the bench after the render under way (the bench
     // starts no render once BenchMatrix::stop is set).
-    std::mutex mutex;
-    std::condition_variable finished;
-    bool done = false;
     std::atomic<bool> stop{false};
     std::atomic<int> cellsDone{0}, cellsTotal{0};
     lm::BenchReport report;
-    std::exception_ptr failure;
-    std::optional<py::error_already_set> pythonError;
     int lastDone = -1;  // the count progress() was last called with
-    {
-        py::gil_scoped_release release;
-        std::thread worker([&] {
-            try {
-                std::unique_ptr<tbb::global_control> limit;
-                if (threads > 0)
-                    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                                  static_cast<size_t>(threads));
-                matrix.stop = &stop;
-                report = lm::RunBenchmarkReport(matrix, [&](int n, int total, const lm::BenchResult&) {
-                    cellsDone = n, cellsTotal = total;
-                });
-            } catch (...) {
-                failure = std::current_exception();
-            }
-            std::lock_guard<std::mutex> lock(mutex);
-            done = true;
-            finished.notify_all();
+    lm::python::RunOffPythonThread(
+        threads,
+        [&] {
+            matrix.stop = &stop;
+            report = lm::RunBenchmarkReport(matrix, [&](int n, int total, const lm::BenchResult&) {
+                cellsDone = n, cellsTotal = total;
+            });
+        },
+        [&](const char*) { stop = true; },
+        [&] {
+            if (progressCallback.is_none() || cellsDone == lastDone || cellsTotal == 0) return;
+            lastDone = cellsDone;
+            progressCallback(lastDone, cellsTotal.load());
         });
-        for (;;) {
-            {
-                std::unique_lock<std::mutex> lock(mutex);
-                if (finished.wait_for(lock, std::chrono::milliseconds(50), [&] { return done; })) break;
-            }
-            if (pythonError) continue;
-            py::gil_scoped_acquire acquire;
-            if (PyErr_CheckSignals() != 0) {
-                pythonError.emplace();  // the KeyboardInterrupt
-                stop = true;
-                continue;
-            }
-            if (!progressCallback.is_none() && cellsDone != lastDone && cellsTotal > 0) {
-                lastDone = cellsDone;
-                try {
-                    progressCallback(lastDone, cellsTotal.load());
-                } catch (py::error_already_set& e) {
-                    pythonError.emplace(std::move(e));
-                    stop = true;
-                }
-            }
-        }
-        worker.join();
-    }
-    if (pythonError) throw std::move(*pythonError);
-    if (failure) std::rethrow_exception(failure);
     if (!progressCallback.is_none() && cellsTotal > 0 && cellsDone != lastDone) progressCallback(cellsDone.load(), cellsTotal.load());
     const py::object doc = py::module_::import("json").attr("loads")(lm::BenchJson(report));
     return wholeReport ? doc : doc["cells"];

@@ -6,18 +6,15 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
 #include <cstring>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "lightmesh/accel/accelerator.h"
@@ -33,6 +30,7 @@
 #include "lightmesh/util/log.h"
 #include "lightmesh/util/progress.h"
 #include "lightmesh/util/system.h"
+#include "off_gil.h"
 
 namespace py = pybind11;
 
@@ -257,58 +255,19 @@ lm::Image ImageArg(const py::object& x, const char* what) {
 lm::RenderResult RunJob(const lm::RenderJob& job, const py::object& progressCallback, int threads,
                         lm::VisibilityImage* visibility) {
     lm::ProgressReporter progress(job.Renderer().TileCount(), "Rendering", false);
-    std::mutex mutex;
-    std::condition_variable finished;
-    bool done = false;
     lm::RenderResult result;
-    std::exception_ptr failure;
-    std::optional<py::error_already_set> pythonError;  // created and destroyed with the GIL
-    {
-        py::gil_scoped_release release;
-        std::thread worker([&] {
-            try {
-                std::unique_ptr<tbb::global_control> limit;
-                if (threads > 0)
-                    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                                  static_cast<size_t>(threads));
-                result = job.Render(&progress, visibility);
-            } catch (...) {
-                failure = std::current_exception();
-            }
-            std::lock_guard<std::mutex> lock(mutex);
-            done = true;
-            finished.notify_all();
+    double lastFraction = -1;
+    lm::python::RunOffPythonThread(
+        threads, [&] { result = job.Render(&progress, visibility); },
+        [&](const char* reason) { progress.Stop(reason); },
+        [&] {
+            if (progressCallback.is_none()) return;
+            const double fraction =
+                std::min(1.0, static_cast<double>(progress.UnitsDone()) / static_cast<double>(progress.Total()));
+            if (fraction == lastFraction) return;
+            lastFraction = fraction;
+            progressCallback(fraction);
         });
-        double lastFraction = -1;
-        for (;;) {
-            {
-                std::unique_lock<std::mutex> lock(mutex);
-                if (finished.wait_for(lock, std::chrono::milliseconds(50), [&] { return done; })) break;
-            }
-            if (pythonError) continue;
-            py::gil_scoped_acquire acquire;
-            if (PyErr_CheckSignals() != 0) {
-                pythonError.emplace();  // fetches the KeyboardInterrupt
-                progress.Stop("interrupted");
-                continue;
-            }
-            if (!progressCallback.is_none()) {
-                const double fraction =
-                    std::min(1.0, static_cast<double>(progress.UnitsDone()) / static_cast<double>(progress.Total()));
-                if (fraction == lastFraction) continue;
-                lastFraction = fraction;
-                try {
-                    progressCallback(fraction);
-                } catch (py::error_already_set& e) {
-                    pythonError.emplace(std::move(e));
-                    progress.Stop("the progress callback raised");
-                }
-            }
-        }
-        worker.join();
-    }
-    if (pythonError) throw std::move(*pythonError);
-    if (failure) std::rethrow_exception(failure);
     if (!progressCallback.is_none()) progressCallback(1.0);
     return result;
 }
