@@ -24,6 +24,13 @@ start=$SECONDS
 step() { echo "== test.sh: $* ($((SECONDS - start)) s)" >&2; }
 
 step "Release build and tests"
+scripts/install-deps.sh
+# ccache for the builds this script configures (a new build directory takes CMake's
+# CMAKE_CXX_COMPILER_LAUNCHER from the environment): the build without MPI compiles the
+# same core library as the Release build, and gets its objects from the cache.
+if command -v ccache >/dev/null; then
+  export CMAKE_C_COMPILER_LAUNCHER=ccache CMAKE_CXX_COMPILER_LAUNCHER=ccache
+fi
 scripts/build.sh
 # -LE real: the real scenes' checks need downloads; scripts/test-real-scenes.sh runs them.
 (cd build && ctest --output-on-failure -LE real -j"$jobs" "${args[@]}")

@@ -10,6 +10,7 @@
 #include "lightmesh/io/image.h"
 #include "lightmesh/util/error.h"
 #include "run_lightmesh.h"
+#include "support/sanitized.h"
 
 namespace {
 
@@ -215,11 +216,14 @@ TEST(ModelCamerasLights, TenThousandLightsRender) {
     ASSERT_NE(lightsAt, std::string::npos);
     std::string lights = "\"KHR_lights_punctual\": {\"lights\": [";
     std::string nodes;
-    for (int i = 0; i < 10000; ++i) {
+    // 10,000 in the Release build; 2,000 under the sanitizers (the same code paths: Assimp's
+    // pairwise name check alone took 50 s of the ASan build's time at 10,000).
+    const int count = lm::testing::SweepCases(10000, 5);
+    for (int i = 0; i < count; ++i) {
         lights += std::string(i ? "," : "") + "{\"type\": \"point\", \"intensity\": 0.05, \"range\": 4}";
         nodes += lm::StringPrintf(",{\"name\": \"L%d\", \"translation\": [%g, 3, %g], \"extensions\": "
                                   "{\"KHR_lights_punctual\": {\"light\": %d}}}",
-                                  i, -5 + 0.1 * (i % 100), -5 + 0.1 * (i / 100), i);
+                                  i, -5 + 0.1 * (i % 100), -5 + (10.0 / (count / 100)) * (i / 100), i);
     }
     lights += "]}}";
     // Replace the file's lights and its light nodes (the last three nodes) by these.
@@ -230,7 +234,7 @@ TEST(ModelCamerasLights, TenThousandLightsRender) {
     ASSERT_NE(nodesFrom, std::string::npos);
     text = text.substr(0, nodesFrom) + nodes + text.substr(nodesTo);
     std::string scene = "[0, 1, 2, 3";
-    for (int i = 0; i < 10000; ++i) scene += "," + std::to_string(4 + i);
+    for (int i = 0; i < count; ++i) scene += "," + std::to_string(4 + i);
     const size_t sceneAt = text.find("\"nodes\": [");
     text = text.substr(0, sceneAt) + "\"nodes\": " + scene + "]" + text.substr(text.find("]", sceneAt) + 1);
     const std::string file = Temp("many_lights.gltf");
@@ -241,7 +245,7 @@ TEST(ModelCamerasLights, TenThousandLightsRender) {
     // validation compares the lights' names pairwise: about 4 s of the import).
     const CliResult r = lm::testing::RunLightmesh("render " + file + " --width 32 --height 24 -o " + out);
     ASSERT_EQ(r.exitCode, 0) << r.output.substr(0, 2000);
-    EXPECT_NE(r.output.find("the file's lights: 10000 point"), std::string::npos) << r.output.substr(0, 2000);
+    EXPECT_NE(r.output.find(lm::StringPrintf("the file's lights: %d point", count)), std::string::npos) << r.output.substr(0, 2000);
     const CliResult info = lm::testing::RunLightmesh("info " + file + " -q");
     EXPECT_NE(info.output.find("light 0  at [-5 3 -5], intensity [0.05 0.05 0.05], falloff inverse_square, radius "),
               std::string::npos)
