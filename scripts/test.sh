@@ -7,7 +7,7 @@
 #      UndefinedBehaviorSanitizer, built with clang into build-asan (with the fuzz targets);
 #   3. the tsan preset: the multithreaded tests (renderer, light mesh, back-ends, CLI
 #      determinism) under ThreadSanitizer, in build-tsan;
-#   4. each fuzzer for 20 s (scripts/fuzz.sh; FUZZ_SECONDS changes it) on the asan build.
+#   4. each fuzzer for 10 s (scripts/fuzz.sh; FUZZ_SECONDS changes it) on the asan build.
 # Usage: scripts/test.sh [--quick] [ctest options...]
 #   --quick   step 1 only, for a fast check while developing (CI always runs everything).
 # Extra options go to every ctest run, e.g. -R SceneFile.
@@ -57,6 +57,6 @@ for preset in asan tsan; do
   ctest --preset "$preset" -j"$jobs" "${args[@]}"
 done
 
-step "fuzzing, ${FUZZ_SECONDS:-20} s per target"
-FUZZ_BUILD_DIR=build-asan FUZZ_LIBRARY_FINDINGS=report scripts/fuzz.sh "${FUZZ_SECONDS:-20}"
+step "fuzzing, ${FUZZ_SECONDS:-10} s per target"
+FUZZ_BUILD_DIR=build-asan FUZZ_LIBRARY_FINDINGS=report scripts/fuzz.sh "${FUZZ_SECONDS:-10}"
 step "all passed"
