@@ -12,6 +12,7 @@
 
 #include "fuzz_entry_points.h"
 
+namespace fuzz_regression_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -76,3 +77,4 @@ TEST(FuzzRegression, MeshImportCorpusAndCrashes) {
 }
 
 }  // namespace
+}  // namespace fuzz_regression_test

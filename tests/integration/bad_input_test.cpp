@@ -20,6 +20,7 @@
 
 #include "run_lightmesh.h"
 
+namespace bad_input_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -1362,3 +1363,4 @@ TEST(BadInput, EveryCaseIsAClearErrorAndLeavesTheOutputAlone) {
 }
 
 }  // namespace
+}  // namespace bad_input_test

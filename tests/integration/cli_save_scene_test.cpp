@@ -8,6 +8,7 @@
 
 #include "run_lightmesh.h"
 
+namespace cli_save_scene_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -89,3 +90,4 @@ TEST(CliSaveScene, WhatCannotBeSavedIsRefusedFirst) {
 }
 
 }  // namespace
+}  // namespace cli_save_scene_test

@@ -14,6 +14,7 @@
 #include "lightmesh/io/image.h"
 #include "run_lightmesh.h"
 
+namespace cli_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -303,3 +304,4 @@ TEST(Cli, InterruptedRenderLeavesThePreviousOutputUntouched) {
 }
 
 }  // namespace
+}  // namespace cli_test

@@ -11,6 +11,7 @@
 #include "lightmesh/io/image.h"
 #include "run_lightmesh.h"
 
+namespace cli_view_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -263,7 +264,9 @@ TEST(CliView, CompareNamesBothFilesInItsSizeError) {
 }
 
 }  // namespace
+}  // namespace cli_view_test
 
+namespace cli_view_test {
 namespace {
 
 // bench times the default shadow method by default, and --variants soft times it alone
@@ -284,3 +287,4 @@ TEST(CliView, BenchTimesTheDefault) {
 }
 
 }  // namespace
+}  // namespace cli_view_test

@@ -21,6 +21,7 @@
 #include "lightmesh/settings/render_settings.h"
 
 namespace lm {
+namespace docs_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -189,4 +190,5 @@ TEST(Docs, RelativeLinksPointAtWhatExists) {
 }
 
 }  // namespace
+}  // namespace docs_test
 }  // namespace lm

@@ -12,6 +12,7 @@
 #include "run_lightmesh.h"
 #include "support/sanitized.h"
 
+namespace model_cameras_lights_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -299,3 +300,4 @@ TEST(ModelCamerasLights, SmoothNormalsSmoothALowPolySphere) {
 }
 
 }  // namespace
+}  // namespace model_cameras_lights_test

@@ -33,6 +33,7 @@
 #include "lightmesh/util/system.h"
 #include "run_lightmesh.h"
 
+namespace robustness_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -482,3 +483,4 @@ TEST(Robustness, DurationsReadAsAPersonWritesThem) {
 }
 
 }  // namespace
+}  // namespace robustness_test

@@ -18,6 +18,7 @@
 #include "lightmesh/scene/scene_file.h"
 #include "run_lightmesh.h"
 
+namespace visibility_cli_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -97,3 +98,4 @@ TEST(CliVisibility, BadPathsAreRefusedBeforeTheRender) {
 }
 
 }  // namespace
+}  // namespace visibility_cli_test

@@ -19,6 +19,7 @@
 #include "lightmesh/geometry/triangle.h"
 
 namespace lm {
+namespace grid_test {
 namespace {
 
 namespace ts = testing_scenes;
@@ -122,7 +123,7 @@ TEST(GridEmptySpace, OctantCubesAreTheLargestEmptyOnes) {
                         for (int y = 0; y < n[1]; ++y)
                             for (int x = 0; x < n[0]; ++x) {
                                 const int r = side[size_t(x) + size_t(n[0]) * (size_t(y) + size_t(n[1]) * size_t(z))];
-                                SCOPED_TRACE(testing::Message() << n[0] << "x" << n[1] << "x" << n[2] << " octant "
+                                SCOPED_TRACE(::testing::Message() << n[0] << "x" << n[1] << "x" << n[2] << " octant "
                                                                 << octant << " cap " << cap << " cell " << x << ","
                                                                 << y << "," << z);
                                 ASSERT_LE(r, cap);
@@ -479,4 +480,5 @@ TEST(GridTraversal, ShortSegmentsMatchBruteForce) {
 }
 
 }  // namespace
+}  // namespace grid_test
 }  // namespace lm

@@ -9,6 +9,7 @@
 #include "support/sanitized.h"
 
 namespace lm {
+namespace occluder_bvh_test {
 namespace {
 
 TriangleMesh RandomSoup(std::mt19937& rng, int count, float extent, float size) {
@@ -151,4 +152,5 @@ TEST(OccluderBvh, EmptyMesh) {
 }
 
 }  // namespace
+}  // namespace occluder_bvh_test
 }  // namespace lm

@@ -15,6 +15,7 @@
 #include "run_lightmesh.h"
 
 namespace lm {
+namespace bench_options_test {
 namespace {
 
 std::string Message(const BenchOptions& o) {
@@ -111,4 +112,5 @@ TEST(BenchOptions, KeywordsAreTheClisOptions) {
 }
 
 }  // namespace
+}  // namespace bench_options_test
 }  // namespace lm

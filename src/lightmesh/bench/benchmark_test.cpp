@@ -11,6 +11,7 @@
 #include "lightmesh/util/error.h"
 
 namespace lm {
+namespace benchmark_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -433,4 +434,5 @@ TEST(RunBenchmark, ThinCheckOffReachesThePenumbraCells) {
 }
 
 }  // namespace
+}  // namespace benchmark_test
 }  // namespace lm

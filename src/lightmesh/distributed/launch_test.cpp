@@ -6,6 +6,7 @@
 #include <string>
 
 namespace lm {
+namespace launch_test {
 namespace {
 
 // The launcher's variables, set and restored around each check.
@@ -55,4 +56,5 @@ TEST(Launch, ReadsOpenMpisAndHydrasVariables) {
 }
 
 }  // namespace
+}  // namespace launch_test
 }  // namespace lm

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 namespace lm {
+namespace affine_test {
 namespace {
 
 bool Near(const Vec3& a, const Vec3& b, float eps = 1e-5f) {
@@ -42,4 +43,5 @@ TEST(Affine, TransformMeshUsesInverseTransposeForNormals) {
 }
 
 }  // namespace
+}  // namespace affine_test
 }  // namespace lm

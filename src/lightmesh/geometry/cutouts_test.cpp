@@ -17,6 +17,7 @@
 #include "support/cutout_scenes.h"
 
 namespace lm {
+namespace cutouts_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -281,4 +282,5 @@ TEST(Cutouts, TheCellTableGivesTheComputedAnswer) {
 }
 
 }  // namespace
+}  // namespace cutouts_test
 }  // namespace lm

@@ -31,6 +31,7 @@
 #include "lightmesh/util/error.h"
 
 namespace lm {
+namespace instances_test {
 namespace {
 
 bool Same(const Vec3& a, const Vec3& b) { return std::memcmp(&a, &b, sizeof(Vec3)) == 0; }
@@ -431,4 +432,5 @@ TEST(Instances, ATransformTooLargeIsRefusedForAnInstance) {
 }
 
 }  // namespace
+}  // namespace instances_test
 }  // namespace lm

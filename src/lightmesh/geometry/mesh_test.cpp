@@ -11,6 +11,7 @@
 #include "lightmesh/scene/shapes.h"
 
 namespace lm {
+namespace mesh_test {
 namespace {
 
 TEST(Mesh, CleanDropsDegenerateAndDuplicateTriangles) {
@@ -114,4 +115,5 @@ TEST(Shapes, SolidsAreClosedAndOutwardWithTheRightVolume) {
 }
 
 }  // namespace
+}  // namespace mesh_test
 }  // namespace lm

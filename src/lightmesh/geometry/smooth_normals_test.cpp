@@ -7,6 +7,7 @@
 #include "lightmesh/scene/shapes.h"
 
 namespace lm {
+namespace smooth_normals_test {
 namespace {
 
 // A closed UV sphere of radius 1: `rings` bands, `segments` around, vertices shared.
@@ -81,4 +82,5 @@ TEST(SmoothNormals, SeparateVerticesAtOnePositionAreSmoothedTogether) {
 }
 
 }  // namespace
+}  // namespace smooth_normals_test
 }  // namespace lm

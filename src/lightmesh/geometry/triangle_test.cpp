@@ -7,6 +7,7 @@
 #include "lightmesh/scene/shapes.h"
 
 namespace lm {
+namespace triangle_test {
 namespace {
 
 const Vec3 A(0, 0, 0), B(1, 0, 0), C(0, 1, 0);
@@ -138,9 +139,11 @@ TEST(Triangle, NormalsAtTheTrianglesOwnScale) {
 }
 
 }  // namespace
+}  // namespace triangle_test
 }  // namespace lm
 
 namespace lm {
+namespace triangle_test {
 namespace {
 
 // TriangleBoxOverlap (the grid's rasterization) against what overlap means: a box that holds
@@ -190,4 +193,5 @@ TEST(TriangleBox, DegenerateTriangleIsASegment) {
 }
 
 }  // namespace
+}  // namespace triangle_test
 }  // namespace lm

@@ -20,6 +20,7 @@
 #include "run_lightmesh.h"
 
 namespace lm {
+namespace compare_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -446,4 +447,5 @@ TEST(CompareCli, AreaShadowsAreTheSameForAnyThreadCount) {
 }
 
 }  // namespace
+}  // namespace compare_test
 }  // namespace lm

@@ -14,6 +14,7 @@
 #include "lightmesh/util/error.h"
 
 namespace lm {
+namespace image_decode_test {
 namespace {
 
 void Append(png_structp png, png_bytep data, size_t n) {
@@ -279,4 +280,5 @@ TEST(ImageDecode, BrokenPngAndJpegAreOneErrorNeverACrash) {
 }
 
 }  // namespace
+}  // namespace image_decode_test
 }  // namespace lm

@@ -24,6 +24,7 @@
 #include "lightmesh/util/parallel.h"
 
 namespace lm {
+namespace image_io_test {
 namespace {
 
 std::string TempPath(const std::string& name) { return ::testing::TempDir() + "/lm_image_" + name; }
@@ -341,4 +342,5 @@ TEST(ImageIO, AnExrPastTheBudgetIsRefusedFromItsHeader) {
 }
 
 }  // namespace
+}  // namespace image_io_test
 }  // namespace lm

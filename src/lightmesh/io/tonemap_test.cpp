@@ -6,6 +6,7 @@
 #include <limits>
 
 namespace lm {
+namespace tonemap_test {
 namespace {
 
 TEST(Tonemap, ExposureScalesByPowersOfTwo) {
@@ -62,4 +63,5 @@ TEST(Tonemap, UnknownCurveIsAnError) {
 }
 
 }  // namespace
+}  // namespace tonemap_test
 }  // namespace lm

@@ -10,6 +10,7 @@
 #include "lightmesh/math/ray.h"
 
 namespace lm {
+namespace vec_test {
 namespace {
 
 TEST(Vec3, ArithmeticAndProducts) {
@@ -110,4 +111,5 @@ TEST(Vec3, NextFloatUpAndDownAreNextafter) {
 }
 
 }  // namespace
+}  // namespace vec_test
 }  // namespace lm

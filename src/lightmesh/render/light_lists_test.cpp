@@ -7,6 +7,7 @@
 #include <random>
 
 namespace lm {
+namespace light_lists_test {
 namespace {
 
 // Against brute force: for random lights (some without a range) and random points in and
@@ -60,4 +61,5 @@ TEST(LightLists, InactiveWithoutRanges) {
 }
 
 }  // namespace
+}  // namespace light_lists_test
 }  // namespace lm

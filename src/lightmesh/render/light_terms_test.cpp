@@ -11,6 +11,7 @@
 #include "lightmesh/util/error.h"
 
 namespace lm {
+namespace light_terms_test {
 namespace {
 
 // The term of one light as shading wrote it light by light (whitted.cpp before
@@ -182,9 +183,11 @@ TEST(LightTerms, RangeAndFacingBoundaries) {
 }
 
 }  // namespace
+}  // namespace light_terms_test
 }  // namespace lm
 
 namespace lm {
+namespace light_terms_test {
 namespace {
 
 // A spot's term is the point light's times its cone's factor: full inside the inner cone,
@@ -228,4 +231,5 @@ TEST(LightTerms, SpotConesScaleTheTermAndDropTheUnlit) {
 }
 
 }  // namespace
+}  // namespace light_terms_test
 }  // namespace lm

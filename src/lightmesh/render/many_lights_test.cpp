@@ -12,6 +12,7 @@
 #include "lightmesh/render/whitted.h"
 
 namespace lm {
+namespace many_lights_test {
 namespace {
 
 using testing::AddBox;
@@ -208,4 +209,5 @@ TEST(ManyLights, FourThousandLightsInEveryMethod) {
 }
 
 }  // namespace
+}  // namespace many_lights_test
 }  // namespace lm

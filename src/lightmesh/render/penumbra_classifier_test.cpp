@@ -5,6 +5,7 @@
 #include <cmath>
 
 namespace lm {
+namespace penumbra_classifier_test {
 namespace {
 
 // A light of radius 1 at (0, 10, 0) over a receiver at the origin: its cone narrows from
@@ -40,4 +41,5 @@ TEST(PenumbraClassifier, ReachIsThePenumbrasHalfWidthInSamples) {
 }
 
 }  // namespace
+}  // namespace penumbra_classifier_test
 }  // namespace lm

@@ -12,6 +12,7 @@
 #include "support/floor_scenes.h"
 
 namespace lm {
+namespace shadow_denoiser_test {
 namespace {
 
 using testing::AddBox;
@@ -237,4 +238,5 @@ TEST(ShadowDenoiser, PointLightsKeepHardShadows) {
 }
 
 }  // namespace
+}  // namespace shadow_denoiser_test
 }  // namespace lm

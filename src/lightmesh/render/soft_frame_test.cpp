@@ -13,6 +13,7 @@
 #include "support/floor_scenes.h"
 
 namespace lm {
+namespace soft_frame_test {
 namespace {
 
 using testing::AddBox;
@@ -148,4 +149,5 @@ TEST(SoftFrame, RefusesBadSampleCounts) {
 }
 
 }  // namespace
+}  // namespace soft_frame_test
 }  // namespace lm

@@ -12,6 +12,7 @@
 #include "lightmesh/util/error.h"
 
 namespace lm {
+namespace texturing_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -152,4 +153,5 @@ TEST(Texturing, AnUntexturedSceneRendersTheSameWithAndWithout) {
 }
 
 }  // namespace
+}  // namespace texturing_test
 }  // namespace lm

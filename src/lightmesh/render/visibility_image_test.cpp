@@ -13,6 +13,7 @@
 #include "lightmesh/scene/scene_file.h"
 
 namespace lm {
+namespace visibility_image_test {
 namespace {
 
 Scene Gazebo() {
@@ -109,4 +110,5 @@ TEST(VisibilityImage, FinishDividesByTheHitsOrGivesNaN) {
 }
 
 }  // namespace
+}  // namespace visibility_image_test
 }  // namespace lm

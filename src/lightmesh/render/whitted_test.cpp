@@ -10,6 +10,7 @@
 #include "lightmesh/util/error.h"
 
 namespace lm {
+namespace whitted_test {
 namespace {
 
 using testing::AddBox;
@@ -219,4 +220,5 @@ TEST(Whitted, BadSettingsAreErrors) {
 }
 
 }  // namespace
+}  // namespace whitted_test
 }  // namespace lm

@@ -8,6 +8,7 @@
 #include "lightmesh/util/error.h"
 
 namespace lm {
+namespace camera_overrides_test {
 namespace {
 
 std::string ErrorOf(const std::function<void()>& f) {
@@ -67,9 +68,11 @@ TEST(CameraOverrides, UpAxisTurnsThatAxisToY) {
 }
 
 }  // namespace
+}  // namespace camera_overrides_test
 }  // namespace lm
 
 namespace lm {
+namespace camera_overrides_test {
 namespace {
 
 // A camera moved so far that the scene's span passes what single-precision rays allow.
@@ -90,4 +93,5 @@ TEST(CameraOverrides, TheMovedCameraKeepsTheSpanUsable) {
 }
 
 }  // namespace
+}  // namespace camera_overrides_test
 }  // namespace lm

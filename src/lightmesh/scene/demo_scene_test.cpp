@@ -6,6 +6,7 @@
 #include "lightmesh/util/error.h"
 
 namespace lm {
+namespace demo_scene_test {
 namespace {
 
 TEST(DemoScene, GazeboIsAFewThousandClosedTrianglesWithTwoLights) {
@@ -43,4 +44,5 @@ TEST(DemoScene, UnknownNameIsAnError) {
 }
 
 }  // namespace
+}  // namespace demo_scene_test
 }  // namespace lm

@@ -10,6 +10,7 @@
 #include "lightmesh/util/error.h"
 
 namespace lm {
+namespace light_keys_test {
 namespace {
 
 const std::string kScene = std::string(LIGHTMESH_TEST_DATA) + "/scene_file/lights.json";
@@ -195,4 +196,5 @@ TEST(FileCamerasLights, LightUnitsAndCones) {
 }
 
 }  // namespace
+}  // namespace light_keys_test
 }  // namespace lm

@@ -13,6 +13,7 @@
 #include <fstream>
 
 namespace lm {
+namespace mesh_loader_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -298,9 +299,11 @@ TEST(MeshLoader, Glob) {
 }
 
 }  // namespace
+}  // namespace mesh_loader_test
 }  // namespace lm
 
 namespace lm {
+namespace mesh_loader_test {
 namespace {
 
 /// COLLADA: a triangle geometry placed by `instances` nodes, each nested `depth` levels deep.
@@ -605,4 +608,5 @@ TEST(MeshLoader, Ac3dTakesAnObjectsFirstTextureLayer) {
 }
 
 }  // namespace
+}  // namespace mesh_loader_test
 }  // namespace lm

@@ -19,6 +19,7 @@
 #include "support/sanitized.h"
 
 namespace lm {
+namespace scene_file_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -1079,9 +1080,11 @@ TEST(SceneFile, BuiltinScenesLoad) {
 }
 
 }  // namespace
+}  // namespace scene_file_test
 }  // namespace lm
 
 namespace lm {
+namespace scene_file_test {
 namespace {
 
 // Issue 16: a JSON object with 300,000 keys took 49 s (ordered_json looks keys up
@@ -1224,4 +1227,5 @@ TEST(SceneFile, BareMeshWithItsOwnFloorGetsNoCoplanarSlab) {
 }
 
 }  // namespace
+}  // namespace scene_file_test
 }  // namespace lm

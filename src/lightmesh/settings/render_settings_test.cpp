@@ -13,6 +13,7 @@
 #include "lightmesh/shadow/shadow.h"
 
 namespace lm {
+namespace render_settings_test {
 namespace {
 
 TEST(RenderSettings, ChoicesAreTheOnesTheFactoriesAccept) {
@@ -141,4 +142,5 @@ TEST(RenderSettings, TheReadmeListsEveryRow) {
 }
 
 }  // namespace
+}  // namespace render_settings_test
 }  // namespace lm

@@ -11,6 +11,7 @@
 #include "lightmesh/util/error.h"
 
 namespace lm {
+namespace area_light_test {
 namespace {
 
 using testing::AddBox;
@@ -381,4 +382,5 @@ TEST(AreaLight, DeterministicForAnyThreadCount) {
 }
 
 }  // namespace
+}  // namespace area_light_test
 }  // namespace lm

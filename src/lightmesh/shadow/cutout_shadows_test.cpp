@@ -12,6 +12,7 @@
 #include "lightmesh/shadow/shadow.h"
 
 namespace lm {
+namespace cutout_shadows_test {
 namespace {
 
 using testing::CheckerScene;
@@ -107,4 +108,5 @@ TEST(CutoutShadows, TheLightMeshSeesTheHolesToo) {
 }
 
 }  // namespace
+}  // namespace cutout_shadows_test
 }  // namespace lm

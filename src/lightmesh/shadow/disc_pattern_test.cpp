@@ -7,6 +7,7 @@
 #include <utility>
 
 namespace lm {
+namespace disc_pattern_test {
 namespace {
 
 // The lattice mapped to the disc is area-preserving: equal shares of the points fall in
@@ -72,4 +73,5 @@ TEST(DiscTurns, AreUnitAndEven) {
 }
 
 }  // namespace
+}  // namespace disc_pattern_test
 }  // namespace lm

@@ -11,6 +11,7 @@
 #include "support/light_mesh_probe.h"
 
 namespace lm {
+namespace light_mesh_groups_test {
 namespace {
 
 using testing::AddBox;
@@ -155,4 +156,5 @@ TEST(LightMeshGroups, ManyLightsEqualTheLightMeshRunLightByLight) {
 }
 
 }  // namespace
+}  // namespace light_mesh_groups_test
 }  // namespace lm

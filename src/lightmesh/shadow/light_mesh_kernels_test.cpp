@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 namespace lm::kernels {
+namespace light_mesh_kernels_test {
 namespace {
 
 // Random triangles near the origin as a cell's front list (structure of arrays, padded as
@@ -583,4 +584,5 @@ TEST(LightMeshKernels, CullingEqualsTheBlockerByBlockerRule) {
 }
 
 }  // namespace
+}  // namespace light_mesh_kernels_test
 }  // namespace lm::kernels

@@ -19,6 +19,7 @@
 #include "lightmesh/util/error.h"
 
 namespace lm {
+namespace light_mesh_test {
 namespace {
 
 using testing::AddBox;
@@ -453,6 +454,11 @@ TEST(LightMesh, CellSummariesKeepEveryImageExactly) {
         const Scene s = SummaryTestScene(index);
         for (const char* accelName : {"grid", "embree", "brute"}) {
             if (std::string(accelName) == "brute" && index != 2) continue;  // slow: one scene
+            // Under the sanitizers the grid and Embree take the scenes in turn (the summaries'
+            // code is the same for both; Release runs every pair).
+            if (testing::kSanitized && std::string(accelName) != "brute" &&
+                (std::string(accelName) == "grid") != (index % 2 == 0))
+                continue;
             std::unique_ptr<Accelerator> accel;
             try {
                 accel = CreateAccelerator(accelName, s.mesh);
@@ -911,4 +917,5 @@ TEST(LightMesh, UnknownVariantIsAnError) {
 }
 
 }  // namespace
+}  // namespace light_mesh_test
 }  // namespace lm

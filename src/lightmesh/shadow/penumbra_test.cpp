@@ -19,6 +19,7 @@
 #include "lightmesh/util/error.h"
 
 namespace lm {
+namespace penumbra_test {
 namespace {
 
 using testing::AddBox;
@@ -415,4 +416,5 @@ TEST(Penumbra, BadLightRadiusOrVariantIsAnError) {
 }
 
 }  // namespace
+}  // namespace penumbra_test
 }  // namespace lm

@@ -10,6 +10,7 @@
 #include "lightmesh/util/error.h"
 
 namespace lm {
+namespace shadow_test {
 namespace {
 
 using testing::AddBox;
@@ -123,4 +124,5 @@ TEST(Shadow, LightsVisibleManyGivesEachPointItsOwnRaysAnswer) {
 }
 
 }  // namespace
+}  // namespace shadow_test
 }  // namespace lm

@@ -14,6 +14,7 @@
 #include "lightmesh/util/error.h"
 
 namespace lm {
+namespace soft_shadows_test {
 namespace {
 
 /// A heightfield terrain (a 24 × 24 grid over [-12, 12]², gentle hills) with two closed
@@ -300,4 +301,5 @@ TEST(SoftShadows, RefusesBadSampleCounts) {
 }
 
 }  // namespace
+}  // namespace soft_shadows_test
 }  // namespace lm

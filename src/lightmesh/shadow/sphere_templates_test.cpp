@@ -16,6 +16,7 @@
 #include "lightmesh/util/error.h"
 
 namespace lm {
+namespace sphere_templates_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -317,4 +318,5 @@ TEST(SphereTemplates, SnappingErrorFallsWithNsAsTheReadmeSays) {
 }
 
 }  // namespace
+}  // namespace sphere_templates_test
 }  // namespace lm

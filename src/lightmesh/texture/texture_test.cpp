@@ -17,6 +17,7 @@
 #include "lightmesh/util/error.h"
 
 namespace lm {
+namespace texture_test {
 namespace {
 
 const std::string DataDir = std::string(LIGHTMESH_TEST_DATA) + "/textures";
@@ -191,9 +192,11 @@ TEST(TextureCache, AnImageTooLargeToDecodeIsAWarning) {
 }
 
 }  // namespace
+}  // namespace texture_test
 }  // namespace lm
 
 namespace lm {
+namespace texture_test {
 namespace {
 
 /// The warnings a fresh cache gives reading `files` (each named by its path) for model m.obj.
@@ -266,9 +269,11 @@ TEST(TextureCache, AHeadThatTellsNoSizeAndAnExrPastTheLimit) {
 }
 
 }  // namespace
+}  // namespace texture_test
 }  // namespace lm
 
 namespace lm {
+namespace texture_test {
 namespace {
 
 // Issue 56: PNG and JPEG are decoded by libpng and libjpeg-turbo. A file cut short or
@@ -323,4 +328,5 @@ TEST(TextureCache, BrokenPngAndJpegAreAWarningAndTheFlatColour) {
 }
 
 }  // namespace
+}  // namespace texture_test
 }  // namespace lm

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 namespace lm {
+namespace error_test {
 namespace {
 
 TEST(SourceLoc, FormatsAsMessagesWriteIt) {
@@ -51,4 +52,5 @@ TEST(Error, KeepsItsPlaceAndReasonApart) {
 }
 
 }  // namespace
+}  // namespace error_test
 }  // namespace lm

@@ -10,6 +10,7 @@
 #include <vector>
 
 namespace lm {
+namespace huge_pages_test {
 namespace {
 
 TEST(HugePages, LargeBuffersAreAlignedToHugePagesAndSmallOnesWork) {
@@ -118,4 +119,5 @@ TEST(HugePages, ArenaHandsOutAlignedDisjointPiecesFromChunks) {
 }
 
 }  // namespace
+}  // namespace huge_pages_test
 }  // namespace lm

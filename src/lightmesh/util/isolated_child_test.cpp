@@ -13,6 +13,7 @@
 #include <vector>
 
 namespace lm {
+namespace isolated_child_test {
 namespace {
 
 TEST(IsolatedChild, ItsResultComesBackThroughTheMemfd) {
@@ -114,4 +115,5 @@ TEST(IsolatedChild, AnAllocationPastTheLimitFailsInTheChild) {
 #endif
 
 }  // namespace
+}  // namespace isolated_child_test
 }  // namespace lm

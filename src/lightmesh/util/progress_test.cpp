@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 namespace lm {
+namespace progress_test {
 namespace {
 
 // The bar's time left is not promised from the first moments of the work: a tenth of a
@@ -22,4 +23,5 @@ TEST(ProgressSecondsLeft, FromTheMeasuredRateOnceShown) {
 }
 
 }  // namespace
+}  // namespace progress_test
 }  // namespace lm
