@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <memory>
 #include <vector>
 
+#include "lightmesh/geometry/shadow_terminator.h"
 #include "lightmesh/geometry/triangle.h"
 #include "lightmesh/render/texturing.h"
 #include "lightmesh/util/error.h"
@@ -25,8 +27,8 @@ WhittedRenderer::WhittedRenderer(const Scene& scene, const Accelerator& accel,
     spread_ = 2.0f * std::tan(0.5f * scene.camera.fovY * Pi / 180.0f) / static_cast<float>(options.height * options.aa);
 }
 
-ShadingPoint WhittedRenderer::MakeShadingPoint(const TriangleMesh& mesh, const Ray& ray,
-                                               const Hit& hit) {
+ShadingPoint WhittedRenderer::MakeShadingPoint(const TriangleMesh& mesh, const Ray& ray, const Hit& hit,
+                                               Vec3* shadingNormal) {
     // A flat triangle's vertices read in place; an instanced one's computed.
     const bool flat = hit.prim < mesh.TriangleCount();
     Vec3 placed[3];
@@ -42,8 +44,30 @@ ShadingPoint WhittedRenderer::MakeShadingPoint(const TriangleMesh& mesh, const R
     Vec3 n = UnitTriangleNormal(p0, p1, p2);
     if (Dot(n, ray.d) > 0) n = -n;
     sp.n = n;
+    // Shading normal: interpolated vertex normals when the mesh has them, on the same side
+    // as the geometric normal.
+    Vec3 ns = n, lifted = sp.p;
+    if (Vec3 vn[3]; mesh.ShadingNormals(hit.prim, vn)) {
+        const Vec3 interp = vn[0] * b0 + vn[1] * hit.b1 + vn[2] * hit.b2;
+        if (LengthSquared(interp) > 0 && IsFinite(interp)) {
+            ns = Normalize(interp);
+            const float side = Dot(ns, n) < 0 ? -1.0f : 1.0f;
+            ns = ns * side;
+            // Rays leave the smooth surface the normals describe, not the facet (Hanika's
+            // shadow terminator fix; geometry/shadow_terminator.h).
+            const Vec3 corner[3] = {p0, p1, p2};
+            Vec3 unit[3];
+            for (int k = 0; k < 3; ++k) {
+                const float l2 = LengthSquared(vn[k]);
+                unit[k] = l2 > 0 && std::isfinite(l2) ? vn[k] * (side / std::sqrt(l2)) : Vec3(0.0f);
+            }
+            const float b[3] = {b0, hit.b1, hit.b2};
+            lifted = LiftToShadingPlanes(sp.p, b, corner, unit);
+        }
+    }
+    if (shadingNormal) *shadingNormal = ns;
     // Push the origin off the surface so rays leaving it never hit its own triangle.
-    sp.origin = sp.p + n * SurfaceOffset(p0, p1, p2);
+    sp.origin = lifted + n * SurfaceOffset(p0, p1, p2);
     return sp;
 }
 
@@ -56,19 +80,9 @@ Color WhittedRenderer::Li(const Ray& ray, int depth, RenderCounters& counters) c
 void WhittedRenderer::PrepareShading(const Ray& ray, const Hit& hit, Lighting* lit, RenderCounters& counters) const {
     ++counters.shadingPoints;
     const TriangleMesh& mesh = scene_.mesh;
-    const ShadingPoint sp = MakeShadingPoint(mesh, ray, hit);
+    Vec3 ns;
+    const ShadingPoint sp = MakeShadingPoint(mesh, ray, hit, &ns);
     const Material& mat = scene_.materials[mesh.MaterialOf(hit.prim)];
-
-    // Shading normal: interpolated vertex normals when the mesh has them, on the same side
-    // as the geometric normal.
-    Vec3 ns = sp.n;
-    if (Vec3 vn[3]; mesh.ShadingNormals(hit.prim, vn)) {
-        const Vec3 interp = vn[0] * (1.0f - hit.b1 - hit.b2) + vn[1] * hit.b1 + vn[2] * hit.b2;
-        if (LengthSquared(interp) > 0 && IsFinite(interp)) {
-            ns = Normalize(interp);
-            if (Dot(ns, sp.n) < 0) ns = -ns;
-        }
-    }
     const Vec3 toEye = Normalize(-ray.d);
 
     lit->sp = sp;
@@ -77,7 +91,11 @@ void WhittedRenderer::PrepareShading(const Ray& ray, const Hit& hit, Lighting* l
     lit->kd = mat.texture < 0 ? mat.kd : TexturedDiffuse(scene_, mat, ray, hit, spread_);
     // The lights' terms, several at a time (LightTerms: the scalar formula's floats), in
     // ascending light order.
-    const LightTermPoint point{sp.p, sp.n, ns, toEye, lit->kd, mat.ks, mat.phong};
+    // A light counts where the shading normal faces it: a smooth-shaded facet turned away
+    // from a light its normals face is lit as the smooth surface is, and its shadow rays,
+    // from the lifted origin, decide (a cut on the facet's own normal would end the lit side
+    // along the facets' edges). Where the mesh has no normals, ns is the facet's normal.
+    const LightTermPoint point{sp.p, ns, ns, toEye, lit->kd, mat.ks, mat.phong};
     if (!lightLists_.Active()) {
         lit->litCount = lightTerms_.All(point, lit->omega, lit->lit);
         return;

@@ -92,8 +92,12 @@ class WhittedRenderer {
                             Color* rest, RenderCounters& counters) const;
 
     /// Builds the shading point for a hit of `ray` (also used by tests and the shadow
-    /// methods' tests).
-    static ShadingPoint MakeShadingPoint(const TriangleMesh& mesh, const Ray& ray, const Hit& hit);
+    /// methods' tests), and its shading normal into *shadingNormal when given: the
+    /// interpolated vertex normals where the mesh has them (then the origin starts from the
+    /// point lifted to the vertices' tangent planes, geometry/shadow_terminator.h), else the
+    /// triangle's, on the side the ray came from.
+    static ShadingPoint MakeShadingPoint(const TriangleMesh& mesh, const Ray& ray, const Hit& hit,
+                                         Vec3* shadingNormal = nullptr);
 
   private:
     /// A hit's shading before its lights' visibility is known (formula (1)'s terms).
