@@ -31,6 +31,7 @@
 #include "lightmesh/util/progress.h"
 #include "lightmesh/util/system.h"
 #include "off_gil.h"
+#include "view_keywords.h"
 
 namespace py = pybind11;
 
@@ -76,20 +77,14 @@ struct CallOptions {
     std::vector<std::string> given;  ///< scene-file keys given
     std::optional<int> width, height;
     bool noTextures = false, noInstancing = false;
+    lm::python::ViewKeywords view;  ///< camera=, smooth_normals=, camera_position=, ...
     int threads = 0;
     bool strict = false;
     bool visibility = false;  ///< also return the per-light visibility
     py::object progress = py::none();
 };
 
-/// A value as JSON takes it: NumPy scalars become Python ones.
-py::object Plain(const py::handle& v) {
-    if (py::isinstance<py::str>(v) || py::isinstance<py::bool_>(v) || py::isinstance<py::int_>(v) ||
-        py::isinstance<py::float_>(v))
-        return py::reinterpret_borrow<py::object>(v);
-    if (py::hasattr(v, "item") && py::hasattr(v, "dtype")) return v.attr("item")();
-    return py::reinterpret_borrow<py::object>(v);
-}
+using lm::python::Plain;
 
 [[noreturn]] void UnknownKeyword(const std::string& name, const std::string& function,
                                  const std::vector<std::string>& extra) {
@@ -124,8 +119,16 @@ CallOptions ParseOptions(const py::kwargs& kwargs, const std::string& function, 
                 throw lm::Error("progress=: expected a callable f(fraction) or None");
             continue;
         }
+        if (callKeywords && lm::python::ParseViewKeyword(name, v, &o.view)) continue;
         const Keyword* kw = FindKeyword(name);
-        if (!kw) UnknownKeyword(name, function, callKeywords ? kCallKeywords : std::vector<std::string>{});
+        if (!kw) {
+            std::vector<std::string> extra;
+            if (callKeywords) {
+                extra = kCallKeywords;
+                extra.insert(extra.end(), lm::python::kViewKeywords.begin(), lm::python::kViewKeywords.end());
+            }
+            UnknownKeyword(name, function, extra);
+        }
         const lm::RenderSetting& s = *kw->setting;
         o.given.push_back(s.key);
         if (s.kind == lm::RenderSetting::Kind::Bool) {
@@ -194,11 +197,7 @@ lm::Scene LoadSceneFor(const SceneSpec& s, const CallOptions& o) {
     load.frameHeight = o.height.value_or(0);
     load.text = s.text;
     std::vector<std::string> warnings;
-    lm::Scene scene;
-    {
-        py::gil_scoped_release release;
-        scene = lm::LoadScene(s.spec, load, &warnings);
-    }
+    lm::Scene scene = lm::python::LoadWithView(s.spec, o.view, load, &warnings);
     for (const std::string& w : warnings) lm::LogWarning(w);
     return scene;
 }
@@ -281,8 +280,9 @@ class PyScene {
 
     py::object Render(const py::kwargs& kwargs) {
         CallOptions o = ParseOptions(kwargs, "Scene.render");
-        if (o.noTextures || o.noInstancing)
-            throw lm::Error("no_textures= and no_instancing= are load options: give them to lightmesh.load()");
+        if (o.noTextures || o.noInstancing || o.view.camera || o.view.smoothNormals)
+            throw lm::Error("no_textures=, no_instancing=, camera= and smooth_normals= are load options: give them "
+                            "to lightmesh.load()");
         // One render at a time per scene (it holds the back-end); the lock is taken
         // without the GIL, so a render in another thread can finish.
         std::unique_lock<std::mutex> lock(mutex_, std::defer_lock);
@@ -298,6 +298,14 @@ class PyScene {
             lm::scene_load::Validate(scene_);
             changed_ = false;
         }
+        // The camera keywords move the camera for this render only.
+        const lm::Camera camera = scene_.camera;
+        struct Restore {
+            lm::Scene& scene;
+            const lm::Camera& camera;
+            ~Restore() { scene.camera = camera; }
+        } restore{scene_, camera};
+        lm::python::MoveCameraForOneRender(spec_, o.view, &scene_);
         lm::CheckRenderOptions(scene_, options, given);
         const bool hadInstances = scene_.mesh.instances != nullptr;
         lm::PrepareSceneForRender(&scene_, options, spec_);
@@ -418,6 +426,7 @@ std::string OptionsDoc() {
         }
         doc += "    " + k.name + " (" + kind + "): " + s.help + "\n";
     }
+    doc += lm::python::kViewKeywordsDoc;
     doc += "    threads (int): worker threads (default 0: all cores)\n"
            "    strict (bool): unknown keys in the scene file are errors, not warnings\n"
            "    progress (callable): called with the fraction done (0..1) from the calling thread\n"

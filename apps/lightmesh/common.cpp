@@ -39,7 +39,14 @@ void AddCommonOptions(CLI::App* cmd, CommonOptions* o) {
     cmd->add_option("--smooth-normals", o->smoothNormals,
                     "Give the meshes of mesh files that have no normals smooth ones, keeping edges sharper than DEG "
                     "degrees as creases (0 to 180; default: none, flat faces)")
-        ->check(InRange(0, 180, false));
+        ->check(CLI::Validator(
+            [](std::string& text) -> std::string {
+                char* end = nullptr;
+                const double v = std::strtod(text.c_str(), &end);
+                if (end == text.c_str() || *end != 0) return "expected a number, got " + text;
+                return lm::SmoothNormalsProblem(v, text);
+            },
+            "FLOAT in [0 - 180]"));
 }
 
 lm::Scene LoadWithWarnings(const CommonOptions& o, int frameWidth, int frameHeight) {

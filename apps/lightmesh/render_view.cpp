@@ -2,10 +2,8 @@
 // (scene/camera_overrides.h), --save-scene, and --width or --height alone keeping the
 // scene's aspect ratio.
 #include <cmath>
-#include <filesystem>
 
 #include "commands.h"
-#include "lightmesh/scene/json_reader.h"
 #include "lightmesh/util/log.h"
 
 namespace lm::cli {
@@ -41,21 +39,18 @@ lm::CameraOverrides CameraFromCommand(const RenderCommand& cmd, CommonOptions* l
     if (cmd.cameraPosition) o.position = lm::ParseVec3Option("--camera-position", *cmd.cameraPosition);
     if (cmd.lookAt) o.lookAt = lm::ParseVec3Option("--look-at", *cmd.lookAt);
     if (cmd.fov) o.fovY = lm::ParseFovOption(*cmd.fov);
-    const std::string& spec = cmd.common.scene;
-    const bool bareMesh = spec.rfind("builtin:", 0) != 0 &&
-                          lm::json::Lower(std::filesystem::path(spec).extension().string()) != ".json";
     if (cmd.up) {
-        const int axis = lm::AxisOfLetter(*cmd.up);
-        if (bareMesh && axis >= 0)
-            load->upAxis = axis;  // the model turned to stand on that axis; the camera's up stays +y
-        else
-            o.up = lm::ParseUpOption(*cmd.up);
+        o.up = lm::ParseUpOption(*cmd.up);
+        o.upAxis = lm::AxisOfLetter(*cmd.up);
     }
-    if (bareMesh && o.fovY) load->frameFovY = *o.fovY;
-    // What can be judged without the scene, before it is read.
-    if (o.up && !(lm::LengthSquared(*o.up) > 0)) lm::ThrowError("--up: must not be zero");
-    if (o.position && o.lookAt && *o.position == *o.lookAt)
-        lm::ThrowError("--look-at: the camera position equals the point looked at, so the camera has no view direction");
+    // A bare mesh's letter --up and --fov reach its framing; what can be judged without the
+    // scene is checked before it is read.
+    lm::SceneLoadOptions framing;
+    framing.upAxis = load->upAxis;
+    framing.frameFovY = load->frameFovY;
+    lm::PrepareCameraOverrides(cmd.common.scene, &o, &framing);
+    load->upAxis = framing.upAxis;
+    load->frameFovY = framing.frameFovY;
     return o;
 }
 

@@ -1,27 +1,26 @@
-// camera_overrides.cpp -- the command line's camera options (camera_overrides.h).
+// camera_overrides.cpp -- the camera options and the shared load-option checks
+// (camera_overrides.h).
 #include "lightmesh/scene/camera_overrides.h"
 
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <limits>
 
+#include "lightmesh/scene/json_reader.h"
 #include "lightmesh/scene/scene_load.h"
 #include "lightmesh/util/error.h"
 
 namespace lm {
 
 Vec3 ParseVec3Option(const std::string& flag, const std::string& text) {
-    Vec3 v;
+    double v[3];
     const char* p = text.c_str();
     for (int i = 0; i < 3; ++i) {
         while (*p == ' ') ++p;
         char* end = nullptr;
-        const double x = std::strtod(p, &end);
+        v[i] = std::strtod(p, &end);
         if (end == p) ThrowError("%s: expected X,Y,Z (3 numbers), got %s", flag.c_str(), Printable(text).c_str());
-        if (!std::isfinite(x) || std::abs(x) > scene_load::kMaxCoordinate)
-            ThrowError("%s: every number must be finite and within ±1e18, got %s", flag.c_str(),
-                       Printable(text).c_str());
-        v[i] = static_cast<float>(x);
         p = end;
         while (*p == ' ') ++p;
         if (i < 2) {
@@ -30,7 +29,18 @@ Vec3 ParseVec3Option(const std::string& flag, const std::string& text) {
         }
     }
     if (*p != 0) ThrowError("%s: expected X,Y,Z (3 numbers), got %s", flag.c_str(), Printable(text).c_str());
-    return v;
+    return Vec3Option(flag, v, text);
+}
+
+Vec3 Vec3Option(const std::string& name, const double (&v)[3], const std::string& shown) {
+    Vec3 out;
+    for (int i = 0; i < 3; ++i) {
+        if (!std::isfinite(v[i]) || std::abs(v[i]) > scene_load::kMaxCoordinate)
+            ThrowError("%s: every number must be finite and within ±1e18, got %s", name.c_str(),
+                       Printable(shown).c_str());
+        out[i] = static_cast<float>(v[i]);
+    }
+    return out;
 }
 
 int AxisOfLetter(const std::string& text) {
@@ -51,10 +61,40 @@ Vec3 ParseUpOption(const std::string& text) {
 float ParseFovOption(const std::string& text) {
     char* end = nullptr;
     const double fov = std::strtod(text.c_str(), &end);
-    if (end == text.c_str() || *end != 0 || !(fov > 0 && fov < 180) || !(static_cast<float>(fov) < 180))
-        ThrowError("--fov: must be a number of degrees between 0 and 180 (both excluded), got %s",
-                   Printable(text).c_str());
-    return static_cast<float>(fov);
+    if (end == text.c_str() || *end != 0) return FovOption("--fov", std::nan(""), text);
+    return FovOption("--fov", fov, text);
+}
+
+float FovOption(const std::string& name, double degrees, const std::string& shown) {
+    if (!(degrees > 0 && degrees < 180) || !(static_cast<float>(degrees) < 180))
+        ThrowError("%s: must be a number of degrees between 0 and 180 (both excluded), got %s", name.c_str(),
+                   Printable(shown).c_str());
+    return static_cast<float>(degrees);
+}
+
+std::string SmoothNormalsProblem(double degrees, const std::string& shown) {
+    // In single precision, as it is stored (and as the CLI's ranges compare).
+    const float f = static_cast<float>(degrees);
+    if (f >= 0 && f <= 180) return "";
+    return "must be between 0 and 180, got " + Printable(shown);
+}
+
+bool IsMeshFileSpec(const std::string& spec) {
+    return spec.rfind("builtin:", 0) != 0 && json::Lower(std::filesystem::path(spec).extension().string()) != ".json";
+}
+
+void PrepareCameraOverrides(const std::string& spec, CameraOverrides* o, SceneLoadOptions* load) {
+    const bool meshFile = IsMeshFileSpec(spec);
+    if (meshFile && o->upAxis >= 0) {
+        load->upAxis = o->upAxis;  // the model turned to stand on that axis; the camera's up stays +y
+        o->up.reset();
+        o->upAxis = -1;
+    }
+    if (meshFile && o->fovY) load->frameFovY = *o->fovY;
+    if (o->up && !(LengthSquared(*o->up) > 0)) ThrowError("%s: must not be zero", o->names.up.c_str());
+    if (o->position && o->lookAt && *o->position == *o->lookAt)
+        ThrowError("%s: the camera position equals the point looked at, so the camera has no view direction",
+                   o->names.lookAt.c_str());
 }
 
 Affine UpAxisToY(int axis) {
@@ -74,21 +114,22 @@ void ApplyCameraOverrides(const CameraOverrides& o, Camera* camera) {
     if (problem.empty()) return;
     // The option to blame: the one the problem names if given, else the one that moved the
     // camera into it (a --camera-position on the scene's look_at).
-    const char* flag = key == "look_at" ? (o.lookAt ? "--look-at" : "--camera-position")
-                       : key == "fov"   ? "--fov"
-                                        : "--up";
+    const CameraOptionNames& n = o.names;
+    const char* moved = o.lookAt ? n.lookAt.c_str() : n.position.c_str();
+    const char* flag = key == "look_at" ? moved : key == "fov" ? n.fov.c_str() : n.up.c_str();
     if (key == "look_at")
         ThrowError("%s: the camera position equals the point looked at, so the camera has no view direction", flag);
     if (key == "up" && !o.up)
-        ThrowError("%s: the view direction is now parallel to the scene's up direction; give --up too",
-                   o.lookAt ? "--look-at" : "--camera-position");
+        ThrowError("%s: the view direction is now parallel to the scene's up direction; give %s too", moved,
+                   n.up.c_str());
     ThrowError("%s: %s", flag, problem.c_str());
 }
 
 void ApplyCameraOverrides(const CameraOverrides& o, Scene* scene) {
     ApplyCameraOverrides(o, &scene->camera);
     if (o.position)
-        if (const std::string p = scene_load::SpanProblem(*scene); !p.empty()) ThrowError("--camera-position: %s", p.c_str());
+        if (const std::string p = scene_load::SpanProblem(*scene); !p.empty())
+            ThrowError("%s: %s", o.names.position.c_str(), p.c_str());
 }
 
 }  // namespace lm

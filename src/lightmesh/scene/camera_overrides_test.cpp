@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <functional>
 #include <string>
 
@@ -55,6 +56,49 @@ TEST(CameraOverrides, ReplaceOnlyTheKeysGiven) {
     straightDown.position = Vec3(0, 10, 0);
     straightDown.lookAt = Vec3(0, 0, 0);
     EXPECT_NE(ErrorOf([&] { ApplyCameraOverrides(straightDown, &c); }).find("give --up too"), std::string::npos);
+}
+
+// Before the scene is read: a mesh file's letter up turns the model and its fov frames it;
+// a scene file keeps both on the camera. Messages use the names given (the Python keywords).
+TEST(CameraOverrides, PreparedForTheSceneKind) {
+    CameraOverrides o;
+    o.up = ParseUpOption("z");
+    o.upAxis = AxisOfLetter("z");
+    o.fovY = 30;
+    SceneLoadOptions load;
+    PrepareCameraOverrides("model.STL", &o, &load);
+    EXPECT_EQ(load.upAxis, 2);
+    EXPECT_EQ(load.frameFovY, 30.0f);
+    EXPECT_FALSE(o.up.has_value());
+    EXPECT_EQ(o.fovY, 30.0f);
+    CameraOverrides s = o;
+    s.up = ParseUpOption("z");
+    s.upAxis = 2;
+    SceneLoadOptions sceneLoad;
+    PrepareCameraOverrides("scene.JSON", &s, &sceneLoad);
+    EXPECT_EQ(sceneLoad.upAxis, 1);
+    EXPECT_EQ(sceneLoad.frameFovY, 0.0f);
+    EXPECT_EQ(s.up, Vec3(0, 0, 1));
+    EXPECT_FALSE(IsMeshFileSpec("builtin:gazebo"));
+    EXPECT_TRUE(IsMeshFileSpec("model.glb"));
+
+    CameraOverrides zero;
+    zero.names = {"camera_position=", "look_at=", "up=", "fov="};
+    zero.up = Vec3(0, 0, 0);
+    EXPECT_EQ(ErrorOf([&] { PrepareCameraOverrides("scene.json", &zero, &sceneLoad); }), "up=: must not be zero");
+    CameraOverrides same;
+    same.names = zero.names;
+    same.position = same.lookAt = Vec3(1, 2, 3);
+    EXPECT_NE(ErrorOf([&] { PrepareCameraOverrides("scene.json", &same, &sceneLoad); }).find("look_at=: the camera"),
+              std::string::npos);
+    EXPECT_EQ(ErrorOf([] { FovOption("fov=", 180, "180"); }),
+              "fov=: must be a number of degrees between 0 and 180 (both excluded), got 180");
+    const double nan[3] = {0, std::nan(""), 0};
+    EXPECT_NE(ErrorOf([&] { Vec3Option("look_at=", nan, "(0, nan, 0)"); }).find("look_at=: every number"),
+              std::string::npos);
+    EXPECT_EQ(SmoothNormalsProblem(180, "180"), "");
+    EXPECT_EQ(SmoothNormalsProblem(-1, "-1"), "must be between 0 and 180, got -1");
+    EXPECT_NE(SmoothNormalsProblem(std::nan(""), "nan"), "");
 }
 
 // The turn a Z-up model gets: +z becomes +y (up), -y (a Z-up model's front) becomes +z.
