@@ -23,12 +23,14 @@ struct CliResult {
     std::string output;  ///< stdout and stderr together
 };
 
-/// `name` in a temporary folder of the running test's own (`prefix`_TestName): ctest runs a
-/// file's tests side by side, so fixed paths shared between tests would race.
+/// `name` in a temporary folder of the running test's own (`prefix`_TestName_pid): ctest runs a
+/// file's tests side by side, and two builds' test runs can share /tmp, so fixed paths shared
+/// between tests would race.
 inline std::string TestTempPath(const std::string& prefix, const std::string& name) {
     const std::filesystem::path dir =
         std::filesystem::path(::testing::TempDir()) /
-        (prefix + "_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        (prefix + "_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+         std::to_string(getpid()));
     std::filesystem::create_directories(dir);
     return (dir / name).string();
 }

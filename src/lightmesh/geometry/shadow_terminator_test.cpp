@@ -61,6 +61,22 @@ TEST(ShadowTerminator, ASphereFacetsPointsRiseAboveTheFacet) {
     }
 }
 
+TEST(ShadowTerminator, NormalsOfAnyLengthAndEitherSideLiftAlike) {
+    // Meshes store normals as written (not unit), and a ray may hit the side they point
+    // away from: `side` turns them.
+    const SphereFacet f;
+    const float b[3] = {0.2f, 0.5f, 0.3f};
+    const Vec3 p = f.corner[0] * b[0] + f.corner[1] * b[1] + f.corner[2] * b[2];
+    const Vec3 unit = LiftToShadingPlanes(p, b, f.corner, f.normal);
+    const Vec3 scaled[3] = {f.normal[0] * 3.0f, f.normal[1] * 0.25f, f.normal[2] * 7.0f};
+    const Vec3 flipped[3] = {-scaled[0], -scaled[1], -scaled[2]};
+    const Vec3 zero[3] = {Vec3(0.0f), Vec3(0.0f), Vec3(0.0f)};
+    EXPECT_NEAR(Length(LiftToShadingPlanes(p, b, f.corner, scaled) - unit), 0.0f, 1e-6f);
+    EXPECT_NEAR(Length(LiftToShadingPlanes(p, b, f.corner, flipped, -1.0f) - unit), 0.0f, 1e-6f);
+    EXPECT_GT(Length(unit - p), 0.01f);
+    EXPECT_EQ(LiftToShadingPlanes(p, b, f.corner, zero), p);  // no normals: no lift
+}
+
 TEST(ShadowTerminator, APointAboveEveryPlaneStays) {
     // A concave patch: the normals lean inwards, so the facet lies above their planes.
     const SphereFacet f;

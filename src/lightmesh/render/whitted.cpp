@@ -56,13 +56,8 @@ ShadingPoint WhittedRenderer::MakeShadingPoint(const TriangleMesh& mesh, const R
             // Rays leave the smooth surface the normals describe, not the facet (Hanika's
             // shadow terminator fix; geometry/shadow_terminator.h).
             const Vec3 corner[3] = {p0, p1, p2};
-            Vec3 unit[3];
-            for (int k = 0; k < 3; ++k) {
-                const float l2 = LengthSquared(vn[k]);
-                unit[k] = l2 > 0 && std::isfinite(l2) ? vn[k] * (side / std::sqrt(l2)) : Vec3(0.0f);
-            }
             const float b[3] = {b0, hit.b1, hit.b2};
-            lifted = LiftToShadingPlanes(sp.p, b, corner, unit);
+            lifted = LiftToShadingPlanes(sp.p, b, corner, vn, side);
         }
     }
     if (shadingNormal) *shadingNormal = ns;
