@@ -1,7 +1,7 @@
 // scene_load.h -- the scene loader's pieces shared by its files (not part of the scene
 // interface): the checks every scene passes before a ray is traced (scene_checks.cpp) and
 // the automatic framing of a bare mesh with its ground slab (framing.cpp); the JSON format
-// itself is scene_file.cpp.
+// itself is scene_file.cpp and the files of scene_file_parts.h.
 #pragma once
 
 #include <string>
