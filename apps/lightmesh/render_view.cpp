@@ -51,7 +51,8 @@ lm::CameraOverrides CameraFromCommand(const RenderCommand& cmd, CommonOptions* l
         else
             o.up = lm::ParseUpOption(*cmd.up);
     }
-    if (bareMesh && o.fovY) load->frameFovY = *o.fovY;
+    // Framing (a bare mesh, a scene file without "camera") fits the model into --fov.
+    if (spec.rfind("builtin:", 0) != 0 && o.fovY) load->frameFovY = *o.fovY;
     // What can be judged without the scene, before it is read.
     if (o.up && !(lm::LengthSquared(*o.up) > 0)) lm::ThrowError("--up: must not be zero");
     if (o.position && o.lookAt && *o.position == *o.lookAt)

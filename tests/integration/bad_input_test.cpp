@@ -324,9 +324,10 @@ std::vector<Case> Corpus() {
          .expected = "lightmesh: error: $D/scene.json /render/width: expected an integer, got a "
                      "string (\"640\")\n",
          .files = {{"scene.json", WithExtra(R"(, "render": {"width": "640"})")}}},
-        {.name = "missing_camera",
-         .args = kRender,
-         .expected = "lightmesh: error: $D/scene.json /camera: missing required key\n",
+        {.name = "camera_choice_without_file_cameras",
+         .args = kRender + " --camera 0",
+         .expected = "lightmesh: error: $D/scene.json: --camera 0: none of the scene's mesh files has cameras "
+                     "(without \"camera\" it is framed automatically)\n",
          .files = {{"scene.json", R"({"lights": [{"position": [0, 5, 0]}], "meshes": [{"file": "box.obj"}]})"}}},
         {.name = "missing_look_at",
          .args = kRender,

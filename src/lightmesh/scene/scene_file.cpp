@@ -7,13 +7,17 @@
 // A scene file is one JSON object (keys in any order; "name" is also allowed on lights
 // and meshes):
 //
-//   "camera"     required. {"position": [x,y,z], "look_at": [x,y,z]} both required;
+//   "camera"     {"position": [x,y,z], "look_at": [x,y,z]} both required;
 //                "up" (default [0,1,0], not parallel to the view direction), "fov" (vertical,
-//                degrees, in (0, 180), default 45).
+//                degrees, in (0, 180), default 45). Without it: the camera of the first mesh
+//                file that has cameras (--camera picks which), moved by its entry's
+//                transform; none: the meshes framed as a bare mesh is.
 //   "ambient"    colour, default 0.05.        "background"  colour, default 0.
 //   "materials"  {NAME: {"kd": colour (0.8), "ks": colour (0), "phong": number ≥ 0 (32),
 //                "mirror": colour (0)}, ...}.
-//   "lights"     required, ≥ 1: [{"position": [x,y,z] (required), "intensity": colour (1),
+//   "lights"     ≥ 1 (without it: every mesh file's own lights, each moved by its entry's
+//                transform; none: a key and a fill light as for a bare mesh):
+//                [{"position": [x,y,z] (required), "intensity": colour (1),
 //                "falloff": "inverse_square" (default) | "none", "radius": number ≥ 0 (the
 //                sphere the light stands for, scene units; 0 is a point; default 2 % of the
 //                light's distance to the centre of the scene's bounding box, ground
@@ -155,18 +159,43 @@ void AddSceneGround(const Reader& r, const GroundEntry& ground, Scene* scene) {
     }
 }
 
+/// A scene file without "camera": its mesh files' camera, else the automatic framing of
+/// the meshes (`box`, without the ground) for the image's aspect.
+void CameraFromMeshFiles(const Reader& r, const SceneLoadOptions& options, const std::vector<EntryCamerasLights>& kept,
+                         const Bounds3& box, Scene* scene) {
+    const bool hinted = options.frameWidth > 0 && options.frameHeight > 0;
+    const float aspect =
+        hinted ? static_cast<float>(options.frameWidth) / static_cast<float>(options.frameHeight)
+               : static_cast<float>(scene->render.width) / static_cast<float>(scene->render.height);
+    if (UseMeshFileCamera(r, kept, options, aspect, scene)) return;
+    scene->report.notes.push_back("no \"camera\" in the scene file or its mesh files: framing the meshes automatically");
+    FrameCamera(r, box, aspect, options.frameFovY, scene);
+}
+
+/// A scene file without "lights": its mesh files' lights, sized from the scene's bounds
+/// (ground included, as "radius" is for the file's own lights), else the key and fill
+/// lights above the meshes (`box`).
+void LightsFromMeshFiles(const Reader& r, const std::vector<EntryCamerasLights>& kept, const Bounds3& box,
+                         Scene* scene) {
+    if (UseMeshFileLights(r, kept, scene->mesh.Bounds(), scene)) return;
+    scene->report.notes.push_back("no \"lights\" in the scene file or its mesh files: a key and a fill light");
+    AddKeyAndFillLights(r, box, scene);
+}
+
 /// The finished mesh's cut-outs, the suns placed, the whole scene checked, the lights
-/// without a stated size sized.
-void FinishScene(const Reader& r, const std::vector<size_t>& unsized, Scene* scene) {
+/// without a stated size sized. `ownLights`: the lights are the file's "lights" (the
+/// messages name their JSON paths), not its mesh files'.
+void FinishScene(const Reader& r, const std::vector<size_t>& unsized, bool ownLights, Scene* scene) {
     BuildCutouts(scene);  // before the inside test: a cut-out surface is not a wall
     PlaceSuns(scene, scene->mesh.Bounds());
     for (size_t i = 0; i < scene->lights.size(); ++i)
         if (scene->lights[i].kind == LightKind::Sun)
             if (std::string p = CoordinateProblem(scene->lights[i].position, "the sun's far sphere"); !p.empty())
-                r.Fail(Index("/lights", i) + "/sun", p + " (the scene is too large for the sun's distance, " +
-                                                         StringPrintf("%g times its size)", double(kSunDistanceFactor)));
+                r.Fail(ownLights ? Index("/lights", i) + "/sun" : std::string(),
+                       p + " (the scene is too large for the sun's distance, " +
+                           StringPrintf("%g times its size)", double(kSunDistanceFactor)));
     if (std::string p = SpanProblem(*scene); !p.empty()) r.Fail("", p);
-    CheckLightsOutsideSolids(r, *scene);
+    CheckLightsOutsideSolids(r, *scene, ownLights ? "/lights" : "");
     SizeUnsizedLights(scene, unsized);
 }
 
@@ -183,7 +212,13 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
 
     Scene scene;
     scene.name = spec;
-    scene.camera = ReadCamera(r, top.Require("camera"));
+    // Without "camera" or "lights" the mesh files' own are used, else the automatic ones.
+    const Json* cameraJson = top.Find("camera");
+    if (cameraJson && !options.camera.empty())
+        r.Fail("/camera", "--camera " + options.camera +
+                              " picks one of a mesh file's own cameras; this scene file sets its \"camera\" (leave "
+                              "the key out to use its mesh files' cameras)");
+    if (cameraJson) scene.camera = ReadCamera(r, *cameraJson);
     if (const Json* v = top.Find("ambient")) scene.ambient = ReadColor(r, *v, "/ambient");
     if (const Json* v = top.Find("background")) scene.background = ReadColor(r, *v, "/background");
     // Free text for people (what the scene is, where its model comes from); not used.
@@ -192,7 +227,8 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
     std::vector<std::string> materialNames;
     if (const Json* mj = top.Find("materials")) ReadMaterials(r, *mj, &scene, &materialNames);
     std::vector<size_t> unsized;  // lights without "radius": sized once the bounds are known
-    ReadLights(r, top.Require("lights", "a scene needs at least one point light"), &scene, &unsized);
+    const Json* lightsJson = top.Find("lights");
+    if (lightsJson) ReadLights(r, *lightsJson, &scene, &unsized);
     const std::vector<MeshEntry> entries = ReadMeshEntries(r, &top, spec, options, materialNames);
     GroundEntry ground;
     if (const Json* gj = top.Find("ground")) ground = ReadGround(r, *gj, materialNames);
@@ -201,12 +237,16 @@ Scene LoadJsonScene(const std::string& spec, const SceneLoadOptions& options,
 
     // Now the mesh files, JSON mistakes having been reported already.
     MeshAssembler meshes(r, options, entries, materialNames, &scene);
+    meshes.KeepCamerasAndLights(!cameraJson, !lightsJson);
     for (const MeshEntry& e : entries) meshes.Add(e);
     meshes.Finish(spec);
     if (scene.mesh.PrimCount() == 0) r.Fail("/meshes", NoTrianglesMessage(scene.report, scene.mesh));
     CheckExtent(r, "/meshes", scene);
+    const Bounds3 meshBox = scene.mesh.Bounds();
+    if (!cameraJson) CameraFromMeshFiles(r, options, meshes.Kept(), meshBox, &scene);
     if (ground.present) AddSceneGround(r, ground, &scene);
-    FinishScene(r, unsized, &scene);
+    if (!lightsJson) LightsFromMeshFiles(r, meshes.Kept(), meshBox, &scene);
+    FinishScene(r, unsized, lightsJson != nullptr, &scene);
     return scene;
 }
 
@@ -248,8 +288,8 @@ Scene LoadScene(const std::string& spec, const SceneLoadOptions& options,
         ThrowError("no scene given: expected builtin:NAME, a .json scene file or a mesh file");
     try {
         Scene scene;
-        const bool bare = spec.rfind("builtin:", 0) != 0 && Lower(fs::path(spec).extension().string()) != ".json";
-        if (!options.camera.empty() && !bare)
+        // A scene file's own "camera" and --camera: LoadJsonScene.
+        if (!options.camera.empty() && spec.rfind("builtin:", 0) == 0)
             throw Error(spec + ": --camera " + options.camera +
                         ": picks one of a mesh file's own cameras; a scene file or builtin scene has its camera");
         if (spec.rfind("builtin:", 0) == 0)

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "lightmesh/geometry/instances.h"
+#include "lightmesh/scene/file_cameras_lights.h"
 #include "lightmesh/scene/json_reader.h"
 #include "lightmesh/scene/mesh_loader.h"
 #include "lightmesh/scene/scene.h"
@@ -64,6 +65,14 @@ void ReadRender(const json::Reader& r, const Json& j, RenderOptions* ro, const s
 
 // ---- Mesh files (scene_meshes.cpp) -----------------------------------------------------
 
+/// The cameras and lights a mesh entry's file brings (file_cameras_lights.h), in the file's
+/// space: the entry's transform is applied when they are used.
+struct EntryCamerasLights {
+    const MeshEntry* entry = nullptr;
+    std::vector<FileCamera> cameras;
+    std::vector<FileLight> lights;
+};
+
 /// Whether `refs` references to a file whose mesh holds `triangles` become instances of
 /// one prototype rather than copies: where that saves memory (docs/scene-format.md).
 bool InstancesSaveMemory(int refs, size_t triangles);
@@ -76,10 +85,18 @@ class MeshAssembler {
   public:
     MeshAssembler(const json::Reader& r, const SceneLoadOptions& options, const std::vector<MeshEntry>& entries,
                   const std::vector<std::string>& materialNames, Scene* scene);
+    /// Keep the cameras of the first file that has some, and every file's lights, for
+    /// Kept(): for a scene file without "camera" or without "lights".
+    void KeepCamerasAndLights(bool cameras, bool lights) {
+        keepCameras_ = cameras;
+        keepLights_ = lights;
+    }
     void Add(const MeshEntry& e);
     /// The warnings held back for their counts, the triangles repeated across meshes, the
     /// instances handed to the scene's mesh.
     void Finish(const std::string& spec);
+    /// The entries whose files brought what KeepCamerasAndLights asked for, in "meshes"' order.
+    const std::vector<EntryCamerasLights>& Kept() const { return kept_; }
 
   private:
     static std::string ImportKey(const MeshEntry& e);
@@ -114,6 +131,22 @@ class MeshAssembler {
     std::vector<std::pair<std::string, size_t>> repeated_;  // (message, references), in order
     std::unordered_map<std::string, size_t> repeatedAt_;
     TextureCache textureCache_;  // each image read once, however many models name it
+    bool keepCameras_ = false, keepLights_ = false;
+    std::vector<EntryCamerasLights> kept_;
 };
+
+// ---- The mesh files' cameras and lights (scene_file_cameras_lights.cpp) ----------------
+
+/// A scene file without "camera": the camera `options.camera` picks ("" the first
+/// perspective one) of the first entry of `kept` whose file has cameras, moved by that
+/// entry's transform, as the scene's, with a note naming the file. False when no file has
+/// cameras (an error if --camera asked for one) or the chosen file's are all orthographic.
+bool UseMeshFileCamera(const json::Reader& r, const std::vector<EntryCamerasLights>& kept,
+                       const SceneLoadOptions& options, float aspect, Scene* scene);
+/// A scene file without "lights": every light of every entry's file (file_cameras_lights.h's
+/// conversions), moved by the entry's transform, point lights and spots sized from `bounds`
+/// (the scene's, ground included), with a note; false when they have none lightmesh renders.
+bool UseMeshFileLights(const json::Reader& r, const std::vector<EntryCamerasLights>& kept, const Bounds3& bounds,
+                       Scene* scene);
 
 }  // namespace lm::scene_load

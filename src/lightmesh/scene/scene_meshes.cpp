@@ -140,6 +140,12 @@ void MeshAssembler::Add(const MeshEntry& e) {
                   e.excludeMaterialsIsList, "material");
     WarnUnmatched(e, "exclude_names", e.load.excludeNames, loaded.excludeNamesMatched, e.excludeNamesIsList,
                   "node or mesh");
+    const bool cameras = keepCameras_ && !loaded.cameras.empty();
+    if (cameras || (keepLights_ && !loaded.lights.empty())) {
+        kept_.push_back({&e, cameras ? loaded.cameras : std::vector<FileCamera>{},
+                         keepLights_ ? loaded.lights : std::vector<FileLight>{}});
+        if (cameras) keepCameras_ = false;  // the first file with cameras gives the camera
+    }
     scene_->report.meshesExcluded += loaded.meshesExcluded;
     scene_->report.sources.push_back(e.resolved);
     if (loaded.mesh.TriangleCount() == 0) {
