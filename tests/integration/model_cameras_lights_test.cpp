@@ -163,7 +163,7 @@ TEST(ModelCamerasLights, BadCameraChoiceIsOneErrorLine) {
         EXPECT_EQ(Lines(r.output), 1u) << r.output;
         EXPECT_FALSE(fs::exists(out));
     }
-    // A file without cameras, and a scene file, have no cameras to choose.
+    // A file without cameras, and a scene file with its own "camera", have no cameras to choose.
     const CliResult obj = lm::testing::RunLightmesh("render " + std::string(LIGHTMESH_TEST_DATA) +
                                                     "/scene_file/two_boxes.obj --camera 0 -o " + out);
     EXPECT_EQ(obj.exitCode, 1);

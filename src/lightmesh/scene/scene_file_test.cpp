@@ -776,8 +776,8 @@ TEST(SceneFile, CorruptedScenesThrowOnlyErrors) {
     EXPECT_GT(loaded, 0);
 }
 
-// Issue 56: one pattern that excludes nothing, over 1,024 references to one file, is one
-// warning with the count (it was 1,024 of them, and 3,072 with every mesh excluded).
+// One pattern that excludes nothing, over 1,024 references to one file, is one warning
+// with the count, not one per reference (nor three per reference with every mesh excluded).
 TEST(SceneFile, AWarningAboutAFilesReferencesIsSaidOnce) {
     const std::string folder = TempFolder();
     std::string meshes;
@@ -919,8 +919,8 @@ TEST(SceneFile, BareMeshErrorsNameTheFile) {
     EXPECT_EQ(LoadError(folder + "/huge.obj"),
               folder + "/huge.obj: the scene's coordinates reach 1e+38, beyond the ±1e+18 that single-precision "
                        "rendering allows (scale the model down)");
-    // Issue 45: a valid model at 1e-17 scale (its squared cross products underflow in
-    // float) loads; only a flat triangle is degenerate.
+    // A valid model at 1e-17 scale (its squared cross products underflow in float) loads;
+    // only a flat triangle is degenerate.
     WriteFile(folder, "tiny.obj", "v 0 0 0\nv 1e-17 0 0\nv 0 1e-17 0\nv 0 0 1e-17\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
     std::vector<std::string> warnings;
     const Scene tiny = LoadScene(folder + "/tiny.obj", {}, &warnings);
@@ -1082,8 +1082,8 @@ namespace lm {
 namespace scene_file_test {
 namespace {
 
-// Issue 16: a JSON object with 300,000 keys took 49 s (ordered_json looks keys up
-// linearly); now well under a second. The bound leaves room for sanitizer builds.
+// A JSON object with 300,000 keys loads in well under a second (ordered_json would look
+// keys up linearly: quadratic). The bound leaves room for sanitizer builds.
 TEST(SceneFile, ManyKeysLoadInLinearTime) {
     const std::string folder = TempFolder();
     WriteFile(folder, "box.obj",
@@ -1109,11 +1109,10 @@ TEST(SceneFile, ManyKeysLoadInLinearTime) {
     EXPECT_EQ(warnings[10], path + " /camera: ... and 299990 more unknown keys (ignored)");
 }
 
-// Issue 45: nesting under an unknown key cost time and memory quadratic in the depth (40,000
-// levels 9.6 s and 1.75 GB; 100,000 did not finish), and 300,000 objects in one array 11 s
-// (nlohmann's callback parser searches the enclosing array at each object's end). Deeper
-// than kMaxJsonDepth is refused at once, naming the file and the pointer; everything else
-// is linear.
+// Nesting under an unknown key, and many objects in one array, must stay linear in time
+// and memory (a naive reader is quadratic in the depth, and nlohmann's callback parser
+// searches the enclosing array at each object's end). Deeper than kMaxJsonDepth is refused
+// at once, naming the file and the pointer; everything else is linear.
 TEST(SceneFile, DeepOrWideJsonIsLinearOrRefused) {
     const std::string folder = TempFolder();
     WriteFile(folder, "box.obj",
@@ -1158,8 +1157,8 @@ TEST(SceneFile, DeepOrWideJsonIsLinearOrRefused) {
     EXPECT_LT(seconds, std::max(10.0, 2.0 * testing::kSanitizerSlowdown));  // about 1.5 s here (Release); 24 s under ASan on a busy machine
 }
 
-// Issue 45: values as given, not as stored: 16.000001 rounds to the float 16.000002, which
-// is out of range, and used to be shown as "got 16".
+// Values as given, not as stored: 16.000001 rounds to the float 16.000002, which is out
+// of range, and must not be shown as "got 16".
 TEST(SceneFile, NumbersInMessagesAreShownAsGiven) {
     EXPECT_EQ(json::NumberText(16.000001), "16.000001");
     EXPECT_EQ(json::NumberText(1e12), "1000000000000");
