@@ -174,6 +174,24 @@ TEST(ModelCamerasLights, BadCameraChoiceIsOneErrorLine) {
     EXPECT_NE(json.output.find("picks one of a mesh file's own cameras"), std::string::npos) << json.output;
 }
 
+TEST(ModelCamerasLights, ASceneFileWithoutCameraOrLightsRendersAsTheModel) {
+    // The scene file places the model as it is and says nothing of a camera or lights: the
+    // model's own are used, so the image is the bare file's, with --camera alike.
+    const std::string scene = Temp("inherit.json");
+    std::ofstream(scene) << "{\"meshes\": [{\"file\": \"" << kData << "lit_scene.gltf\"}]}\n";
+    for (const std::string& extra : {std::string(), std::string("--camera Top")}) {
+        SCOPED_TRACE(extra);
+        const std::string bare = Temp("inherit_bare.exr"), viaScene = Temp("inherit_scene.exr");
+        ASSERT_EQ(Render("lit_scene.gltf", bare, extra).exitCode, 0);
+        fs::remove(viaScene);
+        const CliResult r =
+            lm::testing::RunLightmesh("render " + scene + " --width 160 --height 120 -o " + viaScene + " " + extra);
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        EXPECT_NE(r.output.find("lit_scene.gltf\" (/meshes/0;"), std::string::npos) << r.output;
+        EXPECT_EQ(lm::testing::FileBytes(bare), lm::testing::FileBytes(viaScene));
+    }
+}
+
 TEST(ModelCamerasLights, OrthographicCamerasArePassedOver) {
     // The file's first camera is orthographic: the default takes its perspective "Main";
     // --camera naming the orthographic one is one error line.
