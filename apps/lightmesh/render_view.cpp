@@ -43,7 +43,7 @@ lm::CameraOverrides CameraFromCommand(const RenderCommand& cmd, CommonOptions* l
         o.up = lm::ParseUpOption(*cmd.up);
         o.upAxis = lm::AxisOfLetter(*cmd.up);
     }
-    // A bare mesh's letter --up and --fov reach its framing; what can be judged without the
+    // A bare mesh's letter --up, and --fov, reach the framing; what can be judged without the
     // scene is checked before it is read.
     lm::SceneLoadOptions framing;
     framing.upAxis = load->upAxis;

@@ -163,7 +163,7 @@ TEST(ModelCamerasLights, BadCameraChoiceIsOneErrorLine) {
         EXPECT_EQ(Lines(r.output), 1u) << r.output;
         EXPECT_FALSE(fs::exists(out));
     }
-    // A file without cameras, and a scene file, have no cameras to choose.
+    // A file without cameras, and a scene file with its own "camera", have no cameras to choose.
     const CliResult obj = lm::testing::RunLightmesh("render " + std::string(LIGHTMESH_TEST_DATA) +
                                                     "/scene_file/two_boxes.obj --camera 0 -o " + out);
     EXPECT_EQ(obj.exitCode, 1);
@@ -172,6 +172,24 @@ TEST(ModelCamerasLights, BadCameraChoiceIsOneErrorLine) {
                                                      "/scene_file/good.json --camera 0 -o " + out);
     EXPECT_EQ(json.exitCode, 1);
     EXPECT_NE(json.output.find("picks one of a mesh file's own cameras"), std::string::npos) << json.output;
+}
+
+TEST(ModelCamerasLights, ASceneFileWithoutCameraOrLightsRendersAsTheModel) {
+    // The scene file places the model as it is and says nothing of a camera or lights: the
+    // model's own are used, so the image is the bare file's, with --camera alike.
+    const std::string scene = Temp("inherit.json");
+    std::ofstream(scene) << "{\"meshes\": [{\"file\": \"" << kData << "lit_scene.gltf\"}]}\n";
+    for (const std::string& extra : {std::string(), std::string("--camera Top")}) {
+        SCOPED_TRACE(extra);
+        const std::string bare = Temp("inherit_bare.exr"), viaScene = Temp("inherit_scene.exr");
+        ASSERT_EQ(Render("lit_scene.gltf", bare, extra).exitCode, 0);
+        fs::remove(viaScene);
+        const CliResult r =
+            lm::testing::RunLightmesh("render " + scene + " --width 160 --height 120 -o " + viaScene + " " + extra);
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        EXPECT_NE(r.output.find("lit_scene.gltf\" (/meshes/0;"), std::string::npos) << r.output;
+        EXPECT_EQ(lm::testing::FileBytes(bare), lm::testing::FileBytes(viaScene));
+    }
 }
 
 TEST(ModelCamerasLights, OrthographicCamerasArePassedOver) {

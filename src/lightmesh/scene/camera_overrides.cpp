@@ -90,7 +90,8 @@ void PrepareCameraOverrides(const std::string& spec, CameraOverrides* o, SceneLo
         o->up.reset();
         o->upAxis = -1;
     }
-    if (meshFile && o->fovY) load->frameFovY = *o->fovY;
+    // Framing (a bare mesh, or a scene file without "camera") fits the model into the fov.
+    if (spec.rfind("builtin:", 0) != 0 && o->fovY) load->frameFovY = *o->fovY;
     if (o->up && !(LengthSquared(*o->up) > 0)) ThrowError("%s: must not be zero", o->names.up.c_str());
     if (o->position && o->lookAt && *o->position == *o->lookAt)
         ThrowError("%s: the camera position equals the point looked at, so the camera has no view direction",

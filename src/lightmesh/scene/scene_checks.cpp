@@ -149,14 +149,14 @@ bool InsideASolid(const TriangleMesh& mesh, const Bounds3& box, const Vec3& p, s
 /// outside with two lights or more: no surface lies between it and the room's lights.
 /// With one light, its vote is outvoted by the two exits through the room's walls, every
 /// node of the room is flagged inside, and СТ falls back to P's shadow rays.)
-void CheckLightsOutsideSolids(const Reader& r, const Scene& scene) {
+void CheckLightsOutsideSolids(const Reader& r, const Scene& scene, const std::string& lightsPath) {
     const Bounds3 box = scene.mesh.Bounds();
     std::optional<ClosedParts> parts;
     if (InsideASolid(scene.mesh, box, scene.camera.position, &parts)) return;
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         if (!box.Contains(scene.lights[i].position)) continue;
         if (InsideASolid(scene.mesh, box, scene.lights[i].position, &parts))
-            r.Fail(Index("/lights", i) + "/position",
+            r.Fail(lightsPath.empty() ? std::string() : Index(lightsPath, i) + "/position",
                    "the light " + FormatVec(scene.lights[i].position) +
                        " is inside a closed object, so it would light nothing (lights must be "
                        "outside solids: move it or the object)");

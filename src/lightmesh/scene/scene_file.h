@@ -21,15 +21,15 @@ struct SceneLoadOptions {
     /// Unknown or duplicate keys in a scene file are errors instead of warnings.
     bool strict = false;
     /// The image size the caller will render at when it overrides the scene's (e.g. from
-    /// --width/--height); 0 means the scene's own. Only used to frame bare meshes, so the
-    /// whole model is in view whatever the aspect ratio.
+    /// --width/--height); 0 means the scene's own. Only used to frame bare meshes (and scene
+    /// files without "camera"), so the whole model is in view whatever the aspect ratio.
     int frameWidth = 0, frameHeight = 0;
     /// Bare meshes only: the model's up axis (0 x, 1 y, 2 z; --up x|y|z). The model is
     /// turned so that axis points up (+y, UpAxisToY in camera_overrides.h) before it is
     /// framed, so a Z-up STL stands on the ground. Scene files place their meshes themselves.
     int upAxis = 1;
-    /// Bare meshes only: the vertical field of view the framing fits the model into
-    /// (--fov); 0: the framing's own (40 degrees).
+    /// The vertical field of view the framing of a bare mesh (or a scene file without
+    /// "camera") fits the model into (--fov); 0: the framing's own (40 degrees).
     float frameFovY = 0;
     /// For tests and fuzzing (fuzz/fuzz_entry_points.cpp): the text of a JSON scene file,
     /// parsed instead of reading `spec`, which still names it in messages and locates its
@@ -47,7 +47,9 @@ struct SceneLoadOptions {
     std::string noInstancingBy = "--no-instancing";
     /// Which of a mesh file's own cameras frames it (--camera): "" the first, digits an
     /// index from 0, else a camera's name. Files without cameras are framed automatically
-    /// (then a non-empty value is an error), and so are scene files (their "camera").
+    /// (then a non-empty value is an error). A scene file without "camera" takes it from
+    /// the first of its mesh files that has cameras (none: framed, and a non-empty value
+    /// is an error); with "camera", or for builtin:, a non-empty value is an error.
     std::string camera = "";
     /// Smooth normals, with this crease angle in degrees (0 to 180), for the meshes of mesh
     /// files that have none (--smooth-normals); negative: none, face normals (the default).

@@ -1,7 +1,7 @@
 // scene_load.h -- the scene loader's pieces shared by its files (not part of the scene
 // interface): the checks every scene passes before a ray is traced (scene_checks.cpp) and
 // the automatic framing of a bare mesh with its ground slab (framing.cpp); the JSON format
-// itself is scene_file.cpp.
+// itself is scene_file.cpp and the files of scene_file_parts.h.
 #pragma once
 
 #include <string>
@@ -32,8 +32,9 @@ std::string CameraProblem(const Camera& c, std::string* key);
 std::string SpanProblem(const Scene& scene);
 /// Fails (at JSON path `path`) when the mesh reaches beyond kMaxCoordinate.
 void CheckExtent(const json::Reader& r, const std::string& path, const Scene& scene);
-/// Fails on the first light inside a closed solid.
-void CheckLightsOutsideSolids(const json::Reader& r, const Scene& scene);
+/// Fails on the first light inside a closed solid, at `lightsPath`/N/position ("" when the
+/// lights are not the file's own: at the file).
+void CheckLightsOutsideSolids(const json::Reader& r, const Scene& scene, const std::string& lightsPath = "/lights");
 /// "no triangles", with the reason when one is known.
 std::string NoTrianglesMessage(const SceneReport& report, const TriangleMesh& mesh);
 /// Checks that hold for every scene, whatever its source.
@@ -73,6 +74,10 @@ void ReadSunKey(const json::Reader& r, const Json& j, const std::string& path, P
 void AddGround(Scene* scene, const Bounds3& box, int axis, float height, float sizeFactor, uint32_t material);
 /// The default ground material (light grey).
 Material GroundMaterial();
+/// The automatic camera: a three-quarter view of `box` from the front, with a note.
+void FrameCamera(const json::Reader& r, const Bounds3& box, float aspect, float fovY, Scene* scene);
+/// The automatic lights: a key light and a fill light above `box`, with a note.
+void AddKeyAndFillLights(const json::Reader& r, const Bounds3& box, Scene* scene);
 /// A bare mesh: frame it with a camera, a ground plane and two lights.
 Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options, std::vector<std::string>* warnings);
 
