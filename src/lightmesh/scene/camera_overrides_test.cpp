@@ -77,7 +77,11 @@ TEST(CameraOverrides, PreparedForTheSceneKind) {
     SceneLoadOptions sceneLoad;
     PrepareCameraOverrides("scene.JSON", &s, &sceneLoad);
     EXPECT_EQ(sceneLoad.upAxis, 1);
-    EXPECT_EQ(sceneLoad.frameFovY, 0.0f);
+    EXPECT_EQ(sceneLoad.frameFovY, 30.0f);  // a scene file without "camera" is framed for it
+    SceneLoadOptions builtinLoad;
+    CameraOverrides b = o;
+    PrepareCameraOverrides("builtin:gazebo", &b, &builtinLoad);
+    EXPECT_EQ(builtinLoad.frameFovY, 0.0f);
     EXPECT_EQ(s.up, Vec3(0, 0, 1));
     EXPECT_FALSE(IsMeshFileSpec("builtin:gazebo"));
     EXPECT_TRUE(IsMeshFileSpec("model.glb"));
