@@ -51,7 +51,7 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
     // The camera options, checked before the scene is read (a bare mesh's --up x|z and
     // --fov reach its framing).
     const lm::CameraOverrides camera = CameraFromCommand(cmd, &common);
-    prepared->source = {cmd.common.scene, common.upAxis, common.textures, common.instancing};
+    prepared->source = {cmd.common.scene, common.upAxis, common.textures, common.instancing, common.smoothNormals};
     if (!cmd.saveScene.empty()) lm::CheckSceneSaveable(cmd.saveScene, prepared->source, "--save-scene");
     scene = LoadWithWarnings(common, cmd.width.value_or(0), cmd.height.value_or(0));
     prepared->loadSeconds = SecondsSince(t0);

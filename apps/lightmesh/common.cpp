@@ -38,7 +38,8 @@ void AddCommonOptions(CLI::App* cmd, CommonOptions* o) {
                     "the first; a file without cameras is framed automatically)");
     cmd->add_option("--smooth-normals", o->smoothNormals,
                     "Give the meshes of mesh files that have no normals smooth ones, keeping edges sharper than DEG "
-                    "degrees as creases (0 to 180; default: none, flat faces)")
+                    "degrees as creases (0 to 180; 0: flat faces; default: 60 for a bare mesh file, a scene file's "
+                    "\"smooth_normals\" per mesh, else flat)")
         ->check(CLI::Validator(
             [](std::string& text) -> std::string {
                 char* end = nullptr;

@@ -66,7 +66,7 @@ def test_camera_refusals(lightmesh):
         lightmesh.render(TWO_CAMERAS, camera=-1, **SIZE)
     with pytest.raises(lightmesh.Error, match=r"camera=: expected a camera's name \(str\) or its index"):
         lightmesh.render(TWO_CAMERAS, camera=True, **SIZE)
-    with pytest.raises(lightmesh.Error, match=r"camera=1:.*a scene file or builtin scene has its camera"):
+    with pytest.raises(lightmesh.Error, match=r"camera=1:.*a builtin scene has its own camera"):
         lightmesh.render("builtin:gazebo", camera=1, **SIZE)
     scene = lightmesh.load(TWO_CAMERAS, **SIZE)
     with pytest.raises(lightmesh.Error, match=r"are load options: give them to lightmesh.load\(\)"):
@@ -74,9 +74,11 @@ def test_camera_refusals(lightmesh):
 
 
 def test_smooth_normals(lightmesh, cli, tmp_path, flat_sphere):
-    flat = lightmesh.render(flat_sphere, **SIZE)
+    flat = lightmesh.render(flat_sphere, smooth_normals=0, **SIZE)
     smooth = lightmesh.render(flat_sphere, smooth_normals=60, **SIZE)
     assert smooth.tobytes() != flat.tobytes()
+    # A bare mesh file without normals is smoothed at 60 degrees unless told otherwise.
+    assert lightmesh.render(flat_sphere, **SIZE).tobytes() == smooth.tobytes()
     cli_smooth = cli_image(lightmesh, cli, tmp_path, flat_sphere, "--smooth-normals", "60")
     assert smooth.tobytes() == cli_smooth.tobytes()
     assert lightmesh.load(flat_sphere, smooth_normals=60.0, **SIZE).render().tobytes() == smooth.tobytes()

@@ -3,8 +3,10 @@
 // scene file; what cannot be saved is refused before the render.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <string>
 
 #include "run_lightmesh.h"
 
@@ -42,6 +44,37 @@ TEST(CliSaveScene, BareMeshRendersTheSameBytes) {
     // Turned by --up z, seen from a camera option, with an exposure: all in the file.
     ExpectRoundTrip("obj-up", Data("scene_file/two_boxes.obj"),
                     "--width 80 --height 60 --up z --camera-position 3,4,9 --exposure -1.5 --shadows rt");
+}
+
+// Smooth normals: a bare mesh's default and --smooth-normals become each mesh entry's
+// "smooth_normals", so a low-poly sphere without normals renders smooth from the file too.
+TEST(CliSaveScene, SmoothNormalsAreSaved) {
+    std::string obj;
+    const int rings = 6, segments = 10;
+    for (int i = 0; i <= rings; ++i)
+        for (int j = 0; j < segments; ++j) {
+            const double th = 3.14159265358979 * i / rings, ph = 2 * 3.14159265358979 * j / segments;
+            obj += "v " + std::to_string(std::sin(th) * std::cos(ph)) + " " + std::to_string(1 + std::cos(th)) + " " +
+                   std::to_string(std::sin(th) * std::sin(ph)) + "\n";
+        }
+    auto at = [&](int i, int j) { return std::to_string(i * segments + j % segments + 1); };
+    for (int i = 0; i < rings; ++i)
+        for (int j = 0; j < segments; ++j) {
+            if (i > 0) obj += "f " + at(i, j) + " " + at(i + 1, j) + " " + at(i, j + 1) + "\n";
+            if (i + 1 < rings) obj += "f " + at(i, j + 1) + " " + at(i + 1, j) + " " + at(i + 1, j + 1) + "\n";
+        }
+    const std::string sphere = Temp("sphere.obj");
+    std::ofstream(sphere) << obj;
+    ExpectRoundTrip("smooth-default", sphere, "--width 64 --height 48");
+    EXPECT_NE(lm::testing::FileBytes(Temp("smooth-default.json")).find("\"smooth_normals\": 60.0"), std::string::npos);
+    ExpectRoundTrip("smooth-20", sphere, "--width 64 --height 48 --smooth-normals 20");
+    EXPECT_NE(lm::testing::FileBytes(Temp("smooth-20.json")).find("\"smooth_normals\": 20.0"), std::string::npos);
+    ExpectRoundTrip("flat", sphere, "--width 64 --height 48 --smooth-normals 0");
+    EXPECT_EQ(lm::testing::FileBytes(Temp("flat.json")).find("smooth_normals"), std::string::npos);
+    EXPECT_NE(lm::testing::FileBytes(Temp("smooth-default-a.exr")), lm::testing::FileBytes(Temp("flat-a.exr")));
+    // A scene file's meshes take --smooth-normals over their own key.
+    ExpectRoundTrip("scene-smooth", Temp("smooth-default.json"), "--smooth-normals 35");
+    EXPECT_NE(lm::testing::FileBytes(Temp("scene-smooth.json")).find("\"smooth_normals\": 35.0"), std::string::npos);
 }
 
 TEST(CliSaveScene, GltfRendersTheSameBytes) {

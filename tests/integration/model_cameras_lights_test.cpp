@@ -309,9 +309,10 @@ TEST(ModelCamerasLights, SmoothNormalsSmoothALowPolySphere) {
                 step = std::max(step, std::abs(Luminance(img.At(x + 1, y)) - Luminance(img.At(x, y))));
         return step;
     };
-    const float flat = largestStep(""), smooth = largestStep("--smooth-normals 60");
+    const float flat = largestStep("--smooth-normals 0"), smooth = largestStep("--smooth-normals 60");
     EXPECT_GT(flat, 0.04f);
     EXPECT_LT(smooth, 0.5f * flat) << smooth << " " << flat;
+    EXPECT_EQ(largestStep(""), smooth);  // a bare mesh file's default
     // Its smooth normals do not cross a crease sharper than the angle: at 10° the 30° facet
     // edges stay.
     EXPECT_GT(largestStep("--smooth-normals 10"), 0.8f * flat);

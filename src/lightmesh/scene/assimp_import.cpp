@@ -344,7 +344,7 @@ class SceneWalker {
             mesh.materialIds.push_back(material);
         }
 
-        if (mesh.normals.empty() && options_.smoothAngle >= 0) SmoothNormals(&mesh, options_.smoothAngle);
+        if (mesh.normals.empty() && options_.smoothAngle > 0) SmoothNormals(&mesh, options_.smoothAngle);
         const Affine affine = ToAffine(transform);
         if (!(std::abs(affine.Determinant()) > 0))
             throw MeshFileError(

@@ -223,7 +223,7 @@ Scene LoadBareMesh(const std::string& spec, const SceneLoadOptions& options,
                    std::vector<std::string>* warnings) {
     const Reader r(spec, SceneLoadOptions{}.strict, warnings);
     MeshLoadOptions load;
-    load.smoothAngle = options.smoothNormals;
+    load.smoothAngle = options.smoothNormals >= 0 ? options.smoothNormals : kBareMeshSmoothNormals;
     LoadedMesh loaded = LoadMeshFile(spec, load);  // its errors already name the file
     for (const std::string& w : loaded.warnings) r.Warn(w);
 

@@ -38,7 +38,7 @@ struct MeshLoadOptions {
     /// and mesh names.
     std::vector<std::string> excludeNames;
     /// Smooth normals for the meshes that have none (SmoothNormals, crease angle in degrees,
-    /// 0 to 180); negative: none (shading uses face normals there).
+    /// up to 180); 0 or negative: none (shading uses face normals there).
     float smoothAngle = -1.0f;
 };
 

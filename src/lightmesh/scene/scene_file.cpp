@@ -291,7 +291,7 @@ Scene LoadScene(const std::string& spec, const SceneLoadOptions& options,
         // A scene file's own "camera" and --camera: LoadJsonScene.
         if (!options.camera.empty() && spec.rfind("builtin:", 0) == 0)
             throw Error(spec + ": --camera " + options.camera +
-                        ": picks one of a mesh file's own cameras; a scene file or builtin scene has its camera");
+                        ": picks one of a mesh file's own cameras; a builtin scene has its own camera");
         if (spec.rfind("builtin:", 0) == 0)
             scene = LoadBuiltin(spec, warnings);
         else if (Lower(fs::path(spec).extension().string()) == ".json")

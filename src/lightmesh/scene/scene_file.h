@@ -17,6 +17,11 @@ namespace lm {
 constexpr size_t kInstanceMinTriangles = 64;
 constexpr size_t kInstanceMinTotal = 65536;
 
+/// The crease angle a bare mesh file without normals is smoothed with unless told otherwise
+/// (--smooth-normals): curved surfaces shade smooth, and edges sharper than 60° (a box's)
+/// stay creases.
+inline constexpr float kBareMeshSmoothNormals = 60.0f;
+
 struct SceneLoadOptions {
     /// Unknown or duplicate keys in a scene file are errors instead of warnings.
     bool strict = false;
@@ -51,8 +56,10 @@ struct SceneLoadOptions {
     /// the first of its mesh files that has cameras (none: framed, and a non-empty value
     /// is an error); with "camera", or for builtin:, a non-empty value is an error.
     std::string camera = "";
-    /// Smooth normals, with this crease angle in degrees (0 to 180), for the meshes of mesh
-    /// files that have none (--smooth-normals); negative: none, face normals (the default).
+    /// Smooth normals, with this crease angle in degrees (0 to 180; 0: none, face normals),
+    /// for the meshes of mesh files that have none (--smooth-normals), over a scene file's
+    /// "smooth_normals" keys. Negative (not given): kBareMeshSmoothNormals for a bare mesh
+    /// file, each entry's key (default none) in a scene file.
     float smoothNormals = -1.0f;
     /// For tests and fuzzing: loads the mesh files of a JSON scene instead of LoadMeshFile.
     std::function<LoadedMesh(const std::string& path, const MeshLoadOptions&)> loadMesh = nullptr;

@@ -619,6 +619,12 @@ TEST(SceneFile, BadInputsGiveExactMessages) {
         {.name = "exclude_number",
          .expected = "scene.json /meshes/0/exclude_names/1: expected a string, got the number 5",
          .meshes = R"([{"file": "$DATA/two_boxes.obj", "exclude_names": ["a", 5]}])"},
+        {.name = "smooth_normals_range",
+         .expected = "scene.json /meshes/0/smooth_normals: must be 0 to 180 degrees, got 181",
+         .meshes = R"([{"file": "$DATA/two_boxes.obj", "smooth_normals": 181}])"},
+        {.name = "smooth_normals_string",
+         .expected = "scene.json /meshes/0/smooth_normals: expected a number, got a string (\"60\")",
+         .meshes = R"([{"file": "$DATA/two_boxes.obj", "smooth_normals": "60"}])"},
         // ground
         {.name = "ground_up",
          .expected = "scene.json /ground/up: must be one of \"x\", \"y\", \"z\"; got \"w\"",

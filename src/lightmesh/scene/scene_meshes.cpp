@@ -31,6 +31,7 @@ std::string MeshAssembler::ImportKey(const MeshEntry& e) {
     std::string key = e.resolved;
     for (const std::string& p : e.load.excludeMaterials) key += std::string(1, '\0') + "m" + p;
     for (const std::string& p : e.load.excludeNames) key += std::string(1, '\0') + "n" + p;
+    if (e.load.smoothAngle > 0) key += std::string(1, '\0') + "s" + std::to_string(e.load.smoothAngle);
     return key;
 }
 

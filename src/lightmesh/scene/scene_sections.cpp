@@ -329,6 +329,12 @@ MeshEntry ReadMeshEntry(const Reader& r, const Json& j, const std::string& path,
         e.excludeNamesIsList = v->is_array();
     }
     if (const Json* v = o.Find("name")) String(r, *v, o.Child("name"));
+    if (const Json* v = o.Find("smooth_normals")) {
+        const double degrees = Number(r, *v, o.Child("smooth_normals"));
+        if (!(degrees >= 0 && degrees <= 180))
+            r.Fail(o.Child("smooth_normals"), StringPrintf("must be 0 to 180 degrees, got %g", degrees));
+        if (options.smoothNormals < 0) e.load.smoothAngle = static_cast<float>(degrees);  // the CLI's wins
+    }
     o.Finish();
     return e;
 }

@@ -132,6 +132,8 @@ OJson BareMeshScene(const Scene& scene, const SceneSource& source, const fs::pat
     OJson mesh;
     mesh["file"] = Rebased(source.spec, fs::current_path(), to);
     if (source.upAxis != 1) mesh["matrix"] = AffineJson(UpAxisToY(source.upAxis));
+    const float smooth = source.smoothNormals >= 0 ? source.smoothNormals : kBareMeshSmoothNormals;
+    if (smooth > 0) mesh["smooth_normals"] = Num(smooth);
     root["meshes"] = OJson::array({mesh});
     if (scene.ground) {
         OJson g;
@@ -149,8 +151,10 @@ OJson SceneFileKeys(const SceneSource& source, const fs::path& to) {
     const fs::path from = fs::path(source.spec).parent_path();
     if (root.contains("meshes") && root["meshes"].is_array())
         for (OJson& m : root["meshes"])
-            if (m.is_object() && m.contains("file") && m["file"].is_string())
+            if (m.is_object() && m.contains("file") && m["file"].is_string()) {
                 m["file"] = Rebased(m["file"].get<std::string>(), from.empty() ? fs::path(".") : from, to);
+                if (source.smoothNormals >= 0) m["smooth_normals"] = Num(source.smoothNormals);  // --smooth-normals won
+            }
     return root;
 }
 

@@ -16,6 +16,9 @@ struct SceneSource {
     int upAxis = 1;           ///< a bare mesh's up axis (SceneLoadOptions::upAxis): written as its "matrix"
     bool textures = true;     ///< false: --no-textures (written as "render": {"textures": false})
     bool instancing = true;   ///< false: --no-instancing
+    /// --smooth-normals (SceneLoadOptions::smoothNormals; negative: not given): written as
+    /// each mesh entry's "smooth_normals" (a bare mesh's: kBareMeshSmoothNormals when not given).
+    float smoothNormals = -1.0f;
 };
 
 /// Throws Error naming `flag` when `source` cannot be written as a scene file (a builtin
