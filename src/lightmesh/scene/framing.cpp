@@ -56,16 +56,8 @@ bool UseFileCamera(const Reader& r, const LoadedMesh& loaded, const SceneLoadOpt
     }
     if (index < 0) r.Fail("", "--camera " + options.camera + ": " + problem);
     const FileCamera& fc = loaded.cameras[static_cast<size_t>(index)];
-    const std::string which =
-        fc.name.empty() ? StringPrintf("camera %d", index) : StringPrintf("camera %d \"%s\"", index, fc.name.c_str());
-    problem = CameraFromFile(fc, aspect, &scene->camera);
-    if (problem.empty()) {
-        std::string key;
-        problem = CameraProblem(scene->camera, &key);
-    }
-    if (problem.empty()) {
-        if (std::string p = CoordinateProblem(scene->camera.position, "the camera position"); !p.empty()) problem = p;
-    }
+    std::string which;
+    problem = TakeFileCamera(fc, index, aspect, &scene->camera, &which);
     if (!problem.empty()) r.Fail("", "the file's " + which + " cannot be used: " + problem);
     const Camera& cam = scene->camera;
     scene->report.notes.push_back(StringPrintf(
@@ -118,6 +110,17 @@ bool UseFileLights(const Reader& r, const LoadedMesh& loaded, const Bounds3& box
 }
 
 }  // namespace
+
+std::string TakeFileCamera(const FileCamera& fc, int index, float aspect, Camera* camera, std::string* which) {
+    *which = fc.name.empty() ? StringPrintf("camera %d", index) : StringPrintf("camera %d \"%s\"", index, fc.name.c_str());
+    std::string problem = CameraFromFile(fc, aspect, camera);
+    if (problem.empty()) {
+        std::string key;
+        problem = CameraProblem(*camera, &key);
+    }
+    if (problem.empty()) problem = CoordinateProblem(camera->position, "the camera position");
+    return problem;
+}
 
 void AddGround(Scene* scene, const Bounds3& box, int axis, float height, float sizeFactor,
                uint32_t material) {

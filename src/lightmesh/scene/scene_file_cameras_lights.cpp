@@ -78,16 +78,8 @@ bool UseMeshFileCamera(const Reader& r, const std::vector<EntryCamerasLights>& k
     }
     if (index < 0) r.Fail(e.path, "--camera " + options.camera + ": " + NameTheFile(problem, e.file));
     const FileCamera fc = Moved(e, cameras[static_cast<size_t>(index)]);
-    const std::string which =
-        fc.name.empty() ? StringPrintf("camera %d", index) : StringPrintf("camera %d \"%s\"", index, fc.name.c_str());
-    problem = CameraFromFile(fc, aspect, &scene->camera);
-    if (problem.empty()) {
-        std::string key;
-        problem = CameraProblem(scene->camera, &key);
-    }
-    if (problem.empty()) {
-        if (std::string p = CoordinateProblem(scene->camera.position, "the camera position"); !p.empty()) problem = p;
-    }
+    std::string which;
+    problem = TakeFileCamera(fc, index, aspect, &scene->camera, &which);
     if (!problem.empty()) r.Fail(e.path, Quoted(e.file) + "'s " + which + " cannot be used: " + problem);
     const Camera& cam = scene->camera;
     scene->report.notes.push_back(StringPrintf(

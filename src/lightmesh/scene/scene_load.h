@@ -76,6 +76,10 @@ void AddGround(Scene* scene, const Bounds3& box, int axis, float height, float s
 Material GroundMaterial();
 /// The automatic camera: a three-quarter view of `box` from the front, with a note.
 void FrameCamera(const json::Reader& r, const Bounds3& box, float aspect, float fovY, Scene* scene);
+/// A file's camera `fc` (number `index` in its file) as *camera for an image of `aspect`:
+/// the problem that keeps it from being used ("" when none). *which names it for messages
+/// and notes ("camera 1 \"Top\"").
+std::string TakeFileCamera(const FileCamera& fc, int index, float aspect, Camera* camera, std::string* which);
 /// The automatic lights: a key light and a fill light above `box`, with a note.
 void AddKeyAndFillLights(const json::Reader& r, const Bounds3& box, Scene* scene);
 /// A bare mesh: frame it with a camera, a ground plane and two lights.
