@@ -24,7 +24,7 @@ int FuzzTemplateFile(const uint8_t* data, size_t size);
 
 /// The first byte picks a mesh format (OBJ, PLY, OFF, glTF, GLB, COLLADA, AC3D, STL, NFF,
 /// 3DS, by its value modulo 10); the rest is written to a file of that extension and
-/// imported with ImportMeshInProcess under a small budget (issue 16: Assimp's importers get
+/// imported with ImportMeshInProcess under a small budget (Assimp's importers get
 /// a target of their own). The import must end in lm::MeshFileError or give a mesh whose
 /// every index is in range and every coordinate finite. `isolated` imports through
 /// LoadMeshFile's child process instead (the FuzzRegression replay: inputs that crash

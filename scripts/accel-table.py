@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The README's ray-query table (issue 12) from bench_accel's output.
+"""The README's ray-query table from bench_accel's output.
 
 Usage: scripts/bench-accel.sh | tee docs/bench/bench-accel.txt
        python3 scripts/accel-table.py docs/bench/bench-accel.txt

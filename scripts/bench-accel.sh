@@ -1,5 +1,5 @@
 #!/bin/sh
-# bench-accel.sh -- bench_accel on every scene of issue 12: the builtin gazebo, the teapot in
+# bench-accel.sh -- bench_accel on each of its scenes: the builtin gazebo, the teapot in
 # a stadium, the two Scopia trees (scripts/fetch-bench-mesh.sh) and the castle and garden
 # scene files (scripts/fetch-scenes.sh); scenes whose files are not fetched are left out with
 # a note. REPEAT (default 5) repetitions, medians, the repetitions of all rows interleaved

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The light mesh's cost against hard shadows (issue 11), as the README's tables show it:
+# The light mesh's cost against hard shadows, as the README's tables show it:
 #   1. 1024x768, CC 100 and 200, kI 1.2, 2, 3: no shadows, RT, Нет and the default
 #      (consensus), every method on the same back-end: Embree (the fastest), then the
 #      nested grid;

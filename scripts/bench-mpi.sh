@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# bench-mpi.sh -- issue 14's benchmark: one frame over MPI ranks on this machine.
+# bench-mpi.sh -- the MPI benchmark: one frame over MPI ranks on this machine.
 #   [RUNS=5] scripts/bench-mpi.sh [SCENE] [render options]
 # Default: the MORSE garden (scripts/fetch-scenes.sh) at 1024x768, the default light mesh
 # at kI 2. Runs 1 rank x 1 thread, 2 ranks x 1 thread and 1 rank x 2 threads, interleaved,

@@ -18,7 +18,7 @@ int RunCompare(const CompareCommand& cmd) {
         lm::ThrowError("--diff-scale: must be a finite number >= 0, got %g", double(cmd.diffScale));
     if (cmd.diffScaleGiven && cmd.diff.empty()) lm::LogWarning("--diff-scale is used only with --diff; ignored");
     // What the comparison will take, from the images' heads, before anything is decoded
-    // (issue 56: two 16384² PNGs reached the OOM killer at 24 GB).
+    // (decoding two 16384² PNGs first reaches the OOM killer at 24 GB).
     const lm::ImageSize sa = lm::ReadImageSize(cmd.a), sb = lm::ReadImageSize(cmd.b);
     if (sa.width != sb.width || sa.height != sb.height)
         lm::ThrowError("%s is %dx%d and %s is %dx%d: images of different sizes cannot be compared",

@@ -40,7 +40,7 @@ TEST(Cli, HelpForEveryCommand) {
     EXPECT_NE(Lightmesh("render --help").output.find("--shadows"), std::string::npos);
 }
 
-// Issue 47: the help shows the defaults; `lightmesh help [COMMAND]` is the help.
+// The help shows the defaults; `lightmesh help [COMMAND]` is the help.
 TEST(Cli, HelpShowsTheDefaults) {
     const std::string render = Lightmesh("render --help").output;
     for (const char* text : {"default soft", "default 640", "default 480", "(default 1)", "default 5",
@@ -60,7 +60,7 @@ TEST(Cli, HelpShowsTheDefaults) {
     EXPECT_NE(renderHelp.output.find("--shadows"), std::string::npos) << renderHelp.output;
 }
 
-// -q prints errors only (issue 47); --stats still prints the summary line and the figures.
+// -q prints errors only; --stats still prints the summary line and the figures.
 TEST(Cli, QuietPrintsErrorsOnly) {
     const std::string out = Temp("quiet.png");
     const CliRun quiet = Lightmesh("render builtin:gazebo --width 16 --height 12 -q -o " + out);
@@ -72,7 +72,7 @@ TEST(Cli, QuietPrintsErrorsOnly) {
     EXPECT_NE(stats.output.find("peak"), std::string::npos) << stats.output;
 }
 
-// The summary line: thousands separators, and a singular for one (issue 47).
+// The summary line: thousands separators, and a singular for one.
 TEST(Cli, SummaryLineCountsReadWell) {
     const CliRun r = Lightmesh("render builtin:gazebo --width 16 --height 12 -o " + Temp("counts.png"));
     ASSERT_EQ(r.exitCode, 0) << r.output;
@@ -85,7 +85,7 @@ TEST(Cli, SummaryLineCountsReadWell) {
     EXPECT_NE(one.output.find(", 1 triangle, 1 light: render "), std::string::npos) << one.output;
 }
 
-// Options that do nothing without another one say so (issue 47).
+// Options that do nothing without another one say so.
 TEST(Cli, OptionsIgnoredWithoutTheirPartnerWarn) {
     const CliRun info = Lightmesh("info builtin:gazebo --accel brute --grid 20");
     EXPECT_EQ(info.exitCode, 0) << info.output;
@@ -103,7 +103,7 @@ TEST(Cli, OptionsIgnoredWithoutTheirPartnerWarn) {
         << compare.output;
 }
 
-// templates takes render's --ns range: 0 is the default, 8 (issue 47).
+// templates takes render's --ns range: 0 is the default, 8.
 TEST(Cli, TemplatesTakesNsZeroAsTheDefault) {
     const CliRun r = Lightmesh("templates --ns 0 --ki 1.5 --template-dir " + Temp("templates"));
     EXPECT_EQ(r.exitCode, 0) << r.output;
@@ -265,7 +265,7 @@ TEST(Cli, BadInputIsAClearErrorAndWritesNothing) {
     EXPECT_FALSE(fs::exists(Temp("x.jpg")));
 }
 
-// Ctrl-C during a render: one line says so and what became of the output (issue 47).
+// Ctrl-C during a render: one line says so and what became of the output.
 TEST(Cli, InterruptedRenderSaysSo) {
     const std::string out = Temp("interrupted.png");
     ASSERT_EQ(Lightmesh("render builtin:gazebo --width 32 --height 24 -q -o " + out).exitCode, 0);

@@ -1,4 +1,4 @@
-// Robustness of outputs, caches and threads (issue 8), through the real executable:
+// Robustness of outputs, caches and threads, through the real executable:
 // concurrent runs sharing a template cache, byte-identical images whatever the thread
 // count, atomic outputs under SIGINT/SIGTERM, and --stats' peak memory.
 #include <gtest/gtest.h>
@@ -120,9 +120,9 @@ TEST(Robustness, EveryShadowMethodIsByteIdenticalForAnyThreadCountAndRun) {
     }
 }
 
-// Issue 16: a bare model with its own floor at its base (a playground's lawn) gets no
+// A bare model with its own floor at its base (a playground's lawn) gets no
 // coplanar ground slab, so Embree and brute force agree on every pixel (with the slab they
-// differed at 35 dB PSNR). Hard shadows: the soft default turns its sample pattern by a
+// would differ at 35 dB PSNR). Hard shadows: the soft default turns its sample pattern by a
 // hash of the hit point's bits, which Embree's own triangle test can round differently in
 // the last place, so its penumbrae agree across back-ends within sampling noise only.
 TEST(Robustness, ModelWithItsOwnFloorRendersTheSameOnEveryBackEnd) {
@@ -284,7 +284,7 @@ TEST(Robustness, MemoryLimitComesFromTheEnvironment) {
     EXPECT_EQ(lm::ParseByteCount("64M"), 64u << 20);
     EXPECT_EQ(lm::ParseByteCount("1.5G"), 3ull << 29);
     EXPECT_EQ(lm::ParseByteCount("2T"), 2ull << 40);
-    // Issue 56: the spellings people write, all powers of 1024.
+    // The spellings people write, all powers of 1024.
     for (const char* eight : {"8G", "8g", "8GB", "8gb", "8GiB", "8gib", "8 GB", " 8G ", "8589934592", "8589934592B",
                               "8192M", "8192MiB", "0.0078125T", "8.0G"})
         EXPECT_EQ(lm::ParseByteCount(eight), 8ull << 30) << eight;
@@ -317,7 +317,7 @@ TEST(Robustness, MemoryLimitComesFromTheEnvironment) {
 }
 
 // ---------------------------------------------------------------------------------------
-// Issue 45: outputs that are devices or FIFOs are written into, never renamed over
+// Outputs that are devices or FIFOs are written into, never renamed over
 
 bool IsCharDevice(const std::string& path) {
     struct stat st {};
@@ -372,7 +372,7 @@ TEST(Robustness, DeviceAndFifoOutputsAreWrittenIntoNotReplaced) {
     for (const std::string& name : FilesIn(dir)) EXPECT_EQ(name.find(".tmp"), std::string::npos) << name;
 }
 
-// Issue 45: a render of hours (16384 x 16384 at aa 16 went on without a word) says how long
+// A render of hours (such as 16384 x 16384 at aa 16) says how long
 // once its first tiles are measured, also when stderr is not a terminal; SIGINT then
 // leaves no output.
 TEST(Robustness, LongRenderSaysHowLongItWillTake) {
@@ -394,7 +394,7 @@ TEST(Robustness, LongRenderSaysHowLongItWillTake) {
     EXPECT_EQ(quick.output.find("Rendering: about"), std::string::npos) << quick.output;
 }
 
-// Issue 56: a render estimated past an hour is refused, from its first tiles, the output as
+// A render estimated past an hour is refused, from its first tiles, the output as
 // it was; --force renders it (announced, stopped here by SIGINT).
 TEST(Robustness, ARenderPastAnHourIsRefusedUnlessForced) {
     const Scratch scratch("lm_robust");
@@ -422,10 +422,10 @@ TEST(Robustness, ARenderPastAnHourIsRefusedUnlessForced) {
     EXPECT_EQ(Bytes(out), "a previous image");
 }
 
-// Issue 56: the estimate comes from tiles spread over the image, made as soon as they are
-// done, the set-up apart. A frame whose upper two thirds are sky and whose floor is costly
-// (area shadows) is estimated within 3x of its time, early on; the first tiles (sky) alone
-// said a fraction of it, and it was said only after 2 s (or at the end).
+// The estimate comes from tiles spread over the image, made as soon as they are done, the
+// set-up apart. A frame whose upper two thirds are sky and whose floor is costly (area
+// shadows) is estimated within 3x of its time, early on; the first tiles (sky) alone would
+// give a fraction of it.
 TEST(Robustness, ASkyFirstFrameIsEstimatedFromTilesSpreadOverIt) {
     lm::Scene s = lm::testing::FloorScene(10);
     lm::testing::AddBox(&s, {-1, 0, -1}, {1, 1.5f, 1});

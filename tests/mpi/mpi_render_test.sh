@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# mpi_render_test.sh -- `mpirun -np N lightmesh render` against one process (issue 14).
+# mpi_render_test.sh -- `mpirun -np N lightmesh render` against one process.
 #   mpi_render_test.sh CASE LIGHTMESH MPIEXEC SOURCE_DIR
 # CASE: identical | failure | killed | bad-scene | schedule | templates | other-commands | many-lights
 # Run by ctest (tests/CMakeLists.txt), which sets OMPI_ALLOW_RUN_AS_ROOT{,_CONFIRM}=1: CI

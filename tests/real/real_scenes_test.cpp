@@ -1,4 +1,4 @@
-// The real scenes' checks (issue 6): the scene files of scenes/real/ with the models
+// The real scenes' checks: the scene files of scenes/real/ with the models
 // scripts/fetch-scenes.sh takes from Debian packages. Not part of the unit tests, which need
 // no downloads: this binary carries the ctest label "real" and runs by
 // scripts/test-real-scenes.sh (which fetches the models first). A model that was never
@@ -217,7 +217,7 @@ TEST_P(RealSceneTest, ReducedTestLosesLittleAgainstTemplates) {
     const Scene& s = scene();
     const ImageMetrics m = CompareImages(Render(s, "lmm", "reduced"), Render(s, "lmm", "templates"));
     std::printf("  %s: PSNR(У, Ш) %.1f dB\n", GetParam().file.c_str(), m.psnr);
-    EXPECT_GE(m.psnr, 40.0);  // issue 5: the reduced test's loss, measured by PSNR
+    EXPECT_GE(m.psnr, 40.0);  // the reduced test's loss, measured by PSNR
 }
 
 TEST_P(RealSceneTest, CliImagesDoNotDependOnTheThreadCount) {

@@ -189,7 +189,7 @@ inline TriangleMesh TessellatedBox(int k, float h = 1.0f) {
 }
 
 /// Scales and moves a mesh (for the huge/small scene-scale tests).
-/// "A teapot in a stadium" (issue 12): a detailed closed model (a UV sphere of rings ×
+/// "A teapot in a stadium": a detailed closed model (a UV sphere of rings ×
 /// segments around (0, 1, 0), radius 1) standing on a thin ground slab `width` times its
 /// width, the case where a uniform grid's cells are either empty or crowded.
 inline TriangleMesh TeapotInStadium(int rings, int segments, float width = 4.0f) {

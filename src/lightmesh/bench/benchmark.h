@@ -236,8 +236,8 @@ struct BenchReport {
 /// Runs the matrix; `progress` is called after each cell with (done, total, result).
 /// `estimate` (if given) is called once before the matrix runs with an estimate of the
 /// total seconds, and a matrix estimated above `maxSeconds` (> 0) is refused with an Error
-/// (issue 45: a 10^10-cell matrix ran on, and CC was left out: a subset estimated at 1 s
-/// took 15 s). Measured per scene at the first size, on sampled tiles
+/// (so a 10^10-cell matrix does not run on; the estimate counts CC, without which a subset
+/// estimated at 1 s takes 15 s). Measured per scene at the first size, on sampled tiles
 /// (WhittedRenderer::EstimateSeconds): an RT render, and LMM renders with the first variant
 /// at the smallest and the largest CC (largest kI) and at the largest CC with the smallest
 /// kI, their shadow set-up (which grows with CC³) timed; every cell is extrapolated from

@@ -84,7 +84,7 @@ TEST(LoadBenchMatrix, ErrorsNameTheJsonPath) {
     EXPECT_THROW(LoadBenchMatrix("/nonexistent/m.json"), Error);
 }
 
-// Issue 45: the matrix file names its values' places for later messages, and the keys it
+// The matrix file names its values' places for later messages, and the keys it
 // checks itself (an unknown back-end, an empty variant).
 TEST(LoadBenchMatrix, OriginsAndChecksOfIssue45) {
     const fs::path p = WriteTemp("origins.json", R"({"cc": [50, 100], "ki": [1.5, 3]})");
@@ -100,7 +100,7 @@ TEST(LoadBenchMatrix, OriginsAndChecksOfIssue45) {
               std::string::npos);
 }
 
-// Issue 45: the estimate comes before any cell, counts CC (at 256 x 192 an LMM render at CC
+// The estimate comes before any cell, counts CC (at 256 x 192 an LMM render at CC
 // 1200 takes about 9 times one at CC 20: each pixel needs nodes of its own), and a matrix
 // above maxSeconds is refused, also without an estimate callback (-q); a CC too large for
 // memory names where it was given.

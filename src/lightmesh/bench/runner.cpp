@@ -179,7 +179,7 @@ namespace {
 /// Tiles a probe renders (WhittedRenderer::EstimateSeconds): enough for every thread to
 /// have several, few enough to take a fraction of a second.
 /// At most this long a probe renders tiles (the RT probe and up to three LMM probes: the
-/// estimate within the rule's 2 s however slow a tile, issue 56).
+/// estimate within the rule's 2 s however slow a tile).
 constexpr double kProbeSeconds = 0.4;
 
 int ProbeTiles() {
@@ -195,7 +195,7 @@ void NameOrigins(const BenchMatrix& m, int cc, float ki, RenderOptions* options)
     if (static_cast<size_t>(ki_) < m.kiOrigins.size()) options->origins["ki"] = m.kiOrigins[static_cast<size_t>(ki_)];
 }
 
-/// The bench's estimate of one scene's LMM cells (issue 45), measured on sampled tiles at
+/// The bench's estimate of one scene's LMM cells, measured on sampled tiles at
 /// the first size with the first variant: set-up and render seconds at the smallest and
 /// the largest CC (at the largest kI), and at the largest CC with the smallest kI.
 class LmmCost {

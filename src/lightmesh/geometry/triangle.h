@@ -145,8 +145,8 @@ inline Vec3 TriangleNormal(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
 /// its largest edge component, so the scaling is exact and a collinear triangle stays
 /// exactly flat), so it neither underflows nor overflows whatever the scale: zero only for
 /// a flat triangle (collinear or repeated vertices). Degeneracy is decided on it
-/// (CleanMesh; issue 45: a box at 1e-17 scale, whose squared cross product underflows in
-/// float, was "zero area").
+/// (CleanMesh; a box at 1e-17 scale, whose squared cross product underflows in float, is
+/// not "zero area").
 inline Vec3 ScaledTriangleNormal(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
     const Vec3 e1 = p1 - p0, e2 = p2 - p0;
     const float s = std::max(MaxComponent(Abs(e1)), MaxComponent(Abs(e2)));

@@ -116,10 +116,10 @@ TEST(Triangle, BadCases) {
     EXPECT_FALSE(IntersectTriangle(Ray{Vec3(-1, 0, 0), Vec3(1, 0, 0), 0, Infinity}, A, B, C, &h));
 }
 
-// Issue 45: normals at the triangle's own scale. At 1e-17 the plain cross product's square
-// underflows (the loader called such a model "zero area"); the scaled one does not, and
-// stays exactly zero for a flat triangle; the unit normal is Normalize(TriangleNormal) bit
-// for bit at everyday scales.
+// Normals at the triangle's own scale. At 1e-17 the plain cross product's square underflows
+// (judged by it, such a model would be "zero area"); the scaled one does not, and stays
+// exactly zero for a flat triangle; the unit normal is Normalize(TriangleNormal) bit for bit
+// at everyday scales.
 TEST(Triangle, NormalsAtTheTrianglesOwnScale) {
     for (const float scale : {1e-17f, 1e-30f, 1.0f, 1e15f}) {
         SCOPED_TRACE(scale);

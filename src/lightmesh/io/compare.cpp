@@ -35,7 +35,7 @@ void CheckSizes(const Image& a, const Image& b, const Image* mask) {
 }
 
 /// A mask pixel selects when one of its channels is above 0: black, negative and NaN
-/// pixels do not (issue 45: an all-NaN mask selected every pixel as "not black").
+/// pixels do not (so an all-NaN mask selects nothing, not every pixel as "not black").
 bool Included(const Image* mask, size_t i) {
     if (!mask) return true;
     const Color& c = mask->pixels[i];

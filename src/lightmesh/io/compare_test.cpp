@@ -146,8 +146,8 @@ TEST(Compare, MaskRestrictsThePixels) {
     EXPECT_FALSE(std::isinf(CompareImages(a, b, &mask).psnr));
     const Image black(64, 48);
     EXPECT_THROW(CompareImages(a, b, &black), Error);
-    // Issue 45: a mask of NaN (or negative) pixels selects nothing either; it used to
-    // select every pixel as "not black".
+    // A mask of NaN (or negative) pixels selects nothing either (not every pixel as
+    // "not black").
     Image nan(64, 48);
     for (Color& c : nan.pixels) c = Color(std::nanf(""));
     Image negative(64, 48);
@@ -198,8 +198,8 @@ void WritePng16(const std::string& path, int w, int h, F value) {
     std::ofstream(path, std::ios::binary) << png;
 }
 
-// Issue 45: two 16-bit PNGs that differ in every sample's low byte compared as identical
-// (they were read at 8 bits); they are read at their depth now.
+// Two 16-bit PNGs that differ in every sample's low byte are read at their depth, so they
+// do not compare as identical (as they would if read at 8 bits).
 TEST(Compare, SixteenBitPngsAreComparedAtSixteenBits) {
     const std::string a = Temp("a16.png"), b = Temp("b16.png");
     auto base = [](int x, int y, int c) { return static_cast<uint16_t>((x * 2000 + y * 700 + c * 5000) & 0xff00); };
@@ -232,8 +232,8 @@ void WriteExrChannels(const std::string& path, int w, int h, const std::vector<s
     file.writePixels(h);
 }
 
-// Issue 45: an EXR with only Y, or with channels r, g, b, was read as black. Y is read as
-// grey, lower-case r, g, b as colour, anything else is refused naming the channels.
+// An EXR with only Y, or with channels r, g, b, is not read as black: Y is read as grey,
+// lower-case r, g, b as colour, anything else is refused naming the channels.
 TEST(Compare, ExrLayoutsAreReadOrRefusedByName) {
     auto v = [](int x, int y, int c) { return 0.1f * static_cast<float>(x) + 0.01f * static_cast<float>(y) + 0.3f * c; };
     const std::string y = Temp("y.exr"), lower = Temp("lower.exr"), upper = Temp("upper.exr");
@@ -363,7 +363,7 @@ TEST(CompareCli, ExitCodesJsonAndDiff) {
     EXPECT_EQ(r.exitCode, 1) << r.output;
     EXPECT_NE(r.output.find("missing.png"), std::string::npos) << r.output;
 
-    // NaN in the judged image: counted, left out, and below any threshold (issue 56).
+    // NaN in the judged image: counted, left out, and below any threshold.
     const std::string pn = Temp("cli_nan.exr");
     Image withNan = a;
     withNan.At(5, 5) = Color(std::numeric_limits<float>::quiet_NaN());
@@ -389,8 +389,8 @@ TEST(CompareCli, ExitCodesJsonAndDiff) {
     EXPECT_NE(r.output.find("\"pixels\":10,"), std::string::npos) << r.output;
 }
 
-// Issue 56: NaN and infinite pixels are counted and left out of every figure (they were
-// compared as 0: an all-NaN image was judged as black, and --json said "rmse_linear": null).
+// NaN and infinite pixels are counted and left out of every figure (compared as 0, an
+// all-NaN image would be judged as black, and --json would say "rmse_linear": null).
 TEST(Compare, NonFinitePixelsAreCountedAndLeftOut) {
     const Image a = Gradient(40, 30), b = WithNoise(a, 0.02f);
     Image bad = b, refA = a, refB = b;

@@ -392,8 +392,8 @@ Image ReadPng(const std::string& path) {
     if (in.bad() || static_cast<size_t>(in.gcount()) != bytes.size()) ThrowErrorAt({path}, "cannot read it");
     DecodedPixels p;
     try {
-        // libpng; 16-bit PNGs at their depth (issue 45: two that differed in every
-        // sample's low byte compared as identical when read at 8 bits).
+        // libpng; 16-bit PNGs at their depth (two that differ in every sample's
+        // low byte would compare as identical if read at 8 bits).
         p = DecodePng(bytes.data(), bytes.size(), 3, INT32_MAX);
     } catch (const Error& e) {
         ThrowErrorAt({path}, "cannot read PNG: %s", e.what());
@@ -415,7 +415,7 @@ Image ReadPng(const std::string& path) {
 
 /// The EXR channels to read as R, G and B: "R", "G", "B", or lower-case "r", "g", "b" (all
 /// three of one kind), or a luminance-only "Y" (or "y") read into all three as grey. Any
-/// other layout is refused by name (issue 45: Y-only and lower-case files read as black).
+/// other layout is refused by name, not read as black.
 /// A luminance-chroma file (Y with RY, BY) is refused too: its chroma is subsampled.
 std::array<std::string, 3> ExrChannels(const std::string& path, const Imf::ChannelList& channels) {
     std::vector<std::string> names;

@@ -316,9 +316,9 @@ TEST(ImageIO, GarbageFilesAreErrorsNotCrashes) {
     EXPECT_THROW(ReadImage(exr), Error);
 }
 
-// Issue 56: an EXR's size is read from its header's dataWindow, and what reading it takes
-// judged against the budget, before OpenEXR sees the file: one of 2^28 pixels was decoded
-// into 3 GiB first (its only check was that count).
+// An EXR's size is read from its header's dataWindow, and what reading it takes judged
+// against the budget, before OpenEXR sees the file, which would decode one of 2^28 pixels
+// into 3 GiB first (its only check is that count).
 TEST(ImageIO, AnExrPastTheBudgetIsRefusedFromItsHeader) {
     const std::string exr = TempPath("huge.exr");
     WriteImage(exr, Gradient(4, 4));

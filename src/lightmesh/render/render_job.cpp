@@ -17,8 +17,8 @@ namespace lm {
 
 namespace {
 
-/// A scene too small for single-precision ray queries (issue 45: a box at 1e-17 scale,
-/// which loads since degeneracy is judged per triangle, rendered without its shadows): the
+/// A scene too small for single-precision ray queries (a box at 1e-17 scale, which loads
+/// since degeneracy is judged per triangle, would render without its shadows): the
 /// products of three lengths in a ray/triangle test underflow below float's 1.2e-38.
 /// Measured on a box with its ground, camera and light: Embree's images are exact down to
 /// a span of 3e-8 and wrong at 2e-9; the grid's and brute force's exact to 2e-13, wrong at

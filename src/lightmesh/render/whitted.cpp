@@ -318,7 +318,7 @@ RenderResult WhittedRenderer::Render(ProgressReporter* progress, VisibilityImage
     result.image = Image(options_.width, options_.height);
     std::vector<RenderCounters> tileCounters(static_cast<size_t>(TileCount()));
     // With a progress reporter, a sample of tiles spread over the image goes first, so the
-    // time estimate comes from the whole image and not from its first rows (issue 56); each
+    // time estimate comes from the whole image and not from its first rows; each
     // tile is rendered once, wherever it comes, so the image is the same.
     std::vector<int64_t> sample;
     std::vector<char> sampled;

@@ -72,11 +72,11 @@ class WhittedRenderer {
     /// The seconds the whole render would take, from `samples` of its tiles spread evenly
     /// over the image (SpreadOverGrid; all of them if it has no more), rendered in parallel into scratch
     /// images in two interleaved halves: the faster half's wall time per tile × tiles.
-    /// `bench` estimates its matrix so (issue 45); the lazily evaluated work a render shares
+    /// `bench` estimates its matrix so; the lazily evaluated work a render shares
     /// between neighbouring tiles (the light mesh's nodes) is shared less among spread
     /// tiles, so the figure errs high. With `maxSeconds` > 0 each half starts no tile past
     /// half of it (each does one at least) and counts the tiles it did: a slow render is
-    /// estimated in about that time, from a spread prefix of the sample (issue 56).
+    /// estimated in about that time, from a spread prefix of the sample.
     double EstimateSeconds(int samples, double maxSeconds = 0) const;
     static constexpr int kPacketSize = 8;
 

@@ -131,7 +131,7 @@ TEST(Whitted, NoShadowAcneOnLargeAndSmallScenes) {
     }
 }
 
-// The estimate bounded in time (bench's probes, issue 56): slow tiles (area sampling with
+// The estimate bounded in time (bench's probes): slow tiles (area sampling with
 // 256 rays per light on the brute-force back-end) stop being started after half the bound
 // in each half, and the figure, from the tiles done, stays near the unbounded one.
 TEST(Whitted, EstimateStopsAtItsTimeBound) {

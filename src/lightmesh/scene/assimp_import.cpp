@@ -421,8 +421,8 @@ void CheckReadable(const std::string& path) {
     }
     // No mesh format starts with a run of NUL bytes (a binary STL's 80-byte header may be
     // zeros, but its triangle count and data follow): a zeroed or sparse file is refused
-    // here rather than read to its end under the import deadline (issue 45: a 20 GB sparse
-    // file of zeros was read at 160 MB/s).
+    // here rather than read to its end under the import deadline (a 20 GB sparse file of
+    // zeros would be read at 160 MB/s).
     constexpr size_t kProbe = 4096;
     const int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) return;

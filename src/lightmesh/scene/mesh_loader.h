@@ -89,7 +89,7 @@ struct LoadedMesh {
 /// triangles, or non-finite coordinates. A file whose every mesh is excluded is not an
 /// error: the result is empty and meshesExcluded says why.
 ///
-/// Hardening (issue 16): the import runs in a child process (fork; the triangles come back
+/// Hardening: the import runs in a child process (fork; the triangles come back
 /// through a memfd) whose address space is limited to the ImportBudget's memory, so that
 /// an importer crash, assertion or allocation bomb becomes a MeshFileError ("the importer
 /// crashed (signal 11)") instead of taking the renderer down. Assimp opens regular files

@@ -73,7 +73,7 @@ std::string LoadError(const std::string& path) {
 }
 
 // The importer's known noise (scenes/real/garden.json: 845 messages) is counted in one line;
-// other messages are shown (issue 47).
+// other messages are shown.
 TEST(MeshLoader, KnownImporterNoiseIsRecognised) {
     EXPECT_TRUE(mesh_import::KnownImporterNoise("<add reason>"));
     EXPECT_TRUE(mesh_import::KnownImporterNoise("BlendDNA: Did not find a field named `totloop` in structure `Mesh`"));
@@ -336,7 +336,7 @@ std::string BudgetError(const std::string& path, const ImportBudget& budget) {
     return "<no error>";
 }
 
-// Issue 16: the walk checks its budgets while it expands instances, and says which.
+// The walk checks its budgets while it expands instances, and says which.
 TEST(MeshLoader, ImportBudgetsAreCheckedWhileInstancesAreExpanded) {
     const std::string folder = TempFolder();
     const std::string path = WriteFile(folder, "many.dae", ColladaInstances(50, 3));
@@ -393,10 +393,10 @@ TEST(MeshLoader, ChildProcessImportEqualsInProcessImport) {
     EXPECT_EQ(child.warnings, local.warnings);
 }
 
-// Issue 45: the import deadline is 60 s + 2 s per MB but at most 10 minutes (a 20 GB file
-// had 11 hours), LIGHTMESH_IMPORT_TIMEOUT sets any other; a file of zeros is refused before
-// the importer reads it, and an OBJ whose `o` objects Assimp would look up for longer than
-// the deadline is refused with the estimate.
+// The import deadline is 60 s + 2 s per MB but at most 10 minutes (a 20 GB file would
+// otherwise have 11 hours), LIGHTMESH_IMPORT_TIMEOUT sets any other; a file of zeros is
+// refused before the importer reads it, and an OBJ whose `o` objects Assimp would look up
+// for longer than the deadline is refused with the estimate.
 TEST(MeshLoader, ImportDeadlineAndEarlyRefusals) {
     const std::string folder = TempFolder();
     const std::string big = folder + "/big.obj";
@@ -433,10 +433,10 @@ TEST(MeshLoader, ImportDeadlineAndEarlyRefusals) {
 
 using lm::testing::kSanitizerSlowdown;
 
-// Issue 56: OBJ files are read by lightmesh's parser (MTL by tinyobjloader), laid out as
-// Assimp's reader lays them out. A 12 MB file of 200,000 one-triangle objects, which
-// Assimp's reader was killed on after 84 s (it looks each `o` up among all before it),
-// loads in well under 2 s, in the child process as always.
+// OBJ files are read by lightmesh's parser (MTL by tinyobjloader), laid out as Assimp's
+// reader lays them out. A 12 MB file of 200,000 one-triangle objects, which takes Assimp's
+// reader minutes (it looks each `o` up among all before it), loads in well under 2 s, in
+// the child process as always.
 TEST(ObjReader, TwoHundredThousandObjectsLoadAtDiskSpeed) {
     const std::string folder = TempFolder();
     std::string obj;
@@ -543,8 +543,8 @@ TEST(ObjReader, MalformedRecordsNameTheirLine) {
               "OBJ: line 7: face corner \"9\" refers to vertex 9, but 3 vertices are defined before it");
 }
 
-// Issue 56: an image's data: URI without base64's padding is read (Assimp 5.2 refused the
-// whole file), without a warning.
+// An image's data: URI without base64's padding is read (Assimp 5.2 refuses the whole
+// file), without a warning.
 TEST(MeshLoader, AnUnpaddedDataUriIsRead) {
     const std::string folder = TempFolder();
     std::ifstream in(std::string(LIGHTMESH_TEST_DATA) + "/textures/checker_mask.gltf");

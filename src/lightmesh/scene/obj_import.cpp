@@ -1,6 +1,6 @@
-// obj_import.cpp -- Wavefront OBJ files read by lightmesh in Assimp's place (issue 56:
-// Assimp 5.2's OBJ reader looks each `o` name up among the objects before it, one by one,
-// so a 12 MB file of 200,000 one-triangle objects took minutes). The OBJ file is parsed
+// obj_import.cpp -- Wavefront OBJ files read by lightmesh in Assimp's place (Assimp 5.2's
+// OBJ reader looks each `o` name up among the objects before it, one by one, so a 12 MB
+// file of 200,000 one-triangle objects takes minutes). The OBJ file is parsed
 // here, linear in the file, each malformed record an error naming its line; its MTL files
 // by tinyobjloader. It is laid out as Assimp's OBJ reader lays it out: a root node named
 // after the file, a node per object or group in file order, a mesh per run of faces of one

@@ -56,7 +56,7 @@ struct LightMeshOptions {
     std::string thinCheck = "all";
 };
 
-/// Settings of the area-light reference ("--shadows area", issue 7): every point light
+/// Settings of the area-light reference ("--shadows area"): every point light
 /// becomes a sphere of its radius (same centre and intensity; LightRadii in
 /// shadow/shadow.h), and each shading point traces `samples` stratified shadow rays per
 /// light (the paper's "naive" soft shadows, §1.2). Lights of radius 0 get exactly the shadow

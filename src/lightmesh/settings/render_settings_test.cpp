@@ -38,7 +38,7 @@ TEST(RenderSettings, RowsAreWellFormed) {
     }
 }
 
-// `render --help` shows each knob's default (issue 47): the help text names it, and it is
+// `render --help` shows each knob's default: the help text names it, and it is
 // the default RenderOptions' value.
 TEST(RenderSettings, HelpNamesEachDefault) {
     for (const RenderSetting& s : RenderSettings()) {

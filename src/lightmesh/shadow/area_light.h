@@ -1,6 +1,6 @@
 // area_light.h -- the soft-shadow reference: every point light becomes a sphere, and each
 // shading point traces N stratified shadow rays per light (the paper's "naive" soft
-// shadows, §1.2; issue 7).
+// shadows, §1.2).
 #pragma once
 
 #include <cstdint>

@@ -32,7 +32,7 @@ void CheckParameters(int ns, float ki) {
 /// integer coordinates: |node·ns - (a, b, c)|² <= (kI·ns)². A lattice row (dj, dk) meets the
 /// sphere in an interval of di (the squared distance is exact and convex in di), found from
 /// the square root and settled by the exact test, so the work follows the nodes listed
-/// rather than the cube around them (issue 45: 20 times faster at kI 16 than testing every
+/// rather than the cube around them (20 times faster at kI 16 than testing every
 /// node of the cube and its six neighbours); a node is on the boundary when it ends its
 /// row or its neighbour in one of the four adjacent rows is outside.
 class SubPositionBuilder {
@@ -306,7 +306,7 @@ SphereTemplates ReadSphereTemplates(const std::string& path, int ns, float ki) {
     return ParseSphereTemplates(std::string_view(static_cast<const char*>(mapped), length), path, ns, ki);
 }
 
-// sphere_templates_check.cpp: every invariant of the geometry (issue 16).
+// sphere_templates_check.cpp: every invariant of the geometry.
 void CheckSphereTemplateGeometry(const SphereTemplates& t, const std::string& path);
 
 SphereTemplates ParseSphereTemplates(std::string_view bytes, const std::string& path, int ns,

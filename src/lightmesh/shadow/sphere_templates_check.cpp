@@ -1,5 +1,5 @@
 // sphere_templates_check.cpp -- what a template file read from disk must satisfy beyond its
-// checksum (issue 16: a forged cache with a recomputed checksum changed the image). Kept
+// checksum (a forged cache with a recomputed checksum would otherwise change the image). Kept
 // apart from sphere_templates.cpp, which only calls it.
 #include <algorithm>
 #include <cmath>

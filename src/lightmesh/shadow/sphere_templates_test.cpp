@@ -76,7 +76,7 @@ TEST(SphereTemplates, BoundaryIsTheOuterShell) {
     }
 }
 
-// Issue 45: the build goes row by row of the lattice (an interval of di per row) instead of
+// The build goes row by row of the lattice (an interval of di per row) instead of
 // testing every node of the cube and its six neighbours; the lists, their order and their
 // boundaries are those of the cube loop, for odd ns and kI that are not dyadic too.
 TEST(SphereTemplates, RowBuildIsTheCubeLoopsEntryForEntry) {
@@ -118,9 +118,9 @@ TEST(SphereTemplates, RowBuildIsTheCubeLoopsEntryForEntry) {
     }
 }
 
-// Issue 45: `templates --ns 64 --ki 16` ran for minutes and took 5 GB before saying
-// anything. The size is estimated first (within a few per cent), and what does not fit the
-// memory budget or the 32-bit index is refused at once, saying what would fit.
+// The size is estimated first (within a few per cent), and what does not fit the memory
+// budget or the 32-bit index is refused at once, saying what would fit (`templates --ns 64
+// --ki 16` would otherwise run for minutes and take 5 GB before saying anything).
 TEST(SphereTemplates, SizeIsEstimatedAndRefusedBeforeBuilding) {
     for (const auto& [ns, ki] : std::vector<std::pair<int, float>>{{8, 2.0f}, {3, 0.7f}, {16, 4.5f}, {1, 16.0f}}) {
         const TemplateEstimate e = EstimateSphereTemplates(ns, ki);
@@ -244,7 +244,7 @@ TEST_F(TemplateFiles, DamagedFilesAreDetectedRebuiltAndReplaced) {
     EXPECT_THROW(ReadSphereTemplates(Path(), 4, 2.0f), Error);
 }
 
-// Issue 16: a forged file whose checksum was recomputed (WriteSphereTemplates writes any
+// A forged file whose checksum was recomputed (WriteSphereTemplates writes any
 // templates with a valid checksum) is refused for each invariant the light mesh relies on,
 // and rebuilt.
 TEST_F(TemplateFiles, ForgedFilesWithAValidChecksumAreRefused) {

@@ -328,8 +328,8 @@ DecodedImage ReadImageFile(const std::string& path) {
         }
         return image;
     }
-    // The format and size are judged from the file's head before it is read whole (issue
-    // 56: a 20 GB sparse file named .png was read for 38 s and 7.9 GB before a warning).
+    // The format and size are judged from the file's head before it is read whole (a 20 GB
+    // sparse file named .png would be read for 38 s and 7.9 GB before a warning).
     std::ifstream in(path, std::ios::binary | std::ios::ate);
     if (!in) ThrowError("cannot open it");
     const auto end = in.tellg();

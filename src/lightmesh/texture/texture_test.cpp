@@ -211,7 +211,7 @@ std::vector<std::string> WarningsFor(const std::vector<std::string>& files) {
     return warnings;
 }
 
-// Issue 56: a texture file is judged by its head before it is read whole. A 2 GB sparse
+// A texture file is judged by its head before it is read whole. A 2 GB sparse
 // file named .png, and a true PNG head (16 x 16 texels) followed by 2 GB of holes, are each
 // a warning in well under a second, through the cache as a scene reads them.
 TEST(TextureCache, AHugeFileIsJudgedByItsHeadBeforeItIsRead) {
@@ -276,7 +276,7 @@ namespace lm {
 namespace texture_test {
 namespace {
 
-// Issue 56: PNG and JPEG are decoded by libpng and libjpeg-turbo. A file cut short or
+// PNG and JPEG are decoded by libpng and libjpeg-turbo. A file cut short or
 // corrupt is a warning naming the decoder's reason and the flat colour, decoded in the
 // child as a scene reads it; valid ones give their texels (the 16-bit PNG as linear floats).
 TEST(TextureCache, BrokenPngAndJpegAreAWarningAndTheFlatColour) {

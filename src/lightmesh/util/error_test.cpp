@@ -34,8 +34,8 @@ TEST(Error, KeepsItsPlaceAndReasonApart) {
     EXPECT_STREQ(nowhere.what(), "bad<U+001B>[31m");
     EXPECT_EQ(nowhere.Reason(), "bad<U+001B>[31m");
 
-    // Issue 45: a newline in a file name does not split the one-line message, and a NUL
-    // byte is shown, not a cut.
+    // A newline in a file name does not split the one-line message, and a NUL byte is
+    // shown, not a cut.
     const Error named(SourceLoc("a\nb.json", 0, 0, "/x"), std::string("bad \"v\0x\"", 9));
     EXPECT_STREQ(named.what(), "a<U+000A>b.json /x: bad \"v<U+0000>x\"");
     EXPECT_EQ(Printable("tab\tstays"), "tab\tstays");

@@ -74,8 +74,8 @@ TEST(IsolatedChild, AnExceptionOutOfTheWorkIsExitStatusThree) {
 #endif
 
 #ifndef LIGHTMESH_SANITIZED  // (their reports must reach the logs: the child's stderr is kept)
-// Issue 56: a library's last words before its abort ("terminate called after throwing ...",
-// an assertion) were a second line on the user's standard error, before lightmesh's one
+// A library's last words before its abort ("terminate called after throwing ...", an
+// assertion) would be a second line on the user's standard error, before lightmesh's one
 // line; they are kept from it, and the crash's line quotes the last of them.
 TEST(IsolatedChild, ItsStandardErrorIsKeptAndItsLastLineQuoted) {
     ::testing::internal::CaptureStderr();

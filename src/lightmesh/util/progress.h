@@ -27,10 +27,10 @@ class ProgressReporter {
     /// estimate), and its first `sampleUnits` units are a sample spread over all of it
     /// (`sampleWhat`: "tiles spread over the image"), so the estimate is made when the
     /// sample is done (or after kMeasureSeconds, from the part of it done), from the sample
-    /// alone, rather than from whatever came first (issue 56: a frame whose first tiles were
-    /// sky announced nothing; one tile after a 3 GiB image's set-up, extrapolated a million
-    /// times, gave 72 days for 6 minutes). Without it the estimate is the share done after
-    /// kMeasureSeconds, set-up included.
+    /// alone, rather than from whatever came first (a frame whose first tiles are sky would
+    /// announce nothing; one tile after a 3 GiB image's set-up, extrapolated a million
+    /// times, would give 72 days for 6 minutes). Without it the estimate is the share done
+    /// after kMeasureSeconds, set-up included.
     void BeginWork(int64_t sampleUnits, std::string sampleWhat);
     /// When the estimate passes `limitSeconds`, the work is to stop (Stopped()), and
     /// StopReason() says why: "about 3 h 12 min in all (measured on ...), more than the limit
