@@ -378,7 +378,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
     void Finalize() override {
         ConsoleReporter::Finalize();
         std::printf("\nSummary (median where repeated): rays/s per back-end (1t: per CPU second, "
-                    "all: per wall-clock second); time ratios grid ÷ Embree (issue 12's targets: "
+                    "all: per wall-clock second); time ratios grid ÷ Embree (the grid's targets: "
                     "rays ≤ 1.3, build ≤ 2)\n");
         std::printf("%-24s %10s %10s %10s %10s %12s %14s\n", "workload", "grid", "embree",
                     "brute", "grid16", "grid/embree", "grid16/embree");

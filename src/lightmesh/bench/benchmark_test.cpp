@@ -86,7 +86,7 @@ TEST(LoadBenchMatrix, ErrorsNameTheJsonPath) {
 
 // The matrix file names its values' places for later messages, and the keys it
 // checks itself (an unknown back-end, an empty variant).
-TEST(LoadBenchMatrix, OriginsAndChecksOfIssue45) {
+TEST(LoadBenchMatrix, OriginsAndChecksOfEachSetting) {
     const fs::path p = WriteTemp("origins.json", R"({"cc": [50, 100], "ki": [1.5, 3]})");
     const BenchMatrix m = LoadBenchMatrix(p.string());
     ASSERT_EQ(m.ccOrigins.size(), 2u);
