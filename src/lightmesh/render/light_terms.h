@@ -19,7 +19,8 @@ namespace lm {
 /// What the lights' terms at a shading point depend on besides the lights.
 struct LightTermPoint {
     Vec3 p;      ///< the point
-    Vec3 n;      ///< the geometric normal (unit), on the viewer's side
+    Vec3 n;      ///< the normal a light must face (unit, on the viewer's side): the renderer
+                 ///< passes the shading normal, so a smooth surface is lit as its normals say
     Vec3 ns;     ///< the shading normal (unit), on the same side
     Vec3 toEye;  ///< unit direction from the point towards the viewer
     Color kd;    ///< the diffuse reflectance here

@@ -19,7 +19,8 @@ namespace lm {
 struct ShadingPoint {
     Vec3 p;       ///< the hit point, on the surface
     Vec3 n;       ///< unit geometric normal, on the side the ray came from
-    Vec3 origin;  ///< p pushed off the surface along n: where rays leaving it start
+    Vec3 origin;  ///< where rays leaving p start: p (on a smooth-shaded mesh lifted to its corners'
+                  ///< tangent planes, geometry/shadow_terminator.h) pushed off the surface along n
     uint32_t prim = 0;  ///< the triangle p lies on (the light mesh's cell patches rely on it)
 };
 
