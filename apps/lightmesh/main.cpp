@@ -173,11 +173,11 @@ int main(int argc, char** argv) {
     benchCmd->add_flag("--quality", bench.matrix.quality,
                        "Also judge every cell against a converged area-light reference: PSNR/SSIM, reference "
                        "radius sweep, naive soft shadows (N = 1, 2, 4, 16, 64) vs LMM, contact-hardening penumbrae (lmm with the reference's light radius), leak count; "
-                       "and the default (soft) against RT, the exact mode, LMM, area N = 1, 2, 4, 8, 16 (--area-samples) and "
+                       "and the default (soft) against RT, the exact mode, LMM, area N = 1, 2, 4, …, 256 (--area-samples) and "
                        "the denoiser N = 1, 2, 4 at the lights' own radii: time, PSNR, shadow total, area's N and time at "
                        "soft's PSNR, the denoiser's PSNR at soft's time");
     benchCmd->add_option("--area-samples", bench.matrix.competitorSamples,
-                         "With --quality, the competitors' area rows: rays per light, comma-separated (default 1,2,4,8,16; "
+                         "With --quality, the competitors' area rows: rays per light, comma-separated (default 1,2,4,8,16,32,64,128,256; "
                          "past the largest, area's PSNR is extrapolated at 3.01 dB per doubling)")
         ->delimiter(',')
         ->check(InRange(1, 4096, true));

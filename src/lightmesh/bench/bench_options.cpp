@@ -147,7 +147,7 @@ const std::vector<BenchOptionInfo>& BenchOptionTable() {
         {"table", "the paper's table 1, 2, 3 or 4 on scenes/real (replaces scene, size, cc, ki, variants)"},
         {"matrix", "the matrix from a JSON file (scenes, sizes, cc, ki, variants, accels, repeat, thin_check)"},
         {"quality", "also judge every cell against a converged area-light reference (PSNR, SSIM, shadow total)"},
-        {"area_samples", "with quality: the competitors' area rows, rays per light (a list), 1-4096; default 1,2,4,8,16"},
+        {"area_samples", "with quality: the competitors' area rows, rays per light (a list), 1-4096; default 1,2,4,8,16,32,64,128,256"},
         {"ref_samples", "rays per light of the quality references, 1-4096; default 256"},
         {"light_radius", "with quality: every light's radius in the default-against-competitors table"},
         {"thin_check", "with quality: the penumbra mode's thin-occluder check (all, lit or off)"},

@@ -71,6 +71,11 @@ long long CountLeaks(const Image& rt, const Image& none, const Image& img, float
 
 }  // namespace
 
+/// The references' stream of sample rotations (AreaLightOptions::stream): independent of
+/// the rows they judge, so that area with as many rays as the reference is not judged
+/// against itself, nor fewer rays against rotations they share with it.
+constexpr uint32_t kReferenceStream = 1;
+
 /// PSNR per doubling of independent samples: 10·log10(2).
 constexpr double kDbPerDoubling = 3.010299956639812;  // 10·log10 2
 
@@ -160,6 +165,7 @@ BenchResult RenderCompetitorsReference(const BenchRun& run, const SceneSizeRun& 
     RenderOptions o = compBase;
     o.shadows = "area";
     o.areaLight.samples = m.refSamples;
+    o.areaLight.stream = kReferenceStream;
     std::unique_ptr<RenderJob> keep;
     RenderResult rr = BenchRender(m, s.scene, s.compAcc, o, &ref.setupSeconds, &keep);
     ref.seconds = {rr.seconds};
@@ -322,6 +328,7 @@ void JudgeQuality(BenchRun& run, SceneSizeRun& s) {
         o.shadows = "area";
         o.areaLight.radius = q.radius * f;  // the override: every light this size
         o.areaLight.samples = m.refSamples;
+        o.areaLight.stream = kReferenceStream;
         std::unique_ptr<RenderJob> keep;
         RenderResult rr = BenchRender(m, scene, lmmAccel, o, nullptr, &keep);
         if (f == 1.0f) {

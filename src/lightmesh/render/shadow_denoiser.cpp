@@ -411,7 +411,7 @@ float ShadowDenoiser::NoisyVisibility(const ShadingPoint& sp, size_t light, floa
         return LightVisible(accel_, sp.origin, center) ? 1.0f : 0.0f;
     }
     const int samples = options_.areaLight.samples;
-    const SphereLightRays sampler(sp.origin, center, R, samples, AreaLightSeed(sp, static_cast<uint32_t>(light)));
+    const SphereLightRays sampler(sp.origin, center, R, samples, AreaLightSeed(sp, static_cast<uint32_t>(light), options_.areaLight.stream));
     if (sampler.Inside()) return 1.0f;
     for (int k = 0; k < samples; ++k) rays[k] = sampler.Get(k);
     // Closest hits, not just occlusion: the blockers' distance sizes the filter.

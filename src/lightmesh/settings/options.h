@@ -69,6 +69,10 @@ struct AreaLightOptions {
     /// (LightMeshOptions::lightRadius).
     std::optional<float> radius;
     int samples = 16;     ///< shadow rays per light and shading point, 1 .. 4096
+    /// The stream of the samples' rotations (AreaLightSeed): 0 in every render. The bench's
+    /// references draw from another, so that an area row of as many rays as the reference
+    /// is judged against an independent estimate, not against itself.
+    uint32_t stream = 0;
 };
 
 

@@ -54,8 +54,8 @@ void ValidateAreaLightOptions(const AreaLightOptions& o) {
         ThrowSettingError("samples", "area-light samples %d: must be 1 to 4096", o.samples);
 }
 
-uint64_t AreaLightSeed(const ShadingPoint& sp, uint32_t light) {
-    uint64_t h = Mix64(0x9E3779B97F4A7C15ull + light);
+uint64_t AreaLightSeed(const ShadingPoint& sp, uint32_t light, uint32_t stream) {
+    uint64_t h = Mix64(0x9E3779B97F4A7C15ull + (light | uint64_t(stream) << 32));
     h = Mix64(h ^ (std::bit_cast<uint32_t>(sp.p.x) | uint64_t(std::bit_cast<uint32_t>(sp.p.y)) << 32));
     h = Mix64(h ^ (std::bit_cast<uint32_t>(sp.p.z) | uint64_t(sp.prim) << 32));
     return h;
@@ -215,7 +215,7 @@ class AreaLightShadows final : public ShadowMethod {
             }
             int rays = 0;
             vis[k] = SphereLightVisibility(accel_, sp.origin, center, radii_[i], options_.samples,
-                                           AreaLightSeed(sp, i), &rays);
+                                           AreaLightSeed(sp, i, options_.stream), &rays);
             counters.shadowRays += static_cast<uint64_t>(rays);
         }
     }

@@ -17,9 +17,11 @@ namespace lm {
 void ValidateAreaLightOptions(const AreaLightOptions& options);
 
 /// The seed of the sample sequence of one (shading point, light) pair: a hash of the bits
-/// of sp.p, of sp.prim and of the light's index. So the estimate depends only on the
-/// point, never on the thread, the tile order or the pixel that found the point.
-uint64_t AreaLightSeed(const ShadingPoint& sp, uint32_t light);
+/// of sp.p, of sp.prim, of the light's index and of `stream`. So the estimate depends only
+/// on the point, never on the thread, the tile order or the pixel that found the point.
+/// Stream 0 is every render's; another stream draws rotations independent of it
+/// (AreaLightOptions::stream).
+uint64_t AreaLightSeed(const ShadingPoint& sp, uint32_t light, uint32_t stream = 0);
 
 /// The fraction of a spherical light (centre `center`, radius `radius` > 0) visible from
 /// `origin`, estimated with `samples` shadow rays: directions stratified over the cone
