@@ -10,7 +10,8 @@ packages=(cmake ninja-build g++ pkg-config
           pybind11-dev python3-dev python3-numpy python3-pytest  # the Python module and its tests (optional)
           python3-matplotlib  # examples/radius_sweep.py's plot
           clang libclang-rt-14-dev  # sanitizer builds and libFuzzer (scripts/fuzz.sh)
-          ccache)  # scripts/test.sh: the build without MPI compiles the core again; ccache serves it
+          ccache  # scripts/test.sh: the build without MPI compiles the core again; ccache serves it
+          universal-ctags)  # scripts/check-sizes.sh: the functions' first and last lines
 packages+=("$@")
 
 missing=()

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
 # The whole test suite -- the README's test command, and what CI runs (.ci/run):
+#   0. the size check (scripts/check-sizes.sh), before anything is built;
 #   1. the Release build (scripts/build.sh) and every test (the Python module's pytest tests too);
 #   1b. the build without MPI (core and executable only, in build-nompi): it must build,
 #      and say how to get the MPI build when started by mpirun with several processes;
@@ -23,8 +24,11 @@ jobs="$(nproc)"
 start=$SECONDS
 step() { echo "== test.sh: $* ($((SECONDS - start)) s)" >&2; }
 
-step "Release build and tests"
 scripts/install-deps.sh
+step "size check"
+scripts/check-sizes.sh
+
+step "Release build and tests"
 # ccache for the builds this script configures (a new build directory takes CMake's
 # CMAKE_CXX_COMPILER_LAUNCHER from the environment): the build without MPI compiles the
 # same core library as the Release build, and gets its objects from the cache.

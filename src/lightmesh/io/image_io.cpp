@@ -576,35 +576,67 @@ Image ReadImage(const std::string& path) {
     }
 }
 
+namespace {
+
+enum : uint8_t { kImage = 1, kError = 2 };
+
+// An image's fields, in the order the reading child writes them and the parent reads them
+// (ChildFieldWriter): listed once, for both directions. I is Image, or const Image to
+// write it. The pixels go without a length: width × height of them.
+template <typename Archive, typename I>
+void ImageFields(Archive& a, I& image) {
+    a(image.width, image.height);
+    a.Require(image.width > 0 && image.height > 0 && static_cast<int64_t>(image.width) * image.height <= (int64_t(1) << 28),
+              "bad size");
+    a.Array(image.pixels, static_cast<size_t>(image.width) * static_cast<size_t>(image.height));
+}
+
+/// The reading child's record: kImage and the image, or kError and why it cannot be read.
+void WriteImageRecord(int fd, const std::string& path) {
+    ChildWriter w;
+    Image image;
+    const auto failed = [&](const std::string& why) {
+        w = ChildWriter();
+        w.Pod<uint8_t>(kError);
+        w.Str(why);
+    };
+    try {
+        image = ReadImage(path);
+        w.Pod<uint8_t>(kImage);
+        ChildFieldWriter fields(&w);
+        ImageFields(fields, image);
+    } catch (const Error& e) {
+        failed(e.what());
+    } catch (const std::bad_alloc&) {
+        failed(path + ": reading it needs more memory than this process may use");
+    }
+    if (!w.WriteTo(fd)) _exit(3);
+}
+
+/// The image of the record WriteImageRecord wrote; throws Error with the child's reason, or
+/// std::runtime_error on a record cut short or malformed.
+Image ReadImageRecord(std::string_view bytes) {
+    ChildReader r(bytes);
+    const uint8_t kind = r.Pod<uint8_t>();
+    if (kind == kError) throw Error(r.Str());
+    if (kind != kImage) throw std::runtime_error("bad result");
+    Image image;
+    ChildFieldReader fields(&r);
+    ImageFields(fields, image);
+    return image;
+}
+
+}  // namespace
+
 Image ReadImageIsolated(const std::string& path) {
     ImageFormatFor(path);
     CheckRegularFile(path, "image");  // never blocks on a FIFO
     if (const char* v = std::getenv("LIGHTMESH_IMPORT_IN_PROCESS"); v && *v && std::string(v) != "0")
         return ReadImage(path);
-    enum : uint8_t { kImage = 1, kError = 2 };
     struct stat st {};
     const ChildLimits limits{PhysicalMemoryBytes() / 2,
                              ChildDeadlineSeconds(stat(path.c_str(), &st) == 0 ? static_cast<uint64_t>(st.st_size) : 0)};
-    const ChildOutcome child = RunInChild("lightmesh-image", limits, [&](int fd) {
-        ChildWriter w;
-        Image image;
-        try {
-            image = ReadImage(path);
-            w.Pod<uint8_t>(kImage);
-            w.Pod<int32_t>(image.width);
-            w.Pod<int32_t>(image.height);
-            w.Raw(image.pixels.data(), image.pixels.size() * sizeof(Color));
-        } catch (const Error& e) {
-            w = ChildWriter();
-            w.Pod<uint8_t>(kError);
-            w.Str(e.what());
-        } catch (const std::bad_alloc&) {
-            w = ChildWriter();
-            w.Pod<uint8_t>(kError);
-            w.Str(path + ": reading it needs more memory than this process may use");
-        }
-        if (!w.WriteTo(fd)) _exit(3);
-    });
+    const ChildOutcome child = RunInChild("lightmesh-image", limits, [&](int fd) { WriteImageRecord(fd, path); });
     switch (child.end) {
         case ChildOutcome::End::NotStarted: return ReadImage(path);
         case ChildOutcome::End::TimedOut:
@@ -615,17 +647,7 @@ Image ReadImageIsolated(const std::string& path) {
         case ChildOutcome::End::Exited: break;
     }
     try {
-        ChildReader r(child.Bytes());
-        const uint8_t kind = r.Pod<uint8_t>();
-        if (kind == kError) throw Error(r.Str());
-        if (kind != kImage) throw std::runtime_error("bad result");
-        const int32_t w = r.Pod<int32_t>(), h = r.Pod<int32_t>();
-        if (w <= 0 || h <= 0 || static_cast<int64_t>(w) * h > (int64_t(1) << 28))
-            throw std::runtime_error("bad size");
-        Image image(w, h);
-        const std::string_view texels = r.Raw(image.pixels.size() * sizeof(Color));
-        std::memcpy(image.pixels.data(), texels.data(), texels.size());
-        return image;
+        return ReadImageRecord(child.Bytes());
     } catch (const Error&) {
         throw;
     } catch (const std::exception&) {

@@ -48,59 +48,60 @@ void WriteErrorResult(int fd, const std::string& reason, bool unreadable) {
 
 namespace {
 
+// The imported mesh's fields, in the order they are written and read (ChildFieldWriter):
+// listed once, for both directions. M is LoadedMesh, or const LoadedMesh to write it.
+template <typename Archive, typename M>
+void MaterialFields(Archive& a, M& mat) {
+    a(mat.name, mat.kd, mat.ks, mat.phong, mat.mirror, mat.texture, mat.textureScale, mat.wrapU, mat.wrapV,
+      mat.alphaTexture, mat.alphaSource, mat.alphaCutoff, mat.alphaScale);
+}
+
+template <typename Archive, typename T>
+void TextureSourceFields(Archive& a, T& t) {
+    a(t.file, t.name, t.bytes, t.rawWidth, t.rawHeight);
+}
+
+template <typename Archive, typename C>
+void CameraFields(Archive& a, C& c) {
+    a(c.name, c.position, c.lookAt, c.up, c.horizontalFov, c.aspect, c.fov, c.orthographic);
+}
+
+template <typename Archive, typename L>
+void LightFields(Archive& a, L& l) {
+    a(l.name, l.type, l.unsupported, l.position, l.direction, l.color, l.constant, l.linear, l.quadratic, l.inner,
+      l.outer, l.range);
+}
+
+template <typename Archive, typename M>
+void LoadedMeshFields(Archive& a, M& m) {
+    a(m.mesh.positions, m.mesh.normals, m.mesh.uvs, m.mesh.triangles, m.mesh.materialIds);
+    a.List(m.materials, [&](auto& mat) { MaterialFields(a, mat); });
+    a.List(m.textures, [&](auto& t) { TextureSourceFields(a, t); });
+    a(m.meshesPlaced, m.meshesExcluded, m.excludeMaterialsMatched, m.excludeNamesMatched, m.warnings);
+    a.List(m.cameras, [&](auto& c) { CameraFields(a, c); });
+    a.List(m.lights, [&](auto& l) { LightFields(a, l); });
+}
+
 void WriteMeshResult(int fd, const LoadedMesh& m) {
     ChildWriter w;
     w.Pod<uint8_t>(kResultMesh);
-    w.Vec(m.mesh.positions);
-    w.Vec(m.mesh.normals);
-    w.Vec(m.mesh.uvs);
-    w.Vec(m.mesh.triangles);
-    w.Vec(m.mesh.materialIds);
-    w.Pod<uint64_t>(m.materials.size());
-    for (const Material& mat : m.materials) {
-        w.Str(mat.name);
-        w.Pod(mat.kd);
-        w.Pod(mat.ks);
-        w.Pod(mat.phong);
-        w.Pod(mat.mirror);
-        w.Pod(mat.texture);
-        w.Pod(mat.textureScale);
-        w.Pod(mat.wrapU);
-        w.Pod(mat.wrapV);
-        w.Pod(mat.alphaTexture);
-        w.Pod(mat.alphaSource);
-        w.Pod(mat.alphaCutoff);
-        w.Pod(mat.alphaScale);
-    }
-    w.Pod<uint64_t>(m.textures.size());
-    for (const TextureSource& t : m.textures) {
-        w.Str(t.file);
-        w.Str(t.name);
-        w.Str(t.bytes);
-        w.Pod(t.rawWidth);
-        w.Pod(t.rawHeight);
-    }
-    w.Pod<uint64_t>(m.meshesPlaced);
-    w.Pod<uint64_t>(m.meshesExcluded);
-    w.Bools(m.excludeMaterialsMatched);
-    w.Bools(m.excludeNamesMatched);
-    w.Pod<uint64_t>(m.warnings.size());
-    for (const std::string& s : m.warnings) w.Str(s);
-    w.Pod<uint64_t>(m.cameras.size());
-    for (const FileCamera& c : m.cameras) {
-        w.Str(c.name);
-        w.Pod(c.position), w.Pod(c.lookAt), w.Pod(c.up);
-        w.Pod(c.horizontalFov), w.Pod(c.aspect), w.Pod(c.fov), w.Pod<uint8_t>(c.orthographic);
-    }
-    w.Pod<uint64_t>(m.lights.size());
-    for (const FileLight& l : m.lights) {
-        w.Str(l.name);
-        w.Pod(l.type);
-        w.Str(l.unsupported);
-        w.Pod(l.position), w.Pod(l.direction), w.Pod(l.color);
-        w.Pod(l.constant), w.Pod(l.linear), w.Pod(l.quadratic), w.Pod(l.inner), w.Pod(l.outer), w.Pod(l.range);
-    }
+    ChildFieldWriter fields(&w);
+    LoadedMeshFields(fields, m);
     if (!w.WriteTo(fd)) _exit(3);
+}
+
+/// Throws std::runtime_error when a read mesh's indices or enumerations are out of range.
+void CheckReadMesh(const LoadedMesh& m) {
+    for (const Material& mat : m.materials)
+        if (mat.texture >= static_cast<int>(m.textures.size()) || mat.alphaTexture >= static_cast<int>(m.textures.size()) ||
+            static_cast<uint8_t>(mat.alphaSource) > static_cast<uint8_t>(Material::AlphaSource::OpacityMap))
+            throw std::runtime_error("bad texture index");
+    for (const FileCamera& c : m.cameras)
+        if (static_cast<uint8_t>(c.fov) > static_cast<uint8_t>(FileCamera::Fov::GltfYfovTimesAspect))
+            throw std::runtime_error("bad camera convention");
+    for (const FileLight& l : m.lights)
+        if (static_cast<uint8_t>(l.type) > static_cast<uint8_t>(FileLight::Type::Unsupported))
+            throw std::runtime_error("bad light type");
 }
 
 LoadedMesh ReadResult(const std::string& path, std::string_view bytes) {
@@ -113,73 +114,9 @@ LoadedMesh ReadResult(const std::string& path, std::string_view bytes) {
     }
     if (kind != kResultMesh) throw std::runtime_error("bad result");
     LoadedMesh m;
-    m.mesh.positions = r.Vec<Vec3>();
-    m.mesh.normals = r.Vec<Vec3>();
-    m.mesh.uvs = r.Vec<TexCoord>();
-    m.mesh.triangles = r.Vec<std::array<uint32_t, 3>>();
-    m.mesh.materialIds = r.Vec<uint32_t>();
-    const uint64_t materials = r.Pod<uint64_t>();
-    for (uint64_t i = 0; i < materials; ++i) {
-        Material mat;
-        mat.name = r.Str();
-        mat.kd = r.Pod<Color>();
-        mat.ks = r.Pod<Color>();
-        mat.phong = r.Pod<float>();
-        mat.mirror = r.Pod<Color>();
-        mat.texture = r.Pod<int>();
-        mat.textureScale = r.Pod<Color>();
-        mat.wrapU = r.Pod<TextureWrap>();
-        mat.wrapV = r.Pod<TextureWrap>();
-        mat.alphaTexture = r.Pod<int>();
-        mat.alphaSource = r.Pod<Material::AlphaSource>();
-        mat.alphaCutoff = r.Pod<float>();
-        mat.alphaScale = r.Pod<float>();
-        m.materials.push_back(std::move(mat));
-    }
-    const uint64_t textures = r.Pod<uint64_t>();
-    for (uint64_t i = 0; i < textures; ++i) {
-        TextureSource t;
-        t.file = r.Str();
-        t.name = r.Str();
-        t.bytes = r.Str();
-        t.rawWidth = r.Pod<int>();
-        t.rawHeight = r.Pod<int>();
-        m.textures.push_back(std::move(t));
-    }
-    for (Material& mat : m.materials)
-        if (mat.texture >= static_cast<int>(m.textures.size()) || mat.alphaTexture >= static_cast<int>(m.textures.size()) ||
-            static_cast<uint8_t>(mat.alphaSource) > static_cast<uint8_t>(Material::AlphaSource::OpacityMap))
-            throw std::runtime_error("bad texture index");
-    m.meshesPlaced = r.Pod<uint64_t>();
-    m.meshesExcluded = r.Pod<uint64_t>();
-    m.excludeMaterialsMatched = r.Bools();
-    m.excludeNamesMatched = r.Bools();
-    const uint64_t warnings = r.Pod<uint64_t>();
-    for (uint64_t i = 0; i < warnings; ++i) m.warnings.push_back(r.Str());
-    const uint64_t cameras = r.Pod<uint64_t>();
-    for (uint64_t i = 0; i < cameras; ++i) {
-        FileCamera c;
-        c.name = r.Str();
-        c.position = r.Pod<Vec3>(), c.lookAt = r.Pod<Vec3>(), c.up = r.Pod<Vec3>();
-        c.horizontalFov = r.Pod<float>(), c.aspect = r.Pod<float>(), c.fov = r.Pod<FileCamera::Fov>();
-        if (static_cast<uint8_t>(c.fov) > static_cast<uint8_t>(FileCamera::Fov::GltfYfovTimesAspect))
-            throw std::runtime_error("bad camera convention");
-        c.orthographic = r.Pod<uint8_t>() != 0;
-        m.cameras.push_back(std::move(c));
-    }
-    const uint64_t lights = r.Pod<uint64_t>();
-    for (uint64_t i = 0; i < lights; ++i) {
-        FileLight l;
-        l.name = r.Str();
-        l.type = r.Pod<FileLight::Type>();
-        if (static_cast<uint8_t>(l.type) > static_cast<uint8_t>(FileLight::Type::Unsupported))
-            throw std::runtime_error("bad light type");
-        l.unsupported = r.Str();
-        l.position = r.Pod<Vec3>(), l.direction = r.Pod<Vec3>(), l.color = r.Pod<Color>();
-        l.constant = r.Pod<float>(), l.linear = r.Pod<float>(), l.quadratic = r.Pod<float>();
-        l.inner = r.Pod<float>(), l.outer = r.Pod<float>(), l.range = r.Pod<float>();
-        m.lights.push_back(std::move(l));
-    }
+    ChildFieldReader fields(&r);
+    LoadedMeshFields(fields, m);
+    CheckReadMesh(m);
     return m;
 }
 

@@ -37,27 +37,52 @@ double DecodeSeconds(const std::vector<const TextureSource*>& sources) {
 
 enum : uint8_t { kDecoded = 1, kFailed = 2 };
 
-/// The child's record of one image: its texels, or why it cannot be read.
+// A decoded image's fields, in the order they are written and read (ChildFieldWriter):
+// listed once, for both directions. D is DecodedImage, or const DecodedImage to write it.
+template <typename Archive, typename D>
+void DecodedImageFields(Archive& a, D& image) {
+    a(image.width, image.height, image.ldr, image.hdr);
+}
+
+/// The child's record of one image: kDecoded and its texels, or kFailed and why it cannot
+/// be read.
 void WriteRecord(int fd, const TextureSource& source, const TextureCache::Decoder& decode) {
     ChildWriter w;
     DecodedImage image;
+    const auto failed = [&](const std::string& why) {
+        w = ChildWriter();
+        w.Pod<uint8_t>(kFailed);
+        w.Str(why);
+    };
     try {
         image = decode(source);
         w.Pod<uint8_t>(kDecoded);
-        w.Pod<int32_t>(image.width);
-        w.Pod<int32_t>(image.height);
-        w.Vec(image.ldr);
-        w.Vec(image.hdr);
+        ChildFieldWriter fields(&w);
+        DecodedImageFields(fields, image);
     } catch (const std::bad_alloc&) {
-        w = ChildWriter();
-        w.Pod<uint8_t>(kFailed);
-        w.Str("decoding it needs more memory than this process may use");
+        failed("decoding it needs more memory than this process may use");
     } catch (const std::exception& e) {
-        w = ChildWriter();
-        w.Pod<uint8_t>(kFailed);
-        w.Str(e.what());
+        failed(e.what());
     }
     if (!w.AppendTo(fd)) _exit(3);
+}
+
+/// Reads the record WriteRecord wrote of image `i`: *out[i] its texture, or *why[i] the
+/// reason it cannot be read. Throws std::runtime_error on a record cut short or malformed.
+void ReadRecord(ChildReader* r, size_t i, std::vector<std::shared_ptr<const Texture>>* out,
+                std::vector<std::string>* why) {
+    const uint8_t kind = r->Pod<uint8_t>();
+    if (kind == kDecoded) {
+        DecodedImage image;
+        ChildFieldReader fields(r);
+        DecodedImageFields(fields, image);
+        if (!image.Consistent()) throw std::runtime_error("inconsistent texels");
+        (*out)[i] = std::move(image).MakeTexture();
+    } else if (kind == kFailed) {
+        (*why)[i] = r->Str();
+    } else {
+        throw std::runtime_error("bad record");
+    }
 }
 
 /// Decodes `todo` in child processes: *out[i] the texture of todo[i], or *why[i] the reason
@@ -86,20 +111,7 @@ void DecodeIsolated(const std::vector<const TextureSource*>& todo, const Texture
         ChildReader r(child.Bytes());
         try {
             while (next < todo.size() && !r.AtEnd()) {
-                const uint8_t kind = r.Pod<uint8_t>();
-                if (kind == kDecoded) {
-                    DecodedImage image;
-                    image.width = r.Pod<int32_t>();
-                    image.height = r.Pod<int32_t>();
-                    image.ldr = r.Vec<uint8_t>();
-                    image.hdr = r.Vec<float>();
-                    if (!image.Consistent()) throw std::runtime_error("inconsistent texels");
-                    (*out)[next] = std::move(image).MakeTexture();
-                } else if (kind == kFailed) {
-                    (*why)[next] = r.Str();
-                } else {
-                    throw std::runtime_error("bad record");
-                }
+                ReadRecord(&r, next, out, why);
                 ++next;
             }
         } catch (const std::exception&) {

@@ -2,7 +2,8 @@
 // decoder), run in a child process so that its crash, assertion, allocation bomb or endless
 // loop becomes an error message instead of the renderer's end: the child (fork) gets an
 // address-space limit and a deadline, and sends its result back through a memfd, which the
-// parent maps. ChildWriter and ChildReader serialise that result.
+// parent maps. ChildWriter and ChildReader serialise that result; ChildFieldWriter and
+// ChildFieldReader let one function list a record's fields for both directions.
 #pragma once
 
 #include <cstdint>
@@ -12,6 +13,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 namespace lm {
@@ -166,6 +168,103 @@ class ChildReader {
     }
     std::string_view bytes_;
     size_t at_ = 0;
+};
+
+/// A record's layout, listed once for both directions: a function
+///     template <typename Archive, typename R> void Fields(Archive& a, R& record)
+/// that calls a(field, ...) for the fields in their order, a.List(vector, visit) for a
+/// vector of records (visit(element) lists one element's fields) and a.Array(array, n) for
+/// n values without a length (their count known from the fields before). ChildFieldWriter
+/// writes the fields (R const), ChildFieldReader reads them back. A std::string, a vector
+/// of trivially copyable values, of bool or of strings goes with its length; a bool as one
+/// byte; any other trivially copyable value as its bytes.
+class ChildFieldWriter {
+  public:
+    explicit ChildFieldWriter(ChildWriter* w) : w_(*w) {}
+    template <typename... T>
+    void operator()(const T&... fields) {
+        (Put(fields), ...);
+    }
+    template <typename T, typename Visit>
+    void List(const std::vector<T>& records, Visit visit) {
+        w_.Pod<uint64_t>(records.size());
+        for (const T& r : records) visit(r);
+    }
+    /// `n` must be the array's size; written in place, so it must outlive WriteTo.
+    template <typename Values>
+    void Array(const Values& a, size_t n) {
+        w_.Raw(a.data(), n * sizeof(a[0]));
+    }
+    /// A check of the fields so far, made when they are read back (a writer's are right).
+    void Require(bool, const char*) {}
+
+  private:
+    void Put(const std::string& s) { w_.Str(s); }
+    void Put(const std::vector<bool>& v) { w_.Bools(v); }
+    void Put(const std::vector<std::string>& v) {
+        w_.Pod<uint64_t>(v.size());
+        for (const std::string& s : v) w_.Str(s);
+    }
+    template <typename T>
+    void Put(const std::vector<T>& v) {
+        static_assert(std::is_trivially_copyable_v<T>);
+        w_.Vec(v);  // in place: `v` must outlive WriteTo
+    }
+    void Put(bool b) { w_.Pod<uint8_t>(b ? 1 : 0); }
+    template <typename T>
+    void Put(const T& v) {
+        static_assert(std::is_trivially_copyable_v<T>);
+        w_.Pod(v);
+    }
+    ChildWriter& w_;
+};
+
+/// Reads back what ChildFieldWriter wrote, field by field (see there); throws
+/// std::runtime_error on a record cut short or a failed Require.
+class ChildFieldReader {
+  public:
+    explicit ChildFieldReader(ChildReader* r) : r_(*r) {}
+    template <typename... T>
+    void operator()(T&... fields) {
+        (Get(fields), ...);
+    }
+    template <typename T, typename Visit>
+    void List(std::vector<T>& records, Visit visit) {
+        const uint64_t n = r_.Pod<uint64_t>();
+        for (uint64_t i = 0; i < n; ++i) {
+            T r;
+            visit(r);
+            records.push_back(std::move(r));
+        }
+    }
+    template <typename Values>
+    void Array(Values& a, size_t n) {
+        const std::string_view bytes = r_.Raw(n * sizeof(a[0]));
+        a.resize(n);
+        if (n) std::memcpy(a.data(), bytes.data(), bytes.size());
+    }
+    void Require(bool ok, const char* what) {
+        if (!ok) throw std::runtime_error(what);
+    }
+
+  private:
+    void Get(std::string& s) { s = r_.Str(); }
+    void Get(std::vector<bool>& v) { v = r_.Bools(); }
+    void Get(std::vector<std::string>& v) {
+        const uint64_t n = r_.Pod<uint64_t>();
+        for (uint64_t i = 0; i < n; ++i) v.push_back(r_.Str());
+    }
+    template <typename T>
+    void Get(std::vector<T>& v) {
+        v = r_.Vec<T>();
+    }
+    void Get(bool& b) { b = r_.Pod<uint8_t>() != 0; }
+    template <typename T>
+    void Get(T& v) {
+        static_assert(std::is_trivially_copyable_v<T>);
+        v = r_.Pod<T>();
+    }
+    ChildReader& r_;
 };
 
 }  // namespace lm

@@ -1,5 +1,6 @@
 // isolated_child_test.cpp -- RunInChild: the result comes back; a crash, an endless loop and
-// an allocation past the limit end the child, not this process, and say how.
+// an allocation past the limit end the child, not this process, and say how; a record whose
+// fields one function lists (ChildFieldWriter, ChildFieldReader) comes back as written.
 #include "lightmesh/util/isolated_child.h"
 
 #include <gtest/gtest.h>
@@ -38,6 +39,74 @@ TEST(IsolatedChild, ItsResultComesBackThroughTheMemfd) {
     EXPECT_EQ(r.Pod<int32_t>(), 8);
     EXPECT_TRUE(r.AtEnd());
     EXPECT_THROW(r.Pod<int32_t>(), std::runtime_error);  // past the end: "truncated result"
+}
+
+enum class Shape : uint8_t { Round, Square };
+struct Part {
+    std::string name;
+    Shape shape = Shape::Round;
+    bool hidden = false;
+};
+struct Record {
+    int32_t count = 0;
+    std::vector<float> values;
+    std::vector<bool> flags;
+    std::vector<std::string> notes;
+    std::vector<Part> parts;
+    std::vector<double> raw;  // count values, without a length
+};
+
+// The record's fields, once for both directions.
+template <typename Archive, typename P>
+void PartFields(Archive& a, P& p) {
+    a(p.name, p.shape, p.hidden);
+}
+template <typename Archive, typename R>
+void RecordFields(Archive& a, R& r) {
+    a(r.count, r.values, r.flags, r.notes);
+    a.List(r.parts, [&](auto& p) { PartFields(a, p); });
+    a.Require(r.count >= 0, "negative count");
+    a.Array(r.raw, static_cast<size_t>(r.count));
+}
+
+TEST(IsolatedChild, ARecordsFieldsListedOnceComeBackAsWritten) {
+    Record sent;
+    sent.count = 3;
+    sent.values = {1.5f, -2};
+    sent.flags = {false, true};
+    sent.notes = {"one", "", "three"};
+    sent.parts = {{"lid", Shape::Square, true}, {"", Shape::Round, false}};
+    sent.raw = {0.25, 1e300, -0.0};
+    const ChildOutcome child = RunInChild("test", ChildLimits{}, [&](int fd) {
+        ChildWriter w;
+        ChildFieldWriter out(&w);
+        RecordFields(out, sent);
+        if (!w.WriteTo(fd)) _exit(4);
+    });
+    ASSERT_TRUE(child.Clean());
+    ChildReader r(child.Bytes());
+    ChildFieldReader in(&r);
+    Record got;
+    RecordFields(in, got);
+    EXPECT_TRUE(r.AtEnd());
+    EXPECT_EQ(got.count, 3);
+    EXPECT_EQ(got.values, sent.values);
+    EXPECT_EQ(got.flags, sent.flags);
+    EXPECT_EQ(got.notes, sent.notes);
+    ASSERT_EQ(got.parts.size(), 2u);
+    EXPECT_EQ(got.parts[0].name, "lid");
+    EXPECT_EQ(got.parts[0].shape, Shape::Square);
+    EXPECT_TRUE(got.parts[0].hidden);
+    EXPECT_FALSE(got.parts[1].hidden);
+    EXPECT_EQ(got.raw, sent.raw);
+    // Cut short anywhere, the record is refused rather than read past its end.
+    const std::string_view bytes = child.Bytes();
+    for (size_t n = 0; n < bytes.size(); n += 7) {
+        ChildReader cut(bytes.substr(0, n));
+        ChildFieldReader cutIn(&cut);
+        Record partial;
+        EXPECT_THROW(RecordFields(cutIn, partial), std::runtime_error) << n << " bytes";
+    }
 }
 
 TEST(IsolatedChild, ACrashIsASignalNotTheEndOfThisProcess) {
