@@ -78,6 +78,7 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
     if (cmd.thinCheck) options.lightMesh.thinCheck = *cmd.thinCheck;
     if (cmd.samples) options.areaLight.samples = *cmd.samples;
     if (cmd.softSamples) options.soft.samples = *cmd.softSamples;
+    if (cmd.lightCut) options.lightCut = *cmd.lightCut;
 
     if (cmd.variant && cmd.variant->empty())
         lm::ThrowError("--variant: must not be empty (leave it out for the default)");
@@ -99,6 +100,7 @@ std::unique_ptr<PreparedRender> PrepareRender(const RenderCommand& cmd) {
         {"thin_check", cmd.thinCheck.has_value()},
         {"samples", cmd.samples.has_value()},
         {"soft_samples", cmd.softSamples.has_value()},
+        {"light_cut", cmd.lightCut.has_value()},
         {"grid", cmd.grid.has_value()},
         {"textures", cmd.noTextures},
         {"instancing", cmd.noInstancing},

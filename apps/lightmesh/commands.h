@@ -114,6 +114,7 @@ struct RenderCommand {
     std::optional<float> ki, lightRadius;
     std::optional<int> samples;
     std::optional<int> softSamples;
+    std::optional<float> lightCut;
     std::optional<std::string> shadows, accel, variant, templateDir, cellSummaries, thinCheck;
     bool stats = false;
     bool noTextures = false;

@@ -82,6 +82,7 @@ void AddRenderCommand(CLI::App& app, RenderCommand* render, CLI::App** added) {
     AddSetting(cmd, "thin_check", &render->thinCheck)->group(paper);
     AddSetting(cmd, "samples", &render->samples);
     AddSetting(cmd, "soft_samples", &render->softSamples);
+    AddSetting(cmd, "light_cut", &render->lightCut);
     cmd->add_flag(lm::RenderSettingFor("textures").flag, render->noTextures, lm::RenderSettingFor("textures").help);
     cmd->add_flag(lm::RenderSettingFor("instancing").flag, render->noInstancing,
                   lm::RenderSettingFor("instancing").help);

@@ -10,6 +10,7 @@
 #include "lightmesh/geometry/cutouts.h"
 #include "lightmesh/geometry/instances.h"
 #include "lightmesh/geometry/triangle.h"
+#include "lightmesh/util/hash.h"
 
 namespace lm {
 
@@ -75,13 +76,6 @@ namespace {
 size_t TableSize(size_t entries) { return std::bit_ceil(std::max<size_t>(2 * entries, 16)); }
 constexpr uint32_t kEmpty = UINT32_MAX;
 
-uint64_t Mix(uint64_t h) {  // a 64-bit finaliser (splitmix64)
-    h ^= h >> 30;
-    h *= 0xBF58476D1CE4E5B9ull;
-    h ^= h >> 27;
-    h *= 0x94D049BB133111EBull;
-    return h ^ (h >> 31);
-}
 
 // Welds vertices by exact position (+0 and -0 together, a NaN coordinate with nothing):
 // a canonical id per position index, numbered in order of first appearance.
@@ -102,7 +96,7 @@ std::vector<uint32_t> WeldIds(const std::vector<Vec3>& positions) {
             out[i] = next++;
             continue;
         }
-        size_t slot = Mix((uint64_t(bits(p.x)) << 32 | bits(p.y)) ^ Mix(bits(p.z))) & mask;
+        size_t slot = Mix64((uint64_t(bits(p.x)) << 32 | bits(p.y)) ^ Mix64(bits(p.z))) & mask;
         for (;; slot = (slot + 1) & mask) {
             const uint32_t j = table[slot];
             if (j == kEmpty) {
@@ -130,7 +124,7 @@ CleanReport CleanMesh(TriangleMesh* mesh) {
     std::vector<uint32_t> table(TableSize(mesh->triangles.size()), kEmpty);
     const size_t mask = table.size() - 1;
     auto insert = [&](const std::array<uint32_t, 3>& k) {  // false if already there
-        size_t slot = Mix((uint64_t(k[0]) << 32 | k[1]) ^ Mix(k[2])) & mask;
+        size_t slot = Mix64((uint64_t(k[0]) << 32 | k[1]) ^ Mix64(k[2])) & mask;
         for (;; slot = (slot + 1) & mask) {
             if (table[slot] == kEmpty) {
                 table[slot] = static_cast<uint32_t>(keys.size());

@@ -66,9 +66,40 @@ TEST(ManyLights, ImagesAreIdenticalForAnyThreadCount) {
 
 // A range longer than the scene culls nothing: the image is the one without ranges, to the
 // bit, in every method (the lights' terms add in the same order through the cells' lists).
+// Soft shades every light here (--light-cut 0): without ranges it would cut them.
 TEST(ManyLights, RangeCoveringTheSceneCullsNothing) {
-    const Scene without = ManyLights(130), with = ManyLights(130, 100.0f);
+    Scene without = ManyLights(130), with = ManyLights(130, 100.0f);
+    without.render.lightCut = with.render.lightCut = 0;
     for (const char* method : kMethods) EXPECT_EQ(Render(without, method).pixels, Render(with, method).pixels) << method;
+}
+
+// The soft default under 130 lights that reach everywhere cuts them (render/light_cut.h):
+// the image stays near the exact sum's (every pixel within 3 % of its value, the mean
+// within 0.3 %), for fewer (point, light) pairs; an explicit 0 is the exact sum itself.
+TEST(ManyLights, TheSoftDefaultsLightCutStaysNearTheExactSum) {
+    Scene s = ManyLights(130);
+    s.render.maxDepth = 1;
+    auto accel = CreateAccelerator("embree", s.mesh);
+    auto shadows = CreateShadowMethod("soft", s, *accel, s.render);
+    const WhittedRenderer cut(s, *accel, *shadows, s.render);
+    ASSERT_NE(cut.Cuts(), nullptr);
+    EXPECT_EQ(cut.Cuts()->Error(), kDefaultLightCutError);
+    const RenderResult a = cut.Render();
+    s.render.lightCut = 0;
+    const WhittedRenderer exact(s, *accel, *shadows, s.render);
+    EXPECT_EQ(exact.Cuts(), nullptr);
+    const RenderResult b = exact.Render();
+    EXPECT_GT(a.counters.cutEntries, 0u);
+    EXPECT_LT(a.counters.cutEntries, a.counters.shadingPoints * 130 * 9 / 10);
+    EXPECT_LE(a.counters.cutLargest, 130u);
+    double sumA = 0, sumB = 0;
+    for (size_t i = 0; i < a.image.pixels.size(); ++i) {
+        const Color &p = a.image.pixels[i], &q = b.image.pixels[i];
+        EXPECT_NEAR(p.g, q.g, 0.03f * q.g + 1e-4f) << i;
+        sumA += p.g, sumB += q.g;
+    }
+    EXPECT_NEAR(sumA, sumB, 0.003 * sumB);
+    EXPECT_NE(a.image.pixels, b.image.pixels);  // the cut is an estimate, not the sum
 }
 
 // RT with culling: where every light is in range of the point a pixel sees, the pixel is

@@ -115,6 +115,20 @@ RenderJob::RenderJob(const Scene& scene, const RenderOptions& options, const Acc
                                              SoftFrameSamples(options_.soft));
 }
 
+StatsLines RenderJob::CounterLines(const RenderCounters& c) const {
+    StatsLines lines = frame_ ? frame_->CounterLines(c) : shadows_->CounterLines(c);
+    if (const LightCuts* cuts = renderer_->Cuts()) {
+        const double points = static_cast<double>(std::max<uint64_t>(c.shadingPoints, 1));
+        lines.insert(lines.begin(),
+                     {"light cut", StringPrintf("error bound %g %%, %zu lights in a hierarchy of %zu nodes (%s); per "
+                                                "shading point %.1f entries on average, %llu at most",
+                                                100.0 * cuts->Error(), lights_, cuts->NodeCount(),
+                                                FormatBytes(cuts->Bytes()).c_str(), static_cast<double>(c.cutEntries) / points,
+                                                static_cast<unsigned long long>(c.cutLargest))});
+    }
+    return lines;
+}
+
 RenderResult RenderJob::Render(ProgressReporter* progress, VisibilityImage* visibility) const {
     if (visibility && (visibility->width != options_.width || visibility->height != options_.height ||
                        visibility->lights != lights_))

@@ -46,9 +46,8 @@ class RenderJob {
     const Accelerator& Accel() const { return *accel_; }
     const ShadowMethod& Shadows() const { return *shadows_; }
     /// The shadow work's counts for --stats: the frame's (the soft default) or the method's.
-    StatsLines CounterLines(const RenderCounters& counters) const {
-        return frame_ ? frame_->CounterLines(counters) : shadows_->CounterLines(counters);
-    }
+    /// With a light cut, first its line: the bound, the hierarchy and the cuts' sizes.
+    StatsLines CounterLines(const RenderCounters& counters) const;
     const WhittedRenderer& Renderer() const { return *renderer_; }
     /// The shadow denoiser of "--shadows denoised", else null.
     const ShadowDenoiser* Denoiser() const { return denoiser_.get(); }

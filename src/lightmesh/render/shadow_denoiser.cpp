@@ -13,6 +13,7 @@
 #include "lightmesh/util/error.h"
 #include "lightmesh/util/parallel.h"
 #include "lightmesh/util/system.h"
+#include "lightmesh/util/hash.h"
 
 namespace lm {
 
@@ -26,10 +27,7 @@ constexpr int kTurns = 256;
 inline int TapTurn(int x, int y, int pass) {
     uint64_t z = (static_cast<uint64_t>(static_cast<uint32_t>(x)) << 32 | static_cast<uint32_t>(y)) +
                  0x9E3779B97F4A7C15ull * static_cast<uint64_t>(pass + 1);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    z ^= z >> 31;
-    return static_cast<int>(z >> 56);
+    return static_cast<int>(Mix64(z) >> 56);
 }
 
 /// The unit-disc taps (Vogel's spiral: uniform in area), their Gaussian weights, and the

@@ -48,14 +48,32 @@ void SoftFrame::SeedTile(Window& w, int row, int col, RenderCounters& c) const {
                 else differ |= d;
             }
             if (!differ) continue;
+            if (!lights64) {
+                // Past 64 lights, each neighbour's pairs walked beside the sample's (both
+                // ascend by light): the pairs of one light whose probes differ.
+                for (int k = 0; k < 4; ++k) {
+                    if (!nb[k]) continue;
+                    const Entry *o = nt[k]->entries.data() + nb[k]->first, *end = o + nb[k]->count;
+                    for (uint32_t e = s.first; e < s.first + s.count && o != end; ++e) {
+                        Entry& en = t.entries[e];
+                        while (o != end && o->light < en.light) ++o;
+                        if (o != end && o->light == en.light && o->probe != en.probe) en.seed = 1;
+                    }
+                }
+            }
             for (uint32_t e = s.first; e < s.first + s.count; ++e) {
                 Entry& en = t.entries[e];
-                if (radii_[en.light] <= 0) continue;  // a point light: the probe is the answer
-                if (lights64 && !(differ >> en.light & 1)) continue;
-                for (int k = 0; k < 4 && !en.seed; ++k) {
-                    if (!nb[k]) continue;
-                    const Entry* other = FindEntry(nt[k]->entries.data() + nb[k]->first, nb[k]->count, en.light);
-                    if (other && other->probe != en.probe) en.seed = 1;
+                if (radii_[en.light] <= 0) {  // a point light: the probe is the answer
+                    en.seed = 0;
+                    continue;
+                }
+                if (lights64) {
+                    if (!(differ >> en.light & 1)) continue;
+                    for (int k = 0; k < 4 && !en.seed; ++k) {
+                        if (!nb[k]) continue;
+                        const Entry* other = FindEntry(nt[k]->entries.data() + nb[k]->first, nb[k]->count, en.light);
+                        if (other && other->probe != en.probe) en.seed = 1;
+                    }
                 }
                 if (en.seed) {
                     ++c.method[kSoftFrameSeeds];

@@ -90,6 +90,10 @@ namespace soft_frame {
 /// The entry of `light` among a sample's entries (ascending by light), or null.
 template <typename E>
 E* FindEntry(E* first, uint32_t count, uint32_t light) {
+    if (count > 16) {  // many lights: halving (the entries ascend by light)
+        E* at = std::lower_bound(first, first + count, light, [](const E& e, uint32_t l) { return e.light < l; });
+        return at != first + count && at->light == light ? at : nullptr;
+    }
     for (uint32_t k = 0; k < count; ++k) {
         if (first[k].light == light) return first + k;
         if (first[k].light > light) break;

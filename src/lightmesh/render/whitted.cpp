@@ -21,6 +21,8 @@ WhittedRenderer::WhittedRenderer(const Scene& scene, const Accelerator& accel,
     : scene_(scene), accel_(accel), shadows_(shadows), options_(options),
       camera_(scene.camera, options.width, options.height), lightLists_(scene.lights, scene.mesh.Bounds()),
       lightTerms_(scene.lights) {
+    if (const float error = ResolvedLightCutError(options.lightCut, std::string(shadows.Name()), scene.lights); error > 0)
+        cuts_ = std::make_unique<LightCuts>(scene.lights, lightTerms_, error);
     if (options.aa < 1 || options.aa > 16) ThrowError("--aa %d: must be 1 to 16", options.aa);
     if (options.maxDepth < 1 || options.maxDepth > 64)
         ThrowError("max depth %d: must be 1 to 64", options.maxDepth);
@@ -91,6 +93,12 @@ void WhittedRenderer::PrepareShading(const Ray& ray, const Hit& hit, Lighting* l
     // from the lifted origin, decide (a cut on the facet's own normal would end the lit side
     // along the facets' edges). Where the mesh has no normals, ns is the facet's normal.
     const LightTermPoint point{sp.p, ns, ns, toEye, lit->kd, mat.ks, mat.phong};
+    if (cuts_) {  // the lights clustered under the cut's bound (its hierarchy knows their ranges)
+        lit->litCount = cuts_->Cut(point, lit->omega, lit->lit);
+        counters.cutEntries += lit->litCount;
+        counters.cutLargest = std::max<uint64_t>(counters.cutLargest, lit->litCount);
+        return;
+    }
     if (!lightLists_.Active()) {
         lit->litCount = lightTerms_.All(point, lit->omega, lit->lit);
         return;

@@ -8,6 +8,7 @@
 
 #include "lightmesh/accel/accelerator.h"
 #include "lightmesh/io/image.h"
+#include "lightmesh/render/light_cut.h"
 #include "lightmesh/render/light_lists.h"
 #include "lightmesh/render/light_terms.h"
 #include "lightmesh/render/visibility_image.h"
@@ -62,6 +63,8 @@ class WhittedRenderer {
     int TileCount() const { return TilesX() * ((options_.height + kTileSize - 1) / kTileSize); }
     /// The per-cell lists of the lights with a range (inactive when no light has one).
     const LightLists& Lists() const { return lightLists_; }
+    /// The light cut's hierarchy, or null where every light is shaded.
+    const LightCuts* Cuts() const { return cuts_.get(); }
     /// The pixels of one tile into *image (of the render's size): Pixel()'s values, with the
     /// camera rays of kPacketSize × kPacketSize pixels traced together (IntersectMany).
     /// With an origin, pixel (x, y) goes to image->At(x - originX, y - originY) instead
@@ -173,6 +176,7 @@ class WhittedRenderer {
     float spread_ = 0;  ///< radians between neighbouring camera rays (textures' footprints)
     LightLists lightLists_;  // the lights near each cell, where lights have a range
     LightTerms lightTerms_;  // the lights' arrays for their terms at a point
+    std::unique_ptr<LightCuts> cuts_;  // with a light cut: its hierarchy (else every light)
 };
 
 }  // namespace lm

@@ -39,6 +39,8 @@
 #include <string>
 #include <vector>
 
+#include "lightmesh/util/hash.h"
+
 namespace lm::mesh_import {
 namespace {
 
@@ -377,9 +379,7 @@ aiMesh* MakeMesh(const ObjData& o, size_t first, size_t end, const std::string& 
         for (int i = 0; i < 8; i += 2) {  // splitmix64's finaliser over pairs of floats
             uint64_t x = h + (uint64_t(std::bit_cast<uint32_t>(k[i])) << 32 | std::bit_cast<uint32_t>(k[i + 1])) +
                          0x9e3779b97f4a7c15ull;
-            x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-            x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-            h = x ^ (x >> 31);
+            h = Mix64(x);
         }
         return h;
     };

@@ -260,6 +260,7 @@ void ReadRender(const Reader& r, const Json& j, RenderOptions* ro, const std::st
     if (const Json* v = o.Find("thin_check")) ro->lightMesh.thinCheck = choice(*v, "thin_check");
     if (const Json* v = o.Find("samples")) ro->areaLight.samples = integer(*v, "samples");
     if (const Json* v = o.Find("soft_samples")) ro->soft.samples = integer(*v, "soft_samples");
+    if (const Json* v = o.Find("light_cut")) ro->lightCut = number(*v, "light_cut");
     if (const Json* v = o.Find("textures")) ro->textures = Bool(r, *v, o.Child("textures"));
     if (const Json* v = o.Find("instancing")) ro->instancing = Bool(r, *v, o.Child("instancing"));
     if (const Json* v = o.Find("exposure")) ro->exposure = number(*v, "exposure");

@@ -111,6 +111,7 @@ OJson RenderJson(const RenderOptions& o, const SceneSource& source) {
     if (set("thin_check")) j["thin_check"] = o.lightMesh.thinCheck;
     if (set("samples")) j["samples"] = o.areaLight.samples;
     if (set("soft_samples")) j["soft_samples"] = o.soft.samples;
+    if (set("light_cut")) j["light_cut"] = Num(o.lightCut);
     if (!o.textures || !source.textures) j["textures"] = false;
     if (!o.instancing || !source.instancing) j["instancing"] = false;
     if (o.exposure != 0) j["exposure"] = Num(o.exposure);

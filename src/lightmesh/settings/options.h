@@ -119,6 +119,12 @@ struct RenderOptions {
     LightMeshOptions lightMesh;
     AreaLightOptions areaLight;
     SoftShadowOptions soft;
+    /// The light cut's relative error bound (render/light_cut.h): each point's lights
+    /// clustered so that no cluster's error bound exceeds this share of the point's total;
+    /// 0 shades every light; below 0 (the default) is automatic: kDefaultLightCutError where
+    /// kLightCutMinLights lights or more have no range, else 0. The soft default's only:
+    /// every other method shades every light.
+    float lightCut = -1.0f;
     /// Whether materials use their images (a scene file's "textures"; --no-textures
     /// reaches the loader instead: SceneLoadOptions::textures).
     bool textures = true;

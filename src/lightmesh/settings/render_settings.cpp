@@ -70,6 +70,11 @@ const std::vector<RenderSetting>& RenderSettings() {
          "Soft shadows in a penumbra, per light: rays (soft: a multiple of 4, default 16) or directions "
          "(exact: a multiple of 16, a quarter first, the rest only in a penumbra; default 64)",
          "shadows", {"soft", "exact"}},
+        {"light_cut", "--light-cut", K::Float, 0, 1, {},
+         "Soft shadows of many lights: each point's lights clustered in a hierarchy, a cluster shaded and shadowed as one of its "
+         "lights, no cluster's error above this share of the point's total (Lightcuts); 0: every light. Default: "
+         "0.01 where 128 lights or more have no range, else 0",
+         "shadows", {"soft"}},
         {"textures", "--no-textures", K::Bool, 0, 0, {},
          "Leave the materials' images out (colour textures and alpha cut-outs): flat colours and solid "
          "surfaces (default: textures on)",

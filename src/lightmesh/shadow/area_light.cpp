@@ -29,17 +29,11 @@
 
 #include "lightmesh/settings/render_settings.h"
 #include "lightmesh/util/error.h"
+#include "lightmesh/util/hash.h"
 
 namespace lm {
 
 namespace {
-
-/// SplitMix64's output function (Steele, Lea & Flood 2014): a strong 64-bit mixer.
-constexpr uint64_t Mix64(uint64_t z) {
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
 
 /// A float in [0, 1) from 24 bits.
 constexpr float UnitFloat(uint64_t bits24) { return static_cast<float>(bits24 & 0xFFFFFF) * 0x1p-24f; }

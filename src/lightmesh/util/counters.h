@@ -24,6 +24,8 @@ struct RenderCounters {
     uint64_t reflectionRays = 0;  ///< mirror rays
     uint64_t shadowRays = 0;      ///< shadow rays from shading points, by any shadow method
     uint64_t shadingPoints = 0;   ///< hits that were shaded
+    uint64_t cutEntries = 0;      ///< entries of the light cuts made (render/light_cut.h)
+    uint64_t cutLargest = 0;      ///< the largest cut (a maximum, not a sum)
     std::array<uint64_t, kMethodCounterSlots> method{};  ///< the shadow method's own counts
 
     RenderCounters& operator+=(const RenderCounters& o) {
@@ -31,12 +33,14 @@ struct RenderCounters {
         reflectionRays += o.reflectionRays;
         shadowRays += o.shadowRays;
         shadingPoints += o.shadingPoints;
+        cutEntries += o.cutEntries;
+        cutLargest = cutLargest > o.cutLargest ? cutLargest : o.cutLargest;
         for (size_t i = 0; i < kMethodCounterSlots; ++i) method[i] += o.method[i];
         return *this;
     }
 };
 
-static_assert(sizeof(RenderCounters) == (4 + kMethodCounterSlots) * sizeof(uint64_t),
+static_assert(sizeof(RenderCounters) == (6 + kMethodCounterSlots) * sizeof(uint64_t),
               "RenderCounters must be uint64_t words only");
 
 }  // namespace lm
