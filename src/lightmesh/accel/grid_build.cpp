@@ -1,6 +1,7 @@
 // grid_build.cpp -- the nested uniform grid of the paper's section 2: its build (the top
 // level's resolution, the sub-grids, the flat arrays, the empty-space reach) and its figures.
-// The queries, the 3D-DDA traversal and its SIMD triangle filter, are grid.cpp.
+// The queries are grid.cpp (single rays), grid_packet.cpp (packets) and grid_filter.cpp (the
+// leaf cells' SIMD triangle filter).
 #include "lightmesh/accel/grid.h"
 #include "lightmesh/accel/grid_internal.h"
 
@@ -195,7 +196,7 @@ void RasterizeTriangle(const NestedGridAccel::Node& node, const NestedGridAccel:
 
 }  // namespace grid_detail
 
-// The queries' triangle filters (grid.cpp), of which the build picks one for this machine.
+// The queries' triangle filters (grid_filter.cpp), of which the build picks one for this machine.
 using grid_detail::FilterBlocks4;
 using grid_detail::FilterBlocks8;
 using grid_detail::HasAvx2;
