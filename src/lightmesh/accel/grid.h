@@ -162,7 +162,14 @@ class NestedGridAccel final : public Accelerator {
                                      float* t, uint64_t* ties, float* bary);
 
   private:
+    // The build (grid_build.cpp): the constructor's steps.
     struct Builder;
+    struct BuildLevel;  // one level under construction
+    void SetBounds(const std::vector<Tri>& tris, std::vector<uint32_t>* ids);
+    uint64_t Flatten(BuildLevel& top, std::vector<BuildLevel*>* queue);
+    void FillBlocks(const std::vector<BuildLevel*>& queue, const std::vector<Tri>& tris, uint64_t laneCount);
+    void SetSubGridBoxes();
+    void ChooseFilters();
     struct PacketLanes;  // a packet's rays, lane by lane (grid_packet_walk.h)
     struct SliceLanes;   // the rays' stretches across one slice of one level (grid_packet_walk.h)
     template <typename Query>
