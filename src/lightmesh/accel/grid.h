@@ -108,8 +108,8 @@ class NestedGridAccel final : public Accelerator {
     const Stats& GetStats() const { return stats_; }
 
     /// One grid level: `res` cells of size `cellSize` from `lo`, whose cells are
-    /// cells_[firstCell ...]. (Public only so the helpers of grid.cpp and grid_build.cpp
-    /// can name it.)
+    /// cells_[firstCell ...]. (Public only so the grid's helpers, in its private headers and
+    /// .cpp files, can name it.)
     struct Node {
         Vec3 lo;
         Vec3 cellSize;
@@ -122,7 +122,7 @@ class NestedGridAccel final : public Accelerator {
         Vec3 p0, p1, p2;
     };
     /// Eight triangles of one leaf cell, coordinate by coordinate (v[3·vertex + axis][lane]),
-    /// so that one ray is tested against all eight with SIMD instructions (grid.cpp), and
+    /// so that one ray is tested against all eight with SIMD instructions (grid_filter.cpp), and
     /// their primitive ids: a cell's test reads its blocks and nothing else.
     struct alignas(32) TriBlock {
         float v[9][8];
@@ -162,9 +162,16 @@ class NestedGridAccel final : public Accelerator {
                                      float* t, uint64_t* ties, float* bary);
 
   private:
+    // The build (grid_build.cpp): the constructor's steps.
     struct Builder;
-    struct PacketLanes;  // a packet's rays, lane by lane (grid.cpp)
-    struct SliceLanes;   // the rays' stretches across one slice of one level (grid.cpp)
+    struct BuildLevel;  // one level under construction
+    void SetBounds(const std::vector<Tri>& tris, std::vector<uint32_t>* ids);
+    uint64_t Flatten(BuildLevel& top, std::vector<BuildLevel*>* queue);
+    void FillBlocks(const std::vector<BuildLevel*>& queue, const std::vector<Tri>& tris, uint64_t laneCount);
+    void SetSubGridBoxes();
+    void ChooseFilters();
+    struct PacketLanes;  // a packet's rays, lane by lane (grid_packet_walk.h)
+    struct SliceLanes;   // the rays' stretches across one slice of one level (grid_packet_walk.h)
     template <typename Query>
     bool Walk(uint32_t node, const Ray& ray, const Vec3& invD, float tEnter, float tExit, Query& query) const;
     template <typename Query>
@@ -174,20 +181,23 @@ class NestedGridAccel final : public Accelerator {
     template <typename Query>
     void PacketWalk(uint32_t node, PacketLanes& p, uint64_t lanes, const float* tLo, const float* tHi,
                     Query* queries) const;
+    // The packet's walk of one level and its leaf test, W rays per vector instruction
+    // (grid_packet_walk.h): one body for both instruction sets, always inlined into the
+    // entry points PacketWalkLanes4 and PacketWalkLanes8.
+    template <int W, typename Query>
+    [[gnu::always_inline]] void PacketWalkLanes(uint32_t node, PacketLanes& p, uint64_t lanes, const float* tLo,
+                                                const float* tHi, Query* queries) const;
+    template <int W, typename Query>
+    [[gnu::always_inline]] bool PacketLeaf(PacketLanes& p, const SliceLanes& sl, uint64_t group, const CellRef& ref,
+                                           Query* queries) const;
     template <typename Query>
     void PacketWalkLanes4(uint32_t node, PacketLanes& p, uint64_t lanes, const float* tLo, const float* tHi,
                           Query* queries) const;
-    template <typename Query>
-    bool PacketLeaf4(PacketLanes& p, const SliceLanes& sl, uint64_t group, const CellRef& ref,
-                     Query* queries) const;
 #if defined(__x86_64__) || defined(__i386__)
-    // Compiled for AVX2 (grid.cpp chooses them where the CPU has it).
+    // Compiled for AVX2 (PacketWalk chooses it where the CPU has it).
     template <typename Query>
     __attribute__((target("avx2"))) void PacketWalkLanes8(uint32_t node, PacketLanes& p, uint64_t lanes,
                                                           const float* tLo, const float* tHi, Query* queries) const;
-    template <typename Query>
-    __attribute__((target("avx2"))) bool PacketLeaf8(PacketLanes& p, const SliceLanes& sl, uint64_t group,
-                                                     const CellRef& ref, Query* queries) const;
 #endif
 
     const TriangleMesh& mesh_;

@@ -1,6 +1,7 @@
 // grid_build.cpp -- the nested uniform grid of the paper's section 2: its build (the top
 // level's resolution, the sub-grids, the flat arrays, the empty-space reach) and its figures.
-// The queries, the 3D-DDA traversal and its SIMD triangle filter, are grid.cpp.
+// The queries are grid.cpp (single rays), grid_packet.cpp (packets) and grid_filter.cpp (the
+// leaf cells' SIMD triangle filter).
 #include "lightmesh/accel/grid.h"
 #include "lightmesh/accel/grid_internal.h"
 
@@ -22,6 +23,15 @@ inline const float* Floats(const NestedGridAccel::Tri& t) { return &t.p0.x; }
 
 bool IsFiniteTri(const NestedGridAccel::Tri& t) {
     return IsFinite(t.p0) && IsFinite(t.p1) && IsFinite(t.p2);
+}
+
+// The mesh's triangles by primitive id, for the build only.
+std::vector<NestedGridAccel::Tri> CopyTriangles(const TriangleMesh& mesh) {
+    std::vector<NestedGridAccel::Tri> tris(mesh.triangles.size());
+    for (size_t i = 0; i < tris.size(); ++i)
+        tris[i] = NestedGridAccel::Tri{mesh.Vertex(uint32_t(i), 0), mesh.Vertex(uint32_t(i), 1),
+                                       mesh.Vertex(uint32_t(i), 2)};
+    return tris;
 }
 
 // floor(x) and ceil(x) of a finite x clamped to [lo, hi] (integers), in int arithmetic:
@@ -195,7 +205,7 @@ void RasterizeTriangle(const NestedGridAccel::Node& node, const NestedGridAccel:
 
 }  // namespace grid_detail
 
-// The queries' triangle filters (grid.cpp), of which the build picks one for this machine.
+// The queries' triangle filters (grid_filter.cpp), of which the build picks one for this machine.
 using grid_detail::FilterBlocks4;
 using grid_detail::FilterBlocks8;
 using grid_detail::HasAvx2;
@@ -243,14 +253,17 @@ std::array<int, 3> NestedGridAccel::AutoResolution(size_t triangles, const Bound
 }
 
 // One level under construction: its cells as CSR, and the sub-grids of its crowded cells.
+struct NestedGridAccel::BuildLevel {
+    Node node{};
+    int depth = 1;
+    std::vector<uint32_t> start;  // CSR over this level's cells
+    std::vector<uint32_t> prims;
+    std::vector<std::pair<uint32_t, std::unique_ptr<BuildLevel>>> children;  // by local cell
+};
+
+// Fills the levels with their triangles, top-down.
 struct NestedGridAccel::Builder {
-    struct Level {
-        Node node{};
-        int depth = 1;
-        std::vector<uint32_t> start;  // CSR over this level's cells
-        std::vector<uint32_t> prims;
-        std::vector<std::pair<uint32_t, std::unique_ptr<Level>>> children;  // by local cell
-    };
+    using Level = BuildLevel;
 
     const std::vector<Tri>& tris;
     const AccelOptions& options;
@@ -346,21 +359,49 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
     if (mesh.triangles.size() >= kChildBit)
         ThrowError("the grid holds at most %u triangles, the scene has %zu", kChildBit - 1,
                    mesh.triangles.size());
+    const std::vector<Tri> tris = CopyTriangles(mesh);
+    std::vector<uint32_t> ids;  // the triangles the grid holds
+    SetBounds(tris, &ids);
 
-    std::vector<Tri> tris(mesh.triangles.size());  // by primitive id, for the build only
-    for (size_t i = 0; i < tris.size(); ++i)
-        tris[i] = Tri{mesh.Vertex(uint32_t(i), 0), mesh.Vertex(uint32_t(i), 1),
-                       mesh.Vertex(uint32_t(i), 2)};
+    // The levels, top-down, then in the flat arrays.
+    Builder builder{tris, options_, double(epsAbs_)};
+    BuildLevel top;
+    top.node = Builder::MakeNode(box_.lo, box_.hi, AutoResolution(ids.size(), box_, options_.gridResolution));
+    builder.Fill(top, ids.data(), ids.size(), true);
+    std::vector<BuildLevel*> queue;  // the levels in the order of nodes_
+    const uint64_t laneCount = Flatten(top, &queue);
 
+    ComputeEmptyReach();
+    ComputeOctantReach();
+    if (!octantReach_.empty())
+        jumpReach_ = octantReach_.data(), jumpReachStride_ = octantReach_.size() / 8;
+    else if (!emptyReach_.empty())
+        jumpReach_ = emptyReach_.data(), jumpReachStride_ = 0;
+
+    FillBlocks(queue, tris, laneCount);
+    SetSubGridBoxes();
+    ChooseFilters();
+
+    // The arrays in huge pages count as whole pages (resident where transparent huge pages
+    // are on).
+    stats_.bytes = nodes_.size() * sizeof(Node) + LargeAllocationBytes(cells_.capacity() * sizeof(CellRef), kHugeArraysFrom) +
+                   occupied_.size() * sizeof(uint64_t) + LargeAllocationBytes(blockCount_ * sizeof(TriBlock), kHugeArraysFrom) +
+                   emptyReach_.size() + octantReach_.size();
+    stats_.buildMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - startTime)
+            .count();
+}
+
+// box_, boxAbs_ and epsAbs_ from the triangles; into *ids those with finite vertices.
+void NestedGridAccel::SetBounds(const std::vector<Tri>& tris, std::vector<uint32_t>* ids) {
     // The box of the triangles (not of stray vertices). Triangles with a non-finite vertex
     // are left out: they would make the box infinite, and IntersectTriangle never reports
     // them (every comparison with NaN fails).
-    std::vector<uint32_t> ids;
-    ids.reserve(tris.size());
+    ids->reserve(tris.size());
     Bounds3 b;
     for (uint32_t i = 0; i < tris.size(); ++i) {
         if (!IsFiniteTri(tris[i])) continue;
-        ids.push_back(i);
+        ids->push_back(i);
         b.Extend(tris[i].p0);
         b.Extend(tris[i].p1);
         b.Extend(tris[i].p2);
@@ -388,22 +429,21 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
     boxAbs_ = std::max(MaxComponent(Abs(b.lo)), MaxComponent(Abs(b.hi)));
 
     epsAbs_ = 2e-7f * extent + 2.5e-7f * maxAbs;
-    Builder builder{tris, options_, double(epsAbs_)};
-    Builder::Level top;
-    const auto res = AutoResolution(ids.size(), box_, options_.gridResolution);
-    top.node = Builder::MakeNode(box_.lo, box_.hi, res);
-    builder.Fill(top, ids.data(), ids.size(), true);
+}
 
-    // Flatten breadth-first: a node's index is its order in the queue, known when its
-    // parent's cells are written. A leaf's triangles go into blocks of 8 at once.
-    std::vector<Builder::Level*> queue{&top};
+// The levels into nodes_ and cells_ (*queue: the levels in the order of nodes_), with
+// occupied_ and the cell counts of stats_; returns how many lanes the leaf cells take.
+// Breadth-first: a node's index is its order in the queue, known when its parent's cells are
+// written. A leaf's triangles get their lanes in the blocks at once.
+uint64_t NestedGridAccel::Flatten(BuildLevel& top, std::vector<BuildLevel*>* queue) {
+    queue->assign(1, &top);
     {
         // cells_ at its final size at once: growing it by doubling copied and faulted in
         // memory a process's first build pays for (the garden: 473k cells of 24 bytes).
         size_t cellCount = 0;
-        std::vector<const Builder::Level*> pending{&top};
+        std::vector<const BuildLevel*> pending{&top};
         while (!pending.empty()) {
-            const Builder::Level* level = pending.back();
+            const BuildLevel* level = pending.back();
             pending.pop_back();
             cellCount += level->start.size() - 1;
             for (const auto& child : level->children) pending.push_back(child.second.get());
@@ -411,11 +451,12 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
         cells_.reserve(cellCount);
     }
     stats_ = Stats{};
-    stats_.resolution = res;
+    const int* res = top.node.res;
+    stats_.resolution = {res[0], res[1], res[2]};
     stats_.topCells = size_t(res[0]) * res[1] * res[2];
     uint64_t laneCount = 0;  // the leaf cells' triangles one after another, 8 lanes per block
-    for (size_t q = 0; q < queue.size(); ++q) {
-        Builder::Level& level = *queue[q];
+    for (size_t q = 0; q < queue->size(); ++q) {
+        BuildLevel& level = *(*queue)[q];
         Node node = level.node;
         node.firstCell = uint32_t(cells_.size());
         nodes_.push_back(node);
@@ -425,9 +466,9 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
         for (size_t c = 0; c < cells; ++c) {
             CellRef ref{0, 0, {}};
             if (k < level.children.size() && level.children[k].first == c) {
-                if (queue.size() >= kChildBit) ThrowError("the grid is too large (%zu sub-grids)", queue.size());
-                ref.count = kChildBit | uint32_t(queue.size());
-                queue.push_back(level.children[k].second.get());
+                if (queue->size() >= kChildBit) ThrowError("the grid is too large (%zu sub-grids)", queue->size());
+                ref.count = kChildBit | uint32_t(queue->size());
+                queue->push_back(level.children[k].second.get());
                 ++k;
             } else if (const uint32_t n = level.start[c + 1] - level.start[c]; n > 0) {
                 ref = {uint32_t(laneCount), n, {}};
@@ -450,22 +491,19 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
     stats_.subGrids = nodes_.size() - 1;
     nodes_.shrink_to_fit();
     cells_.shrink_to_fit();
+    return laneCount;
+}
 
-    ComputeEmptyReach();
-    ComputeOctantReach();
-    if (!octantReach_.empty())
-        jumpReach_ = octantReach_.data(), jumpReachStride_ = octantReach_.size() / 8;
-    else if (!emptyReach_.empty())
-        jumpReach_ = emptyReach_.data(), jumpReachStride_ = 0;
-
+// blocks_: the leaf cells' triangles, 8 lanes per block, and the leaf cells' content boxes.
+void NestedGridAccel::FillBlocks(const std::vector<BuildLevel*>& queue, const std::vector<Tri>& tris,
+                                 uint64_t laneCount) {
     // The blocks, node by node in parallel (each leaf cell writes its own lanes; the storage
     // is not cleared first, a pass over memory the size of the grid, so the last block's
     // unused lanes are cleared here).
     const uint64_t blockCount = (laneCount + 7) / 8;
     blockCount_ = blockCount;
-    const size_t blockBytes = blockCount * sizeof(TriBlock);
     if (blockCount) {
-        blocks_.reset(static_cast<TriBlock*>(AllocateLarge(blockBytes, alignof(TriBlock), kHugeArraysFrom)));
+        blocks_.reset(static_cast<TriBlock*>(AllocateLarge(blockCount * sizeof(TriBlock), alignof(TriBlock), kHugeArraysFrom)));
         TriBlock& last = blocks_[blockCount - 1];
         for (uint64_t lane = laneCount % 8; lane != 0 && lane < 8; ++lane) {
             for (int row = 0; row < 9; ++row) last.v[row][lane] = 0.0f;
@@ -474,7 +512,7 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
     }
     // Each leaf cell's content box (CellRef) with it, from the vertices it copies.
     ForEachIndex(queue.size(), blockCount > 4096 ? 2 : SIZE_MAX, [&](size_t q) {
-        const Builder::Level& level = *queue[q];
+        const BuildLevel& level = *queue[q];
         const Node& node = nodes_[q];
         const size_t cells = level.start.size() - 1;
         int cell[3] = {0, 0, 0};  // c's x, y, z
@@ -503,11 +541,14 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
             grid_detail::SetContentBox(node, cell, lo, hi, &ref);
         }
     });
-    // A cell holding a sub-grid gets the union of its sub-cells' boxes (every point of a
-    // triangle in the cell is in a sub-cell that holds the triangle), children before their
-    // parents (a sub-grid's node comes after its parent's in the queue): no second pass over
-    // the crowded cells' triangles, which are most of the references of a large scene.
-    for (size_t q = queue.size(); q-- > 0;) {
+}
+
+// A cell holding a sub-grid gets the union of its sub-cells' boxes (every point of a
+// triangle in the cell is in a sub-cell that holds the triangle), children before their
+// parents (a sub-grid's node comes after its parent's in nodes_): no second pass over
+// the crowded cells' triangles, which are most of the references of a large scene.
+void NestedGridAccel::SetSubGridBoxes() {
+    for (size_t q = nodes_.size(); q-- > 0;) {
         const Node& node = nodes_[q];
         const size_t cells = size_t(node.res[0]) * node.res[1] * node.res[2];
         for (size_t c = 0; c < cells; ++c) {
@@ -515,19 +556,15 @@ NestedGridAccel::NestedGridAccel(const TriangleMesh& mesh, const AccelOptions& o
             if (ref.count & kChildBit) grid_detail::SetBoxFromSubGrid(nodes_[ref.count & ~kChildBit], cells_.data(), &ref);
         }
     }
+}
+
+// The triangle filters for this machine (grid_filter.cpp).
+void NestedGridAccel::ChooseFilters() {
     simdWidth_ = options_.gridSimdWidth == 4 || !HasAvx2() ? 4 : 8;
     filter_ = simdWidth_ == 8 ? FilterBlocks8 : FilterBlocks4;
     nearestFilter_ = simdWidth_ == 8 ? grid_detail::FilterBlocks8Bary : grid_detail::FilterBlocks4Bary;
     anyFilter_ = simdWidth_ == 8 ? grid_detail::FilterBlocks8Any : grid_detail::FilterBlocks4Any;
 
-    // The arrays in huge pages count as whole pages (resident where transparent huge pages
-    // are on).
-    stats_.bytes = nodes_.size() * sizeof(Node) + LargeAllocationBytes(cells_.capacity() * sizeof(CellRef), kHugeArraysFrom) +
-                   occupied_.size() * sizeof(uint64_t) + LargeAllocationBytes(blockBytes, kHugeArraysFrom) +
-                   emptyReach_.size() + octantReach_.size();
-    stats_.buildMs =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - startTime)
-            .count();
 }
 
 NestedGridAccel::~NestedGridAccel() = default;

@@ -1,5 +1,5 @@
-// grid_internal.h -- what the nested grid's build (grid_build.cpp) and its queries (grid.cpp)
-// share; not part of the grid's interface.
+// grid_internal.h -- what the nested grid's build (grid_build.cpp) and its triangle filter
+// (grid_filter.cpp) share; not part of the grid's interface.
 #pragma once
 
 #include <algorithm>
@@ -13,7 +13,7 @@
 namespace lm::grid_detail {
 
 /// The leaf cells' triangle filters (NestedGridAccel::BlockFilter), 4 and 8 lanes at a time,
-/// defined with the queries that call them (grid.cpp); the build picks one for the machine.
+/// defined in grid_filter.cpp; the build picks one for the machine.
 uint64_t FilterBlocks4(const NestedGridAccel::TriBlock* blocks, uint32_t count, const detail::PreparedRay& ray,
                        float* t, uint64_t* ties, float* bary);
 /// Without AVX2 (not x86) the 4-lane filter.

@@ -1,18 +1,93 @@
-// grid_packet_walk.inc -- the body of NestedGridAccel::PacketWalkLanes4 / PacketWalkLanes8 (a
-// packet's walk of one level, LM_PACKET_LANES rays per vector instruction), included twice by
-// grid.cpp: once for the baseline instruction set, once with LM_PACKET_TARGET the AVX2 target
-// attribute. Not a header: it has no include guard on purpose.
+// grid_packet_walk.h -- the nested grid's packets (private to the grid, grid_packet.cpp's):
+// a packet's rays lane by lane, and its walk of one level with its leaf test, W rays per
+// vector instruction.
+//
+// The walk and the leaf test are templates on W in generic vector code, always inlined into
+// their entry points: PacketWalkLanes4 (SSE, the x86-64 baseline) and PacketWalkLanes8,
+// compiled for AVX2 with a target attribute and chosen at run time, so that the one body
+// becomes the code of both instruction sets. A target attribute cannot depend on W, and it
+// does not reach into functions the body calls; so the body's helpers are always_inline too
+// and take 32-byte vectors by reference and return them through pointers (by value, outside
+// AVX code, they would change the ABI), and the one AVX2 helper, LaneBits<8>, is inlined
+// once the body is in the AVX2 entry point (grid_lanes.h).
+#pragma once
 
-// Helpers as macros, not lambdas or functions: a target attribute does not reach a lambda
-// defined in the function, and a function taking 32-byte vectors by value without AVX would
-// change the ABI.
-#define LM_VMIN(a, b) ((a) < (b) ? (a) : (b))
-#define LM_VMAX(a, b) ((a) > (b) ? (a) : (b))
-#define LM_LOAD(x) (*reinterpret_cast<const VF*>(x))
-// The cell index, clamped to the level, of coordinate x (a vector) along an axis.
-#define LM_CELL(x, lo, inv, maxCell) __builtin_convertvector(LM_VMIN(LM_VMAX(((x) - (lo)) * (inv), zero), maxCell), VI)
-// After a query of lane i changed, the packet's copies of what it bounds.
-#define LM_SYNC_LANE(i) (p.cap[i] = q[i].Cap(), p.capId[i] = q[i].CapId(), p.ftMax[i] = q[i].ray.tMax)
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <tuple>
+#include <utility>
+
+#include "lightmesh/accel/grid.h"
+#include "lightmesh/accel/grid_lanes.h"
+#include "lightmesh/accel/grid_queries.h"
+#include "lightmesh/geometry/triangle.h"
+#include "lightmesh/math/simd.h"
+
+namespace lm {
+
+struct NestedGridAccel::PacketLanes {
+    static constexpr int kMax = kPacketSize;
+    int width = 0;           // lanes the vector loops run over (a multiple of 8)
+    int K = 0, U = 1, V = 2;  // the slicing axis and the other two
+    int s = 1;               // the rays' direction along K
+    float pad = 0;           // world units: how far rounding may put a computed point
+    float slope = 0;         // top-level cells a ray moves sideways (U or V) per slice, at most
+    uint64_t live = 0;       // lanes still walking the top level
+    // What the top level's slices are skipped by: the empty cubes of the rays' octant when
+    // they share one (octantReach_), else the centred boxes (emptyReach_), or nullptr.
+    const uint8_t* skipReach = nullptr;
+    alignas(32) float oK[kMax], oU[kMax], oV[kMax], dK[kMax], dU[kMax], dV[kMax], invK[kMax];
+    alignas(32) float t0[kMax], t1[kMax];  // each ray's range clipped to the box
+    alignas(32) float cap[kMax];           // Query::Cap(): hits beyond it cannot win
+    const Ray* ray[kMax];
+    Vec3 invD[kMax];
+    // The watertight test's frame (PreparedRay's axes) of the first lane, the lanes that
+    // share it (in a coherent packet, nearly all), and their rays in it: a leaf cell tests
+    // one triangle against W of them at once (PacketLeaf).
+    int fkx = 0, fky = 1, fkz = 2;
+    uint64_t frameLanes = 0;
+    alignas(32) float fox[kMax], foy[kMax], foz[kMax], fsx[kMax], fsy[kMax], fsz[kMax], ftMin[kMax], ftMax[kMax];
+    alignas(32) int capId[kMax];  // Query::CapId()
+
+    // After lane i's query changed, the packet's copies of what it bounds.
+    template <typename Query>
+    [[gnu::always_inline]] void Sync(int i, const Query& q) {
+        cap[i] = q.Cap(), capId[i] = q.CapId(), ftMax[i] = q.ray.tMax;
+    }
+};
+
+// One slice of one level as the packet's rays cross it: each ray's stretch [a, b], the
+// rectangle [uLo, uHi] × [vLo, vHi] its points there lie in (padded by the packet's `pad`),
+// and the cells (u0 … u1) × (v0 … v1) of that rectangle; empty ranges for rays not in the
+// slice.
+struct NestedGridAccel::SliceLanes {
+    static constexpr int kMax = kPacketSize;
+    alignas(32) float a[kMax], b[kMax];
+    alignas(32) float uLo[kMax], uHi[kMax], vLo[kMax], vHi[kMax];
+    alignas(32) int u0[kMax], u1[kMax];
+    alignas(32) int v0[kMax], v1[kMax];
+};
+
+namespace grid_detail {
+
+// The W floats (or ints) at x as one vector (x 32-byte aligned for W = 8).
+template <typename V, typename T>
+[[gnu::always_inline]] inline const V& Lanes(const T* x) {
+    return *reinterpret_cast<const V*>(x);
+}
+
+// The cell indices, clamped to [0, maxCell], of the coordinates x along an axis whose cells
+// start at lo, 1 / inv apart.
+template <typename VF, typename VI>
+[[gnu::always_inline]] inline void CellIndices(const VF& x, const VF& lo, const VF& inv, const VF& maxCell, VI* cell) {
+    const VF zero = {};
+    const VF f = (x - lo) * inv;
+    const VF clampedLo = f > zero ? f : zero;
+    *cell = __builtin_convertvector(clampedLo < maxCell ? clampedLo : maxCell, VI);
+}
+
+}  // namespace grid_detail
 
 // A leaf cell's triangles against the rays of `group` (lanes in the packet's shared frame),
 // one triangle against W rays per step, with the watertight test's very operations in each
@@ -28,10 +103,12 @@
 // shadow ray is done at its first. The tie cases go through IntersectPrepared itself.
 // Returns false if there were more tie cases than it keeps (nothing is lost: the caller
 // then tests those rays one by one, and a query keeps the least hit whatever the order).
-template <typename Query>
-LM_PACKET_TARGET bool NestedGridAccel::LM_PACKET_LEAF(PacketLanes& p, const SliceLanes& sl, uint64_t group,
-                                                      const CellRef& ref, Query* q) const {
-    constexpr int W = LM_PACKET_LANES;
+template <int W, typename Query>
+inline bool NestedGridAccel::PacketLeaf(PacketLanes& p, const SliceLanes& sl, uint64_t group, const CellRef& ref,
+                                        Query* q) const {
+    using grid_detail::Lanes;
+    using grid_detail::LaneBits;
+    using grid_detail::WatertightLanes;
     using VF = typename SimdVectors<W>::F;
     using VI = typename SimdVectors<W>::I;
     const VF zero = {};
@@ -67,11 +144,11 @@ LM_PACKET_TARGET bool NestedGridAccel::LM_PACKET_LEAF(PacketLanes& p, const Slic
         for (int i = gFirst; i < gEnd; i += W) {
             uint32_t lanes = uint32_t(active >> i) & ((1u << W) - 1);
             if (!lanes) continue;
-            lanes &= LaneBits<W>((triULo <= LM_LOAD(sl.uHi + i)) & (triUHi >= LM_LOAD(sl.uLo + i)) &
-                                 (triVLo <= LM_LOAD(sl.vHi + i)) & (triVHi >= LM_LOAD(sl.vLo + i)));
+            lanes &= LaneBits<W>((triULo <= Lanes<VF>(sl.uHi + i)) & (triUHi >= Lanes<VF>(sl.uLo + i)) &
+                                 (triVLo <= Lanes<VF>(sl.vHi + i)) & (triVHi >= Lanes<VF>(sl.vLo + i)));
             if (!lanes) continue;
-            const VF ox = LM_LOAD(p.fox + i), oy = LM_LOAD(p.foy + i), oz = LM_LOAD(p.foz + i);
-            const VF sx = LM_LOAD(p.fsx + i), sy = LM_LOAD(p.fsy + i), sz = LM_LOAD(p.fsz + i);
+            const VF ox = Lanes<VF>(p.fox + i), oy = Lanes<VF>(p.foy + i), oz = Lanes<VF>(p.foz + i);
+            const VF sx = Lanes<VF>(p.fsx + i), sy = Lanes<VF>(p.fsy + i), sz = Lanes<VF>(p.fsz + i);
             const WatertightLanes<VF, VI> tri(Ax, Ay, Az, Bx, By, Bz, Cx, Cy, Cz, ox, oy, oz, sx, sy);
             for (uint32_t tie = LaneBits<W>(tri.zeroEdge) & lanes; tie; tie &= tie - 1) {
                 if (ties == kMaxTies) {
@@ -85,19 +162,19 @@ LM_PACKET_TARGET bool NestedGridAccel::LM_PACKET_LEAF(PacketLanes& p, const Slic
             if (!in) continue;
             VF t, u, v, w, det;  // (u unused: b0 is not kept)
             VI hit;
-            tri.Hits(sz, LM_LOAD(p.ftMin + i), LM_LOAD(p.ftMax + i), &hit, &t, &u, &v, &w, &det);
+            tri.Hits(sz, Lanes<VF>(p.ftMin + i), Lanes<VF>(p.ftMax + i), &hit, &t, &u, &v, &w, &det);
             hit &= ((none + int(in)) & laneBit) != none;
             if constexpr (Query::kClosest) {
-                const VF bt = LM_LOAD(bestT + i);
+                const VF bt = Lanes<VF>(bestT + i);
                 const VI bid = *reinterpret_cast<const VI*>(bestId + i);
                 const VI better = hit & ((t < bt) | ((t == bt) & (idV < bid)));
                 const uint32_t betterBits = LaneBits<W>(better);
                 if (!betterBits) continue;
                 *reinterpret_cast<VF*>(bestT + i) = better ? t : bt;
                 *reinterpret_cast<VI*>(bestId + i) = better ? idV : bid;
-                *reinterpret_cast<VF*>(bestV + i) = better ? v : LM_LOAD(bestV + i);
-                *reinterpret_cast<VF*>(bestW + i) = better ? w : LM_LOAD(bestW + i);
-                *reinterpret_cast<VF*>(bestDet + i) = better ? det : LM_LOAD(bestDet + i);
+                *reinterpret_cast<VF*>(bestV + i) = better ? v : Lanes<VF>(bestV + i);
+                *reinterpret_cast<VF*>(bestW + i) = better ? w : Lanes<VF>(bestW + i);
+                *reinterpret_cast<VF*>(bestDet + i) = better ? det : Lanes<VF>(bestDet + i);
                 won |= uint64_t(betterBits) << i;
             } else {
                 const uint64_t hitBits = uint64_t(LaneBits<W>(hit)) << i;
@@ -114,7 +191,7 @@ LM_PACKET_TARGET bool NestedGridAccel::LM_PACKET_LEAF(PacketLanes& p, const Slic
         } else {
             q[i].found = true;
         }
-        LM_SYNC_LANE(i);
+        p.Sync(i, q[i]);
     }
     if (overflow) return false;
     for (int k = 0; k < ties; ++k) {
@@ -130,15 +207,18 @@ LM_PACKET_TARGET bool NestedGridAccel::LM_PACKET_LEAF(PacketLanes& p, const Slic
             q[i].Offer(block.id[j], th.t, th.b1, th.b2);
         else
             q[i].found = true;
-        LM_SYNC_LANE(i);
+        p.Sync(i, q[i]);
     }
     return true;
 }
 
-template <typename Query>
-LM_PACKET_TARGET void NestedGridAccel::LM_PACKET_WALK_LANES(uint32_t nodeIndex, PacketLanes& p, uint64_t lanes, const float* tLo,
-                                           const float* tHi, Query* q) const {
-    constexpr int W = LM_PACKET_LANES;
+template <int W, typename Query>
+inline void NestedGridAccel::PacketWalkLanes(uint32_t nodeIndex, PacketLanes& p, uint64_t lanes, const float* tLo,
+                                             const float* tHi, Query* q) const {
+    using grid_detail::CellIndices;
+    using grid_detail::CellSpan;
+    using grid_detail::Lanes;
+    using grid_detail::LaneBits;
     using VF = typename SimdVectors<W>::F;
     using VI = typename SimdVectors<W>::I;
     const Node& g = nodes_[nodeIndex];
@@ -184,19 +264,23 @@ LM_PACKET_TARGET void NestedGridAccel::LM_PACKET_WALK_LANES(uint32_t nodeIndex, 
         // Only the lane groups that still hold rays of this walk.
         const int width = lanes ? std::min(p.width, (64 - __builtin_clzll(lanes) + W - 1) / W * W) : 0;
         for (int i = (lanes ? __builtin_ctzll(lanes) / W * W : 0); i < width; i += W) {
-            const VF oK = LM_LOAD(p.oK + i), invK = LM_LOAD(p.invK + i);
-            const VF lo = LM_LOAD(tLo + i), hi = LM_LOAD(tHi + i), cap = LM_LOAD(p.cap + i);
+            const VF oK = Lanes<VF>(p.oK + i), invK = Lanes<VF>(p.invK + i);
+            const VF lo = Lanes<VF>(tLo + i), hi = Lanes<VF>(tHi + i), cap = Lanes<VF>(p.cap + i);
             const VF ta = (entryV - oK) * invK, tb = (exitV - oK) * invK;
-            const VF a = LM_VMAX(ta, lo), b = LM_VMIN(tb, LM_VMIN(hi, cap));
+            const VF hiCap = hi < cap ? hi : cap;
+            const VF a = ta > lo ? ta : lo, b = tb < hiCap ? tb : hiCap;
             const VI inSlice = (a <= b) & (((none + int((lanes >> i) & ((1u << W) - 1))) & laneBit) != none);
-            const VF oU = LM_LOAD(p.oU + i), dU = LM_LOAD(p.dU + i), oV = LM_LOAD(p.oV + i), dV = LM_LOAD(p.dV + i);
+            const VF oU = Lanes<VF>(p.oU + i), dU = Lanes<VF>(p.dU + i), oV = Lanes<VF>(p.oV + i), dV = Lanes<VF>(p.dV + i);
             const VF ua = oU + dU * a, ub = oU + dU * b, va = oV + dV * a, vb = oV + dV * b;
-            const VF uLo = LM_VMIN(ua, ub) - padV, uHi = LM_VMAX(ua, ub) + padV;
-            const VF vLo = LM_VMIN(va, vb) - padV, vHi = LM_VMAX(va, vb) + padV;
-            const VI u0 = inSlice ? LM_CELL(uLo, loU, invU, maxU) : emptyLo;
-            const VI u1 = inSlice ? LM_CELL(uHi, loU, invU, maxU) : emptyHi;
-            const VI v0 = inSlice ? LM_CELL(vLo, loV, invV, maxV) : emptyLo;
-            const VI v1 = inSlice ? LM_CELL(vHi, loV, invV, maxV) : emptyHi;
+            const VF uLo = (ua < ub ? ua : ub) - padV, uHi = (ua > ub ? ua : ub) + padV;
+            const VF vLo = (va < vb ? va : vb) - padV, vHi = (va > vb ? va : vb) + padV;
+            VI u0, u1, v0, v1;
+            CellIndices(uLo, loU, invU, maxU, &u0);
+            CellIndices(uHi, loU, invU, maxU, &u1);
+            CellIndices(vLo, loV, invV, maxV, &v0);
+            CellIndices(vHi, loV, invV, maxV, &v1);
+            u0 = inSlice ? u0 : emptyLo, u1 = inSlice ? u1 : emptyHi;
+            v0 = inSlice ? v0 : emptyLo, v1 = inSlice ? v1 : emptyHi;
             *reinterpret_cast<VF*>(sl.a + i) = a;
             *reinterpret_cast<VF*>(sl.b + i) = b;
             *reinterpret_cast<VF*>(sl.uLo + i) = uLo;
@@ -207,7 +291,7 @@ LM_PACKET_TARGET void NestedGridAccel::LM_PACKET_WALK_LANES(uint32_t nodeIndex, 
             *reinterpret_cast<VI*>(sl.u1 + i) = u1;
             *reinterpret_cast<VI*>(sl.v0 + i) = v0;
             *reinterpret_cast<VI*>(sl.v1 + i) = v1;
-            ru0 = LM_VMIN(ru0, u0), ru1 = LM_VMAX(ru1, u1), rv0 = LM_VMIN(rv0, v0), rv1 = LM_VMAX(rv1, v1);
+            ru0 = ru0 < u0 ? ru0 : u0, ru1 = ru1 > u1 ? ru1 : u1, rv0 = rv0 < v0 ? rv0 : v0, rv1 = rv1 > v1 ? rv1 : v1;
             in |= uint64_t(LaneBits<W>(inSlice)) << i;
             // The top level ends a ray whose best hit lies before this slice (the padded
             // plane), or whose range ended before it.
@@ -269,8 +353,8 @@ LM_PACKET_TARGET void NestedGridAccel::LM_PACKET_WALK_LANES(uint32_t nodeIndex, 
                         const VF boxVHi = zero + (cellV + float(ref.box[4 + V]) * boxStepV + p.pad);
                         uint64_t meets = 0;
                         for (int i = selFirst; i < selEnd; i += W)
-                            meets |= uint64_t(LaneBits<W>((boxULo <= LM_LOAD(sl.uHi + i)) & (boxUHi >= LM_LOAD(sl.uLo + i)) &
-                                                          (boxVLo <= LM_LOAD(sl.vHi + i)) & (boxVHi >= LM_LOAD(sl.vLo + i))))
+                            meets |= uint64_t(LaneBits<W>((boxULo <= Lanes<VF>(sl.uHi + i)) & (boxUHi >= Lanes<VF>(sl.uLo + i)) &
+                                                          (boxVLo <= Lanes<VF>(sl.vHi + i)) & (boxVHi >= Lanes<VF>(sl.vLo + i))))
                                      << i;
                         sel &= meets;
                         if (!sel) continue;
@@ -301,7 +385,7 @@ LM_PACKET_TARGET void NestedGridAccel::LM_PACKET_WALK_LANES(uint32_t nodeIndex, 
                             }
                             if (!(t0 <= t1)) continue;
                             Walk(child, ray, invD, t0, t1, q[i]);
-                            LM_SYNC_LANE(i);
+                            p.Sync(i, q[i]);
                         }
                         continue;
                     }
@@ -311,12 +395,12 @@ LM_PACKET_TARGET void NestedGridAccel::LM_PACKET_WALK_LANES(uint32_t nodeIndex, 
                     // Several rays in the shared frame: each triangle against W of them at
                     // once. Few: each ray against 8 triangles at once (the single-ray test).
                     const uint64_t group = sel & p.frameLanes;
-                    if (__builtin_popcountll(group) >= kMinLeafGroup && LM_PACKET_LEAF(p, sl, group, ref, q)) sel &= ~group;
+                    if (__builtin_popcountll(group) >= kMinLeafGroup && PacketLeaf<W>(p, sl, group, ref, q)) sel &= ~group;
                     for (; sel; sel &= sel - 1) {
                         const int i = __builtin_ctzll(sel);
                         if (q[i].Finished()) continue;
                         q[i].Cell(span);
-                        LM_SYNC_LANE(i);
+                        p.Sync(i, q[i]);
                     }
                 }
             // Every cell within reach - 1 steps of the footprint's is empty (towards the rays'
@@ -337,8 +421,4 @@ LM_PACKET_TARGET void NestedGridAccel::LM_PACKET_WALK_LANES(uint32_t nodeIndex, 
     }
 }
 
-#undef LM_VMIN
-#undef LM_VMAX
-#undef LM_LOAD
-#undef LM_CELL
-#undef LM_SYNC_LANE
+}  // namespace lm
