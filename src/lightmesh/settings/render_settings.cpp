@@ -72,8 +72,8 @@ const std::vector<RenderSetting>& RenderSettings() {
          "shadows", {"soft", "exact"}},
         {"light_cut", "--light-cut", K::Float, 0, 1, {},
          "Soft shadows of many lights: each point's lights clustered in a hierarchy, a cluster shaded and shadowed as one of its "
-         "lights, no cluster's error above this share of the point's total (Lightcuts); 0: every light. Default: "
-         "0.01 where 128 lights or more have no range, else 0",
+         "lights, no cluster's error above this share of the point's total (Lightcuts); 0: every light; default "
+         "0.01 where 512 lights or more have no range, else 0",
          "shadows", {"soft"}},
         {"textures", "--no-textures", K::Bool, 0, 0, {},
          "Leave the materials' images out (colour textures and alpha cut-outs): flat colours and solid "
