@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "support/floor_scenes.h"
+#include "lightmesh/render/render_job.h"
 #include "lightmesh/render/whitted.h"
 
 namespace lm {
@@ -61,6 +62,9 @@ TEST(ManyLights, ImagesAreIdenticalForAnyThreadCount) {
             const Image one = Render(s, method, 1), many = Render(s, method, 4);
             EXPECT_EQ(one.pixels, many.pixels) << method << ", range " << range;
         }
+        Scene cut = s;  // the soft default's light cut (render/light_cut.h)
+        cut.render.lightCut = kDefaultLightCutError;
+        EXPECT_EQ(Render(cut, "soft", 1).pixels, Render(cut, "soft", 4).pixels) << "light cut, range " << range;
     }
 }
 
@@ -102,6 +106,20 @@ TEST(ManyLights, TheSoftDefaultsLightCutStaysNearTheExactSum) {
     }
     EXPECT_NEAR(sumA, sumB, 0.003 * sumB);
     EXPECT_NE(a.image.pixels, b.image.pixels);  // the cut is an estimate, not the sum
+}
+
+// The soft default's frame with a light cut: the same bytes for any thread count.
+TEST(ManyLights, TheSoftFramesLightCutIsTheSameForAnyThreadCount) {
+    Scene s = ManyLights(130);
+    s.render.lightCut = kDefaultLightCutError;
+    const RenderJob job(s, s.render);
+    ASSERT_NE(job.Renderer().Cuts(), nullptr);
+    RenderResult one, many;
+    tbb::task_arena(1).execute([&] { one = job.Render(); });
+    tbb::task_arena(4).execute([&] { many = job.Render(); });
+    EXPECT_EQ(one.image.pixels, many.image.pixels);
+    EXPECT_GT(one.counters.cutEntries, 0u);
+    EXPECT_EQ(one.counters.cutEntries, many.counters.cutEntries);
 }
 
 // RT with culling: where every light is in range of the point a pixel sees, the pixel is
