@@ -136,27 +136,18 @@ std::vector<BenchCell> PlanCells(const BenchRun& run, LoadedScene& loaded, const
         add(exact, compAcc, exactOptions);
         if (!compLmmInMatrix)
             addLmm("lmm", kDefaultLightMeshVariant, lmmDefaults.cc, lmmDefaults.ki, 0.0f, compAcc, "competitor");
-        for (int n : m.competitorSamples) {
-            BenchResult r;
-            r.method = "area";
-            r.paperName = StringPrintf("area N=%d", n);
-            r.samples = n;
-            r.role = "competitor";
-            RenderOptions o = compBase;
-            o.areaLight.samples = n;
-            add(r, compAcc, o);
-        }
-        for (int n : m.denoisedSamples) {
-            BenchResult r;
-            r.method = "denoised";
-            r.paperName = StringPrintf("denoised N=%d", n);
-            r.samples = n;
-            r.role = "competitor";
-            RenderOptions o = compBase;
-            o.shadows = "denoised";
-            o.areaLight.samples = n;
-            add(r, compAcc, o);
-        }
+        // Area sampling and the denoiser, each with its N rays per light (add sets the method).
+        for (const auto& [method, counts] : {std::pair{"area", &m.competitorSamples}, std::pair{"denoised", &m.denoisedSamples}})
+            for (int n : *counts) {
+                BenchResult r;
+                r.method = method;
+                r.paperName = StringPrintf("%s N=%d", method, n);
+                r.samples = n;
+                r.role = "competitor";
+                RenderOptions o = compBase;
+                o.areaLight.samples = n;
+                add(r, compAcc, o);
+            }
     }
     return cells;
 }
