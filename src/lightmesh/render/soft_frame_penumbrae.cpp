@@ -57,16 +57,13 @@ void SoftFrame::SeedTile(Window& w, int row, int col, RenderCounters& c) const {
                     for (uint32_t e = s.first; e < s.first + s.count && o != end; ++e) {
                         Entry& en = t.entries[e];
                         while (o != end && o->light < en.light) ++o;
-                        if (o != end && o->light == en.light && o->probe != en.probe) en.seed = 1;
+                        if (o != end && o->light == en.light && o->probe != en.probe && radii_[en.light] > 0) en.seed = 1;
                     }
                 }
             }
             for (uint32_t e = s.first; e < s.first + s.count; ++e) {
                 Entry& en = t.entries[e];
-                if (radii_[en.light] <= 0) {  // a point light: the probe is the answer
-                    en.seed = 0;
-                    continue;
-                }
+                if (radii_[en.light] <= 0) continue;  // a point light: the probe is the answer
                 if (lights64) {
                     if (!(differ >> en.light & 1)) continue;
                     for (int k = 0; k < 4 && !en.seed; ++k) {
