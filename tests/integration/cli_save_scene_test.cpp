@@ -102,6 +102,14 @@ TEST(CliSaveScene, SceneFileRendersTheSameBytes) {
         EXPECT_NE(text.find(kept), std::string::npos) << kept << "\n" << text;
 }
 
+// A light cut asked for on the command line is saved, and the saved scene renders the
+// same bytes with it.
+TEST(CliSaveScene, TheLightCutIsSaved) {
+    ExpectRoundTrip("cut", Data("scene_file/good.json"), "--width 48 --light-cut 0.05");
+    const std::string text = lm::testing::FileBytes(Temp("cut.json"));
+    EXPECT_NE(text.find("\"light_cut\": 0.05"), std::string::npos) << text;
+}
+
 TEST(CliSaveScene, WhatCannotBeSavedIsRefusedFirst) {
     const std::string out = Temp("refused.png");
     fs::remove(out);
